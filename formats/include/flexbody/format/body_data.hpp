@@ -1,0 +1,88 @@
+#pragma once
+// flexbody/format/body_data.hpp: the in-memory image of a flexible body file (*.fbh5).
+//
+// formats/SCHEMA.md is the normative description of the file; this struct mirrors it one to one.
+// Everything is SI (metres, kilograms, seconds, pascals). Node-interleaved conventions follow the
+// paper (Zwölfer & Gerstmayr 2023): a nodal vector field is stored node by node (x, y, z of node 0,
+// then of node 1, ...), Eq. (3); the reduction modes are stored in list format, Eq. (49).
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace flexbody::format {
+
+using RowMatrixX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using RowMatrixX4i = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 4, Eigen::RowMajor>;
+using RowMatrixX3i = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+/// The schema version this library writes, and the only one it reads.
+inline constexpr int kFormatVersion = 1;
+/// Value of the root attribute `format`.
+inline constexpr const char* kFormatName = "flexbody";
+
+/// Where a body file came from: enough to reproduce it.
+struct Provenance {
+  std::string created_by;     ///< tool and version, e.g. "fbprep 0.1.0"
+  std::string created_utc;    ///< ISO 8601 time of writing, e.g. "2026-11-21T14:38:08Z"
+  std::string source_file;    ///< file name of the input (no directory)
+  std::string source_sha256;  ///< SHA-256 of the input file, lowercase hex
+  std::string input_unit;     ///< length unit the input was read in ("mm", "cm", "m", "in")
+  std::string unit_reason;    ///< why that unit was used (declared by the file, --unit, ...)
+  /// Every option the tool ran with, as (name, value) in the order given; values as text.
+  std::vector<std::pair<std::string, std::string>> options;
+};
+
+/// Linear-elastic isotropic material.
+struct Material {
+  std::string name;               ///< "steel", "aluminium", "titanium" or "custom"
+  double youngs_modulus = 0.0;    ///< E [Pa]
+  double poisson_ratio = 0.0;     ///< nu [-]
+  double density = 0.0;           ///< rho [kg/m^3]
+};
+
+/// Rigid-body mass properties from the consistent mass matrix (exact for the tetrahedral mesh).
+struct MassProperties {
+  double mass = 0.0;                                            ///< [kg]
+  Eigen::Vector3d center_of_mass_input = Eigen::Vector3d::Zero(); ///< [m], in the input frame
+  Eigen::Matrix3d inertia_about_com = Eigen::Matrix3d::Zero();    ///< [kg m^2], body axes
+};
+
+/// The finite-element mesh in the body frame: origin at the centre of mass, axes parallel to the
+/// input's. Input-frame coordinates are nodes + center_of_mass_input.
+struct BodyMesh {
+  RowMatrixX3d nodes;              ///< n_n x 3 [m], body frame
+  RowMatrixX4i tets;               ///< n_e x 4, 0-based node indices, positive orientation
+  RowMatrixX3i surface_triangles;  ///< n_t x 3, 0-based, counter-clockwise seen from outside
+  int element_order = 1;           ///< 1: linear tetrahedra (4 nodes)
+};
+
+/// The reduction basis.
+struct Modes {
+  std::string kind = "free-free";  ///< how the modes were computed
+  /// Elastic frequencies [Hz], ascending; rigid-body modes never appear here.
+  Eigen::VectorXd frequencies_hz;
+  /// ||K phi - omega^2 M phi|| / ||K phi|| for each mode, as computed by fbprep.
+  Eigen::VectorXd relative_residuals;
+  /// Ῡ of Eq. (49): n_n x 3 n_m, row i = [psi_1^(i)T ... psi_nm^(i)T], M-orthonormal modes
+  /// (Psiᵀ M̄ Psi = I, unit kg^-1/2).
+  Eigen::MatrixXd upsilon;
+  std::string eigensolver;  ///< "arpack" or "spectra"
+  double shift = 0.0;       ///< sigma of the shift-invert solve [rad^2/s^2]
+
+  [[nodiscard]] Eigen::Index count() const { return frequencies_hz.size(); }
+};
+
+/// Everything a flexible body file holds.
+struct BodyData {
+  Provenance provenance;
+  Material material;
+  MassProperties mass;
+  BodyMesh mesh;
+  Modes modes;
+};
+
+}  // namespace flexbody::format

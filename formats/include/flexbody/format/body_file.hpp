@@ -1,0 +1,36 @@
+#pragma once
+// flexbody/format/body_file.hpp: read and write flexible body files (*.fbh5, HDF5).
+//
+// \code
+//   flexbody::format::BodyData body = flexbody::format::read_body_file("bracket.fbh5");
+//   std::cout << body.modes.frequencies_hz.transpose() << "\n";
+// \endcode
+
+#include "flexbody/format/body_data.hpp"
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+namespace flexbody::format {
+
+/// Thrown for every problem with a body file; the message names the file, the dataset or attribute,
+/// and what was expected against what was found.
+class BodyFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Checks that `body` is complete and consistent (shapes against each other, finite numbers).
+/// Throws BodyFileError naming the first problem found.
+void validate(const BodyData& body);
+
+/// Writes `body` atomically: to a temporary file beside `path`, then renamed onto it. A failure at any
+/// point leaves no file under `path` (and an existing file there untouched). Validates first.
+void write_body_file(const BodyData& body, const std::filesystem::path& path);
+
+/// Reads a body file and validates it. Throws BodyFileError for a missing file, a file that is not a
+/// flexbody file, another format version, missing datasets, wrong shapes or non-finite values.
+[[nodiscard]] BodyData read_body_file(const std::filesystem::path& path);
+
+}  // namespace flexbody::format

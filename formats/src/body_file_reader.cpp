@@ -1,0 +1,218 @@
+// body_file_reader.cpp: read_body_file(), checking a file against SCHEMA.md version 1.
+//
+// Order of the checks: the file exists and is readable, is HDF5, says format "flexbody" and
+// format_version 1, holds every required group, dataset and attribute, has consistent shapes,
+// finite values, and finally passes the same checks as validate().
+#include "body_checks.hpp"
+#include "hdf5_io.hpp"
+
+#include "flexbody/format/body_file.hpp"
+
+#include <cerrno>
+#include <cstdio>
+#include <optional>
+#include <system_error>
+
+namespace flexbody::format {
+namespace {
+
+using detail::Location;
+
+enum class Item { group, dataset, attribute };
+
+struct Required {
+  Item kind;
+  const char* path;  ///< for an attribute: path of its object, '/', attribute name
+};
+
+// Listed parents first, so that each entry's parent group is known to exist when it is checked.
+constexpr Required kRequired[] = {
+    {Item::attribute, "/length_unit"},          {Item::attribute, "/mass_unit"},
+    {Item::attribute, "/time_unit"},            {Item::attribute, "/created_by"},
+    {Item::attribute, "/created_utc"},          {Item::attribute, "/source_file"},
+    {Item::attribute, "/source_sha256"},        {Item::attribute, "/input_unit"},
+    {Item::attribute, "/unit_reason"},          {Item::group, "/provenance"},
+    {Item::group, "/provenance/options"},       {Item::attribute, "/provenance/options/order"},
+    {Item::group, "/material"},                 {Item::attribute, "/material/name"},
+    {Item::attribute, "/material/youngs_modulus"}, {Item::attribute, "/material/poisson_ratio"},
+    {Item::attribute, "/material/density"},     {Item::group, "/mass"},
+    {Item::attribute, "/mass/total"},           {Item::attribute, "/mass/center_of_mass_input"},
+    {Item::dataset, "/mass/inertia_about_com"}, {Item::group, "/mesh"},
+    {Item::dataset, "/mesh/nodes"},             {Item::dataset, "/mesh/tets"},
+    {Item::dataset, "/mesh/surface_triangles"}, {Item::attribute, "/mesh/element_order"},
+    {Item::group, "/modes"},                    {Item::attribute, "/modes/kind"},
+    {Item::attribute, "/modes/eigensolver"},    {Item::attribute, "/modes/shift"},
+    {Item::dataset, "/modes/frequencies_hz"},   {Item::dataset, "/modes/relative_residuals"},
+    {Item::dataset, "/modes/upsilon"},
+};
+
+void check_readable(const std::filesystem::path& path, const std::string& label) {
+  std::error_code error;
+  const std::filesystem::file_status status = std::filesystem::status(path, error);
+  if (!std::filesystem::exists(status)) throw BodyFileError(label + ": no such file");
+  if (std::filesystem::is_directory(status)) throw BodyFileError(label + ": is a directory, not a body file");
+  std::FILE* probe = std::fopen(path.c_str(), "rb");
+  if (probe == nullptr) {
+    throw BodyFileError(label + ": cannot be opened for reading: " + std::generic_category().message(errno));
+  }
+  std::fclose(probe);
+}
+
+void check_identity(const Location& root) {
+  if (!detail::has_attribute(root, "/", "format")) {
+    root.fail("missing root attribute /format; this HDF5 file is not a flexbody body file");
+  }
+  const std::string format = detail::read_string_attribute(root, "format");
+  if (format != kFormatName) {
+    root.fail("/format is \"" + format + "\", expected \"" + kFormatName + "\"; not a flexbody body file");
+  }
+  const int version = detail::read_int_attribute(root, "format_version");
+  if (version != kFormatVersion) {
+    root.fail("format_version " + std::to_string(version) + " is not supported by this reader (supports " +
+              std::to_string(kFormatVersion) + ")");
+  }
+}
+
+void check_presence(const Location& root) {
+  for (const Required& item : kRequired) {
+    const std::string path = item.path;
+    if (item.kind == Item::attribute) {
+      const std::size_t slash = path.rfind('/');
+      const std::string object = slash == 0 ? "/" : path.substr(0, slash);
+      if (!detail::has_attribute(root, object, path.substr(slash + 1))) root.fail("missing attribute " + path);
+      continue;
+    }
+    const detail::ObjectKind kind = detail::object_kind(root, path);
+    const bool want_group = item.kind == Item::group;
+    if (kind == detail::ObjectKind::missing) {
+      root.fail(std::string("missing ") + (want_group ? "group " : "dataset ") + path);
+    }
+    if (kind != (want_group ? detail::ObjectKind::group : detail::ObjectKind::dataset)) {
+      root.fail(path + " is not " + (want_group ? "a group" : "a dataset"));
+    }
+  }
+  for (const auto& [name, unit] : {std::pair{"length_unit", "m"}, {"mass_unit", "kg"}, {"time_unit", "s"}}) {
+    const std::string found = detail::read_string_attribute(root, name);
+    if (found != unit) {
+      root.fail(std::string("/") + name + " is \"" + found + "\", expected \"" + unit +
+                "\" (version 1 stores SI units only)");
+    }
+  }
+}
+
+/// Throws unless `table` has `cols` columns and, if `rows` is given, `rows` rows.
+template <class T>
+void expect_shape(const Location& group, const char* name, const detail::Table<T>& table,
+                  std::optional<std::size_t> rows, std::size_t cols, const char* rows_text) {
+  if (table.cols != cols || (rows && table.rows != *rows)) {
+    group.fail(group.child(name) + " has shape " + std::to_string(table.rows) + " x " + std::to_string(table.cols) +
+               ", expected " + rows_text + " x " + std::to_string(cols));
+  }
+}
+
+template <class Matrix, class T>
+Matrix to_matrix(const detail::Table<T>& table) {
+  using RowMajor = Eigen::Matrix<typename Matrix::Scalar, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const auto rows = static_cast<Eigen::Index>(table.rows);
+  const auto cols = static_cast<Eigen::Index>(table.cols);
+  return Matrix(Eigen::Map<const RowMajor>(table.values.data(), rows, cols));
+}
+
+Eigen::VectorXd to_vector(const std::vector<double>& values) {
+  return Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+}
+
+Provenance read_provenance(const Location& root) {
+  Provenance p;
+  p.created_by = detail::read_string_attribute(root, "created_by");
+  p.created_utc = detail::read_string_attribute(root, "created_utc");
+  p.source_file = detail::read_string_attribute(root, "source_file");
+  p.source_sha256 = detail::read_string_attribute(root, "source_sha256");
+  p.input_unit = detail::read_string_attribute(root, "input_unit");
+  p.unit_reason = detail::read_string_attribute(root, "unit_reason");
+  const Location options = detail::open_group(detail::open_group(root, "provenance"), "options");
+  const std::string order = detail::read_string_attribute(options, "order");
+  for (std::size_t begin = 0; begin < order.size();) {
+    const std::size_t end = std::min(order.find(',', begin), order.size());
+    const std::string name = order.substr(begin, end - begin);
+    p.options.emplace_back(name, detail::read_string_attribute(options, name));
+    begin = end + 1;
+  }
+  return p;
+}
+
+Material read_material(const Location& root) {
+  const Location group = detail::open_group(root, "material");
+  Material material;
+  material.name = detail::read_string_attribute(group, "name");
+  material.youngs_modulus = detail::read_double_attribute(group, "youngs_modulus");
+  material.poisson_ratio = detail::read_double_attribute(group, "poisson_ratio");
+  material.density = detail::read_double_attribute(group, "density");
+  return material;
+}
+
+MassProperties read_mass(const Location& root) {
+  const Location group = detail::open_group(root, "mass");
+  MassProperties mass;
+  mass.mass = detail::read_double_attribute(group, "total");
+  const std::vector<double> com = detail::read_double_vector_attribute(group, "center_of_mass_input", 3);
+  mass.center_of_mass_input = Eigen::Vector3d(com[0], com[1], com[2]);
+  const detail::Table<double> inertia = detail::read_double_matrix(group, "inertia_about_com");
+  expect_shape(group, "inertia_about_com", inertia, 3, 3, "3");
+  mass.inertia_about_com = to_matrix<Eigen::Matrix3d>(inertia);
+  return mass;
+}
+
+BodyMesh read_mesh(const Location& root) {
+  const Location group = detail::open_group(root, "mesh");
+  BodyMesh mesh;
+  const detail::Table<double> nodes = detail::read_double_matrix(group, "nodes");
+  expect_shape(group, "nodes", nodes, std::nullopt, 3, "n_n");
+  const detail::Table<std::int32_t> tets = detail::read_int_matrix(group, "tets");
+  expect_shape(group, "tets", tets, std::nullopt, 4, "n_e");
+  const detail::Table<std::int32_t> triangles = detail::read_int_matrix(group, "surface_triangles");
+  expect_shape(group, "surface_triangles", triangles, std::nullopt, 3, "n_t");
+  mesh.nodes = to_matrix<RowMatrixX3d>(nodes);
+  mesh.tets = to_matrix<RowMatrixX4i>(tets);
+  mesh.surface_triangles = to_matrix<RowMatrixX3i>(triangles);
+  mesh.element_order = detail::read_int_attribute(group, "element_order");
+  return mesh;
+}
+
+Modes read_modes(const Location& root) {
+  const Location group = detail::open_group(root, "modes");
+  Modes modes;
+  modes.kind = detail::read_string_attribute(group, "kind");
+  modes.eigensolver = detail::read_string_attribute(group, "eigensolver");
+  modes.shift = detail::read_double_attribute(group, "shift");
+  modes.frequencies_hz = to_vector(detail::read_double_vector(group, "frequencies_hz"));
+  modes.relative_residuals = to_vector(detail::read_double_vector(group, "relative_residuals"));
+  modes.upsilon = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(group, "upsilon"));
+  return modes;
+}
+
+}  // namespace
+
+BodyData read_body_file(const std::filesystem::path& path) {
+  const std::string label = path.string();
+  check_readable(path, label);
+  if (!detail::is_hdf5_file(path)) throw BodyFileError(label + ": not an HDF5 file");
+  const detail::QuietHdf5Errors quiet;
+  BodyData body;
+  {
+    const Location root = detail::open_file(path, label);
+    check_identity(root);
+    check_presence(root);
+    body.provenance = read_provenance(root);
+    body.material = read_material(root);
+    body.mass = read_mass(root);
+    body.mesh = read_mesh(root);
+    body.modes = read_modes(root);
+  }
+  detail::check_structure(body, label);
+  detail::check_finite(body, label);
+  detail::check_ranges(body, label);
+  return body;
+}
+
+}  // namespace flexbody::format

@@ -1,0 +1,148 @@
+// body_file_writer.cpp: write_body_file(), the layout of SCHEMA.md version 1, written atomically.
+#include "hdf5_io.hpp"
+
+#include "flexbody/format/body_file.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <span>
+#include <system_error>
+
+namespace flexbody::format {
+namespace {
+
+using detail::Location;
+
+using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+std::span<const double> values_of(const Eigen::VectorXd& v) {
+  return {v.data(), static_cast<std::size_t>(v.size())};
+}
+
+std::size_t rows_of(const auto& m) { return static_cast<std::size_t>(m.rows()); }
+std::size_t cols_of(const auto& m) { return static_cast<std::size_t>(m.cols()); }
+
+void write_root(const Location& root, const Provenance& p) {
+  detail::write_string_attribute(root, "format", kFormatName);
+  detail::write_int_attribute(root, "format_version", kFormatVersion);
+  detail::write_string_attribute(root, "length_unit", "m");
+  detail::write_string_attribute(root, "mass_unit", "kg");
+  detail::write_string_attribute(root, "time_unit", "s");
+  detail::write_string_attribute(root, "created_by", p.created_by);
+  detail::write_string_attribute(root, "created_utc", p.created_utc);
+  detail::write_string_attribute(root, "source_file", p.source_file);
+  detail::write_string_attribute(root, "source_sha256", p.source_sha256);
+  detail::write_string_attribute(root, "input_unit", p.input_unit);
+  detail::write_string_attribute(root, "unit_reason", p.unit_reason);
+}
+
+void write_provenance(const Location& root, const Provenance& p) {
+  const Location group = detail::create_group(root, "provenance");
+  const Location options = detail::create_group(group, "options");
+  std::string order;
+  for (const auto& [name, value] : p.options) {
+    detail::write_string_attribute(options, name, value);
+    order += (order.empty() ? "" : ",") + name;
+  }
+  detail::write_string_attribute(options, "order", order);
+}
+
+void write_material(const Location& root, const Material& material) {
+  const Location group = detail::create_group(root, "material");
+  detail::write_string_attribute(group, "name", material.name);
+  detail::write_double_attribute(group, "youngs_modulus", material.youngs_modulus);
+  detail::write_double_attribute(group, "poisson_ratio", material.poisson_ratio);
+  detail::write_double_attribute(group, "density", material.density);
+}
+
+void write_mass(const Location& root, const MassProperties& mass) {
+  const Location group = detail::create_group(root, "mass");
+  detail::write_double_attribute(group, "total", mass.mass);
+  detail::write_double_vector_attribute(group, "center_of_mass_input",
+                                        {mass.center_of_mass_input.data(), 3});
+  const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> inertia = mass.inertia_about_com;
+  detail::write_matrix(group, "inertia_about_com", 3, 3, inertia.data(), "kg m^2");
+}
+
+void write_mesh(const Location& root, const BodyMesh& mesh) {
+  const Location group = detail::create_group(root, "mesh");
+  detail::write_matrix(group, "nodes", rows_of(mesh.nodes), 3, mesh.nodes.data(), "m");
+  detail::write_matrix(group, "tets", rows_of(mesh.tets), 4, mesh.tets.data(), "");
+  detail::write_matrix(group, "surface_triangles", rows_of(mesh.surface_triangles), 3,
+                       mesh.surface_triangles.data(), "");
+  detail::write_int_attribute(group, "element_order", mesh.element_order);
+}
+
+void write_modes(const Location& root, const Modes& modes) {
+  const Location group = detail::create_group(root, "modes");
+  detail::write_string_attribute(group, "kind", modes.kind);
+  detail::write_string_attribute(group, "eigensolver", modes.eigensolver);
+  detail::write_double_attribute(group, "shift", modes.shift);
+  detail::write_vector(group, "frequencies_hz", values_of(modes.frequencies_hz), "Hz");
+  detail::write_vector(group, "relative_residuals", values_of(modes.relative_residuals), "1");
+  const RowMatrixXd upsilon = modes.upsilon;  // the file is row-major, Eigen::MatrixXd column-major
+  detail::write_matrix(group, "upsilon", rows_of(upsilon), cols_of(upsilon), upsilon.data(), "kg^-1/2");
+}
+
+/// Writes the whole layout into a new file at `path`; every handle is closed on return.
+void write_layout(const BodyData& body, const std::filesystem::path& path, const std::string& label) {
+  Location file = detail::create_file(path, label);
+  write_root(file, body.provenance);
+  write_provenance(file, body.provenance);
+  write_material(file, body.material);
+  write_mass(file, body.mass);
+  write_mesh(file, body.mesh);
+  write_modes(file, body.modes);
+  detail::flush_and_close(file);
+}
+
+/// Forces the written bytes to disk so that the rename never exposes a file with missing data.
+void sync_to_disk(const std::filesystem::path& path, const std::string& label) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  const bool ok = fd >= 0 && ::fsync(fd) == 0;
+  if (fd >= 0) ::close(fd);
+  if (!ok) throw BodyFileError(label + ": cannot sync the temporary file " + path.string() + " to disk");
+}
+
+std::filesystem::path temporary_beside(const std::filesystem::path& target) {
+  static std::atomic<unsigned long> counter{0};
+  for (;;) {
+    std::string name(1, '.');  // built by appending: GCC 12 warns falsely on "literal" + std::string&&
+    name += target.filename().string();
+    name += ".tmp-";
+    name += std::to_string(::getpid());
+    name += '-';
+    name += std::to_string(counter.fetch_add(1));
+    std::filesystem::path candidate = target.parent_path() / name;
+    std::error_code error;
+    if (!std::filesystem::exists(std::filesystem::symlink_status(candidate, error))) return candidate;
+  }
+}
+
+}  // namespace
+
+void write_body_file(const BodyData& body, const std::filesystem::path& path) {
+  validate(body);
+  const std::string label = path.string();
+  if (path.filename().empty()) throw BodyFileError(label + ": not a file name");
+  const detail::QuietHdf5Errors quiet;
+  const std::filesystem::path temporary = temporary_beside(path);
+  try {
+    write_layout(body, temporary, label);
+    sync_to_disk(temporary, label);
+    std::error_code error;
+    std::filesystem::rename(temporary, path, error);
+    if (error) {
+      throw BodyFileError(label + ": cannot move the temporary file " + temporary.filename().string() +
+                          " onto it: " + error.message());
+    }
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw;
+  }
+}
+
+}  // namespace flexbody::format

@@ -1,0 +1,160 @@
+// body_validation.cpp: validate() and the checks it shares with the reader.
+#include "body_checks.hpp"
+
+#include "flexbody/format/body_file.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <set>
+#include <string_view>
+
+namespace flexbody::format {
+namespace detail {
+namespace {
+
+[[noreturn]] void fail(const std::string& context, const std::string& problem) {
+  throw BodyFileError(context + ": " + problem);
+}
+
+/// Shortest text that reads back as the same double ("10.5", "1e-09", "nan", "inf").
+std::string number(double value) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+std::string index(Eigen::Index i) {
+  std::string text(1, '[');  // built by appending: GCC 12 warns falsely on "literal" + std::string&&
+  text += std::to_string(i);
+  text += ']';
+  return text;
+}
+
+template <class Derived>
+void check_indices(const Eigen::MatrixBase<Derived>& elements, Eigen::Index node_count, const std::string& path,
+                   const std::string& context) {
+  for (Eigen::Index e = 0; e < elements.rows(); ++e) {
+    for (Eigen::Index k = 0; k < elements.cols(); ++k) {
+      const auto node = elements(e, k);
+      if (node < 0 || node >= node_count) {
+        fail(context, path + index(e) + " refers to node " + std::to_string(node) + " but the mesh has " +
+                          std::to_string(node_count) + " nodes (valid: 0 to " + std::to_string(node_count - 1) +
+                          ")");
+      }
+    }
+  }
+}
+
+void check_options(const Provenance& provenance, const std::string& context) {
+  std::set<std::string_view> seen;
+  for (std::size_t i = 0; i < provenance.options.size(); ++i) {
+    const std::string& name = provenance.options[i].first;
+    const std::string where = "/provenance/options: option " + std::to_string(i);
+    if (name.empty()) fail(context, where + " has an empty name");
+    if (name.find(',') != std::string::npos) {
+      fail(context, where + " is named \"" + name + "\"; option names must not contain ','");
+    }
+    if (name == "order") fail(context, where + " is named \"order\", which the schema reserves");
+    if (!seen.insert(name).second) fail(context, where + " repeats the name \"" + name + "\"");
+  }
+}
+
+void check_value(double value, const std::string& path, const std::string& context) {
+  if (!std::isfinite(value)) fail(context, path + " is " + number(value) + ", expected a finite number");
+}
+
+template <class Derived>
+void check_values(const Eigen::DenseBase<Derived>& values, const std::string& path, const std::string& context) {
+  for (Eigen::Index r = 0; r < values.rows(); ++r) {
+    for (Eigen::Index c = 0; c < values.cols(); ++c) {
+      if (!std::isfinite(values(r, c))) {
+        const std::string at = values.cols() == 1 ? index(r) : index(r) + index(c);
+        fail(context, path + at + " is " + number(values(r, c)) + ", expected a finite number");
+      }
+    }
+  }
+}
+
+void check_positive(double value, const std::string& path, const char* unit, const std::string& context) {
+  if (!(value > 0.0)) fail(context, path + " is " + number(value) + " " + unit + ", expected > 0");
+}
+
+}  // namespace
+
+void check_structure(const BodyData& body, const std::string& context) {
+  const BodyMesh& mesh = body.mesh;
+  const Eigen::Index n_n = mesh.nodes.rows();
+  if (n_n < 4) fail(context, "/mesh/nodes has " + std::to_string(n_n) + " rows, expected at least 4 nodes");
+  if (mesh.tets.rows() < 1) fail(context, "/mesh/tets has no rows, expected at least 1 tetrahedron");
+  if (mesh.element_order != 1) {
+    fail(context, "/mesh/element_order is " + std::to_string(mesh.element_order) +
+                      ", expected 1 (linear 4-node tetrahedra, the only kind version 1 stores)");
+  }
+  check_indices(mesh.tets, n_n, "/mesh/tets", context);
+  check_indices(mesh.surface_triangles, n_n, "/mesh/surface_triangles", context);
+
+  const Modes& modes = body.modes;
+  const Eigen::Index n_m = modes.count();
+  if (modes.relative_residuals.size() != n_m) {
+    fail(context, "/modes/relative_residuals has " + std::to_string(modes.relative_residuals.size()) +
+                      " entries, expected " + std::to_string(n_m) + " (n_m, the length of /modes/frequencies_hz)");
+  }
+  if (modes.upsilon.rows() != n_n || modes.upsilon.cols() != 3 * n_m) {
+    fail(context, "/modes/upsilon has shape " + std::to_string(modes.upsilon.rows()) + " x " +
+                      std::to_string(modes.upsilon.cols()) + ", expected " + std::to_string(n_n) + " x " +
+                      std::to_string(3 * n_m) + " (n_n x 3 n_m)");
+  }
+  check_options(body.provenance, context);
+}
+
+void check_finite(const BodyData& body, const std::string& context) {
+  check_value(body.material.youngs_modulus, "/material/youngs_modulus", context);
+  check_value(body.material.poisson_ratio, "/material/poisson_ratio", context);
+  check_value(body.material.density, "/material/density", context);
+  check_value(body.mass.mass, "/mass/total", context);
+  check_values(body.mass.center_of_mass_input, "/mass/center_of_mass_input", context);
+  check_values(body.mass.inertia_about_com, "/mass/inertia_about_com", context);
+  check_values(body.mesh.nodes, "/mesh/nodes", context);
+  check_value(body.modes.shift, "/modes/shift", context);
+  check_values(body.modes.frequencies_hz, "/modes/frequencies_hz", context);
+  check_values(body.modes.relative_residuals, "/modes/relative_residuals", context);
+  check_values(body.modes.upsilon, "/modes/upsilon", context);
+}
+
+void check_ranges(const BodyData& body, const std::string& context) {
+  check_positive(body.mass.mass, "/mass/total", "kg", context);
+  check_positive(body.material.youngs_modulus, "/material/youngs_modulus", "Pa", context);
+  check_positive(body.material.density, "/material/density", "kg/m^3", context);
+  const double nu = body.material.poisson_ratio;
+  if (!(nu > -1.0 && nu < 0.5)) {
+    fail(context, "/material/poisson_ratio is " + number(nu) + ", expected -1 < nu < 0.5");
+  }
+  const Eigen::VectorXd& f = body.modes.frequencies_hz;
+  for (Eigen::Index m = 0; m < f.size(); ++m) {
+    const std::string path = "/modes/frequencies_hz" + index(m);
+    if (!(f[m] > 0.0)) {
+      fail(context, path + " is " + number(f[m]) + " Hz, expected > 0 (rigid-body modes are not stored)");
+    }
+    if (m > 0 && f[m] < f[m - 1]) {
+      fail(context, path + " = " + number(f[m]) + " Hz is below /modes/frequencies_hz" + index(m - 1) + " = " +
+                        number(f[m - 1]) + " Hz; frequencies must be ascending");
+    }
+  }
+  const Eigen::VectorXd& r = body.modes.relative_residuals;
+  for (Eigen::Index m = 0; m < r.size(); ++m) {
+    if (r[m] < 0.0) fail(context, "/modes/relative_residuals" + index(m) + " is " + number(r[m]) + ", expected >= 0");
+  }
+}
+
+}  // namespace detail
+
+void validate(const BodyData& body) {
+  const std::string context = "body data";
+  detail::check_structure(body, context);
+  detail::check_finite(body, context);
+  detail::check_ranges(body, context);
+}
+
+}  // namespace flexbody::format

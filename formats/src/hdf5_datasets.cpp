@@ -1,0 +1,128 @@
+// hdf5_datasets.cpp: 1-D and 2-D datasets of the private HDF5 layer (row-major, contiguous).
+#include "hdf5_io.hpp"
+
+#include <array>
+#include <limits>
+
+namespace flexbody::format::detail {
+namespace {
+
+std::string shape_text(const std::vector<hsize_t>& dims) {
+  std::string text;
+  for (std::size_t i = 0; i < dims.size(); ++i) {
+    if (i > 0) text += " x ";
+    text += std::to_string(dims[i]);
+  }
+  return text.empty() ? "a scalar" : text;
+}
+
+void write_dataset(const Location& loc, std::string_view name, std::span<const hsize_t> dims, hid_t file_type,
+                   hid_t memory_type, const void* data, std::string_view unit) {
+  const std::string key(name);
+  const Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
+  if (!space.valid()) loc.fail_hdf5("cannot create a dataspace for " + loc.child(name));
+  Handle dataset(H5Dcreate2(loc.id(), key.c_str(), file_type, space.id(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                 H5Dclose);
+  if (!dataset.valid()) loc.fail_hdf5("cannot create dataset " + loc.child(name));
+  const bool empty = H5Sget_simple_extent_npoints(space.id()) == 0;
+  if (!empty && H5Dwrite(dataset.id(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
+    loc.fail_hdf5("cannot write dataset " + loc.child(name));
+  }
+  Location written(std::move(dataset), loc.file_label(), loc.child(name));
+  if (!unit.empty()) write_string_attribute(written, "unit", unit);
+  written.close();
+}
+
+/// An open dataset whose rank and type class have been checked.
+struct OpenDataset {
+  Handle dataset;
+  std::vector<hsize_t> dims;
+};
+
+OpenDataset open_dataset(const Location& loc, std::string_view name, int rank, H5T_class_t type_class,
+                         const char* expected_type) {
+  const std::string key(name);
+  if (H5Lexists(loc.id(), key.c_str(), H5P_DEFAULT) <= 0) loc.fail("missing dataset " + loc.child(name));
+  OpenDataset result{Handle(H5Dopen2(loc.id(), key.c_str(), H5P_DEFAULT), H5Dclose), {}};
+  if (!result.dataset.valid()) loc.fail_hdf5(loc.child(name) + " cannot be opened as a dataset");
+
+  const Handle type(H5Dget_type(result.dataset.id()), H5Tclose);
+  if (!type.valid() || H5Tget_class(type.id()) != type_class) {
+    loc.fail(loc.child(name) + " does not hold " + expected_type + " values");
+  }
+  const Handle space(H5Dget_space(result.dataset.id()), H5Sclose);
+  const int found_rank = space.valid() ? H5Sget_simple_extent_ndims(space.id()) : -1;
+  if (found_rank < 0) loc.fail_hdf5("cannot read the shape of " + loc.child(name));
+  result.dims.assign(static_cast<std::size_t>(found_rank), 0);
+  if (found_rank > 0 && H5Sget_simple_extent_dims(space.id(), result.dims.data(), nullptr) < 0) {
+    loc.fail_hdf5("cannot read the shape of " + loc.child(name));
+  }
+  if (found_rank != rank) {
+    loc.fail(loc.child(name) + " has shape " + shape_text(result.dims) + ", expected a " + std::to_string(rank) +
+             "-D dataset");
+  }
+  return result;
+}
+
+template <class T>
+std::vector<T> read_values(const Location& loc, std::string_view name, const OpenDataset& open, hid_t memory_type) {
+  std::size_t count = 1;
+  for (const hsize_t dim : open.dims) {
+    if (dim != 0 && count > std::numeric_limits<std::size_t>::max() / sizeof(T) / dim) {
+      loc.fail(loc.child(name) + " has an implausible shape " + shape_text(open.dims));
+    }
+    count *= static_cast<std::size_t>(dim);
+  }
+  std::vector<T> values(count);
+  if (count > 0 &&
+      H5Dread(open.dataset.id(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0) {
+    loc.fail_hdf5("cannot read dataset " + loc.child(name));
+  }
+  return values;
+}
+
+template <class T>
+Table<T> read_matrix(const Location& loc, std::string_view name, H5T_class_t type_class, const char* expected_type,
+                     hid_t memory_type) {
+  const OpenDataset open = open_dataset(loc, name, 2, type_class, expected_type);
+  Table<T> table;
+  table.values = read_values<T>(loc, name, open, memory_type);
+  table.rows = static_cast<std::size_t>(open.dims[0]);
+  table.cols = static_cast<std::size_t>(open.dims[1]);
+  return table;
+}
+
+}  // namespace
+
+void write_matrix(const Location& loc, std::string_view name, std::size_t rows, std::size_t cols,
+                  const double* data, std::string_view unit) {
+  const std::array<hsize_t, 2> dims{rows, cols};
+  write_dataset(loc, name, dims, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, data, unit);
+}
+
+void write_matrix(const Location& loc, std::string_view name, std::size_t rows, std::size_t cols,
+                  const std::int32_t* data, std::string_view unit) {
+  const std::array<hsize_t, 2> dims{rows, cols};
+  write_dataset(loc, name, dims, H5T_STD_I32LE, H5T_NATIVE_INT32, data, unit);
+}
+
+void write_vector(const Location& loc, std::string_view name, std::span<const double> values,
+                  std::string_view unit) {
+  const std::array<hsize_t, 1> dims{values.size()};
+  write_dataset(loc, name, dims, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), unit);
+}
+
+Table<double> read_double_matrix(const Location& loc, std::string_view name) {
+  return read_matrix<double>(loc, name, H5T_FLOAT, "floating-point", H5T_NATIVE_DOUBLE);
+}
+
+Table<std::int32_t> read_int_matrix(const Location& loc, std::string_view name) {
+  return read_matrix<std::int32_t>(loc, name, H5T_INTEGER, "integer", H5T_NATIVE_INT32);
+}
+
+std::vector<double> read_double_vector(const Location& loc, std::string_view name) {
+  const OpenDataset open = open_dataset(loc, name, 1, H5T_FLOAT, "floating-point");
+  return read_values<double>(loc, name, open, H5T_NATIVE_DOUBLE);
+}
+
+}  // namespace flexbody::format::detail

@@ -1,0 +1,155 @@
+// hdf5_io.cpp: handles, error capture, files and groups of the private HDF5 layer (attributes are in
+// hdf5_attributes.cpp, datasets in hdf5_datasets.cpp).
+#include "hdf5_io.hpp"
+
+#include "flexbody/format/body_file.hpp"
+
+#include <algorithm>
+#include <fstream>
+
+namespace flexbody::format::detail {
+
+Handle::Handle(Handle&& other) noexcept : id_(other.id_), closer_(other.closer_) {
+  other.id_ = H5I_INVALID_HID;
+}
+
+Handle& Handle::operator=(Handle&& other) noexcept {
+  if (this != &other) {
+    (void)close();
+    id_ = other.id_;
+    closer_ = other.closer_;
+    other.id_ = H5I_INVALID_HID;
+  }
+  return *this;
+}
+
+bool Handle::close() noexcept {
+  if (id_ < 0 || closer_ == nullptr) return true;
+  const herr_t status = closer_(id_);
+  id_ = H5I_INVALID_HID;
+  return status >= 0;
+}
+
+QuietHdf5Errors::QuietHdf5Errors() noexcept {
+  if (H5Eget_auto2(H5E_DEFAULT, &function_, &data_) < 0) {
+    function_ = nullptr;
+    data_ = nullptr;
+  }
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+}
+
+QuietHdf5Errors::~QuietHdf5Errors() { H5Eset_auto2(H5E_DEFAULT, function_, data_); }
+
+namespace {
+
+herr_t keep_innermost(unsigned /*n*/, const H5E_error2_t* error, void* client_data) {
+  if (error != nullptr && error->desc != nullptr && error->desc[0] != '\0') {
+    *static_cast<std::string*>(client_data) = error->desc;
+  }
+  return 0;
+}
+
+/// File access properties; file locking is kept but not required (network file systems lack it).
+Handle file_access(const Location& context) {
+  Handle access(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  if (!access.valid()) context.fail_hdf5("cannot create file access properties");
+#if H5_VERSION_GE(1, 10, 7)
+  if (H5Pset_file_locking(access.id(), true, true) < 0) context.fail_hdf5("cannot set up file locking");
+#endif
+  return access;
+}
+
+}  // namespace
+
+std::string hdf5_error_detail() {
+  std::string innermost;
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, keep_innermost, &innermost);
+  return innermost;
+}
+
+std::string Location::child(std::string_view name) const {
+  std::string result = path_;
+  if (result.empty() || result.back() != '/') result += '/';
+  result += name;
+  return result;
+}
+
+void Location::fail(const std::string& message) const { throw BodyFileError(file_label_ + ": " + message); }
+
+void Location::fail_hdf5(const std::string& message) const {
+  const std::string detail = hdf5_error_detail();
+  fail(detail.empty() ? message : message + " (HDF5: " + detail + ")");
+}
+
+void Location::close() {
+  if (!handle_.close()) fail_hdf5("cannot close " + path_);
+}
+
+Location create_file(const std::filesystem::path& path, const std::string& file_label) {
+  const Location context(Handle(), file_label, "/");
+  const Handle access = file_access(context);
+  if (H5Pset_libver_bounds(access.id(), H5F_LIBVER_V18, H5F_LIBVER_V18) < 0 ||
+      H5Pset_fclose_degree(access.id(), H5F_CLOSE_SEMI) < 0) {
+    context.fail_hdf5("cannot set up file access properties");
+  }
+  Handle file(H5Fcreate(path.string().c_str(), H5F_ACC_EXCL, H5P_DEFAULT, access.id()), H5Fclose);
+  if (!file.valid()) context.fail_hdf5("cannot create the file " + path.string());
+  return {std::move(file), file_label, "/"};
+}
+
+bool is_hdf5_file(const std::filesystem::path& path) {
+  // The superblock signature sits at byte 0 or, after a user block, at 512, 1024, 2048, ...
+  static constexpr char kSignature[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
+  std::ifstream in(path, std::ios::binary);
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  if (!in || error) return false;
+  for (std::uintmax_t offset = 0; offset + sizeof kSignature <= size; offset = offset == 0 ? 512 : 2 * offset) {
+    char buffer[sizeof kSignature] = {};
+    in.seekg(static_cast<std::streamoff>(offset));
+    if (!in.read(buffer, sizeof buffer)) return false;
+    if (std::equal(buffer, buffer + sizeof buffer, kSignature)) return true;
+  }
+  return false;
+}
+
+Location open_file(const std::filesystem::path& path, const std::string& file_label) {
+  const Location context(Handle(), file_label, "/");
+  const Handle access = file_access(context);
+  Handle file(H5Fopen(path.string().c_str(), H5F_ACC_RDONLY, access.id()), H5Fclose);
+  if (!file.valid()) context.fail_hdf5("cannot be opened although it is an HDF5 file; it may be truncated or damaged");
+  return {std::move(file), file_label, "/"};
+}
+
+void flush_and_close(Location& file) {
+  if (H5Fflush(file.id(), H5F_SCOPE_GLOBAL) < 0) file.fail_hdf5("cannot flush the file to disk");
+  file.close();
+}
+
+Location create_group(const Location& parent, std::string_view name) {
+  const std::string key(name);
+  Handle group(H5Gcreate2(parent.id(), key.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+  if (!group.valid()) parent.fail_hdf5("cannot create group " + parent.child(name));
+  return {std::move(group), parent.file_label(), parent.child(name)};
+}
+
+Location open_group(const Location& parent, std::string_view name) {
+  const std::string key(name);
+  if (H5Lexists(parent.id(), key.c_str(), H5P_DEFAULT) <= 0) parent.fail("missing group " + parent.child(name));
+  Handle group(H5Gopen2(parent.id(), key.c_str(), H5P_DEFAULT), H5Gclose);
+  if (!group.valid()) parent.fail_hdf5(parent.child(name) + " cannot be opened as a group");
+  return {std::move(group), parent.file_label(), parent.child(name)};
+}
+
+ObjectKind object_kind(const Location& file, const std::string& path) {
+  if (H5Lexists(file.id(), path.c_str(), H5P_DEFAULT) <= 0) return ObjectKind::missing;
+  const Handle object(H5Oopen(file.id(), path.c_str(), H5P_DEFAULT), H5Oclose);
+  if (!object.valid()) return ObjectKind::other;
+  switch (H5Iget_type(object.id())) {
+    case H5I_GROUP: return ObjectKind::group;
+    case H5I_DATASET: return ObjectKind::dataset;
+    default: return ObjectKind::other;
+  }
+}
+
+}  // namespace flexbody::format::detail

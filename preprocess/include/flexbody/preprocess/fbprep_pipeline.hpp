@@ -1,0 +1,87 @@
+#pragma once
+// flexbody/preprocess/fbprep_pipeline.hpp: the whole of fbprep as one call, and its summary.
+//
+// \code
+//   flexbody::preprocess::PrepOptions options;
+//   options.input = "bracket.step";
+//   options.output = "bracket.fbh5";
+//   options.modes.modes = 12;
+//   const auto summary = flexbody::preprocess::run_fbprep(options);
+//   std::cout << summary.full_report();
+// \endcode
+
+#include "flexbody/preprocess/free_free_modes.hpp"
+#include "flexbody/preprocess/gmsh_import.hpp"
+#include "flexbody/preprocess/material.hpp"
+#include "flexbody/preprocess/mesh_topology.hpp"
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace flexbody::preprocess {
+
+/// The fbprep version written into every body file (created_by).
+inline constexpr const char* kFbprepVersion = "0.1.0";
+
+struct PrepOptions {
+  std::filesystem::path input;
+  std::filesystem::path output;
+  GmshImportOptions mesh;  ///< unit, mesh size, order
+  Material material{"steel", 210e9, 0.30, 7850.0};
+  FreeFreeOptions modes;   ///< number of modes, fmax, eigensolver backend
+  /// The options as the user gave them, recorded in the body file's provenance.
+  std::vector<std::pair<std::string, std::string>> recorded_options;
+  /// Called with a short message at the start of each long step.
+  std::function<void(const std::string&)> progress;
+};
+
+/// Wall time and the process' memory high-water mark at the end of one stage.
+struct StageRecord {
+  std::string name;
+  double seconds = 0.0;
+  double peak_memory_mb = 0.0;
+};
+
+/// What fbprep did, for FullReport() and --json. Starts empty; run_fbprep fills every field.
+struct PrepSummary {
+  std::filesystem::path input, output;
+  std::string input_sha256;
+  InputFormat format = InputFormat::step;
+  std::string unit, unit_reason;
+  int volumes = 0;
+  bool meshed_here = true;
+  double mesh_size_m = 0.0;
+  Eigen::Index nodes = 0, elements = 0, dofs = 0, surface_triangles = 0;
+  MeshQuality quality;
+  Material material;
+  format::MassProperties mass;
+  Eigen::VectorXd frequencies_hz, relative_residuals;
+  double shift = 0.0;
+  std::string eigensolver;
+  double rigid_body_residual = 0.0, rigid_body_coupling = 0.0;
+  int solver_runs = 0, restarts = 0, operator_applies = 0;
+  ShiftSolveStats factor;
+  std::vector<StageRecord> stages;
+  double total_seconds = 0.0;
+  double peak_memory_mb = 0.0;
+  std::uintmax_t output_bytes = 0;
+
+  [[nodiscard]] std::string full_report() const;
+  /// The summary as one JSON object (a single line).
+  [[nodiscard]] std::string json() const;
+};
+
+/// Runs every stage and writes options.output atomically. Throws std::runtime_error or
+/// std::invalid_argument with one line naming the problem; then no file is left under options.output.
+[[nodiscard]] PrepSummary run_fbprep(const PrepOptions& options);
+
+/// SHA-256 of a file's bytes, lowercase hex.
+[[nodiscard]] std::string sha256_of_file(const std::filesystem::path& path);
+
+/// The process' memory high-water mark (VmHWM) in MB.
+[[nodiscard]] double peak_memory_mb();
+
+}  // namespace flexbody::preprocess

@@ -1,0 +1,47 @@
+#pragma once
+// flexbody/preprocess/gmsh_import.hpp: CAD or mesh file -> linear tetrahedral mesh in metres (gmsh).
+
+#include "flexbody/preprocess/length_unit.hpp"
+#include "flexbody/preprocess/tet_mesh.hpp"
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
+namespace flexbody::preprocess {
+
+enum class InputFormat { step, iges, brep, geo, msh };
+[[nodiscard]] std::string_view to_string(InputFormat format);
+/// From the file extension (case-insensitive); throws std::invalid_argument for anything else.
+[[nodiscard]] InputFormat input_format_of(const std::filesystem::path& path);
+
+struct GmshImportOptions {
+  /// Length unit of the input. STEP and IGES files declare their own unit, which OpenCASCADE
+  /// honours (gmsh hands the geometry over in mm); for them `unit` only states the unit of
+  /// `mesh_size`. BREP, .geo and .msh files carry no unit: `unit` is required for them.
+  std::optional<LengthUnit> unit;
+  /// Target element size in `unit` (0: one twenty-fifth of the bounding-box diagonal).
+  double mesh_size = 0.0;
+  /// Element order; 1 (linear tetrahedra) is the only one implemented.
+  int order = 1;
+  /// Called with a short message before each long step.
+  std::function<void(const std::string&)> progress;
+};
+
+struct ImportedMesh {
+  TetMesh mesh;  ///< nodes in metres, in the input's frame
+  InputFormat format = InputFormat::step;
+  LengthUnit unit = LengthUnit::metre;  ///< the unit the geometry was read in
+  std::string unit_reason;              ///< why that unit (for the report)
+  int volumes = 0;                      ///< CAD volumes (0 for .msh)
+  double mesh_size_m = 0.0;             ///< element size asked of gmsh [m] (0 for .msh)
+  bool meshed_here = true;              ///< false when a .msh's tetrahedra were used as they are
+};
+
+/// Imports `path` with gmsh and returns its linear tetrahedra in metres. Throws std::runtime_error
+/// with one line naming the file and the problem: unreadable file, no volume, several disconnected
+/// solids, inverted or zero-volume elements, a .msh without tetrahedra.
+[[nodiscard]] ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImportOptions& options);
+
+}  // namespace flexbody::preprocess

@@ -1,0 +1,115 @@
+#include "flexbody/preprocess/assembly.hpp"
+
+#include <algorithm>
+
+namespace flexbody::preprocess {
+namespace {
+
+// Index of node i within the sorted upper column of node j.
+std::int64_t position_in_column(const NodeGraph& graph, std::int64_t j, std::int32_t i) {
+  const auto first = graph.rows.begin() + graph.column_start[j];
+  const auto last = graph.rows.begin() + graph.column_start[j + 1];
+  return std::lower_bound(first, last, i) - first;
+}
+
+// An empty compressed matrix with the given column pointers and row indices.
+SparseMatrix make_pattern(std::int64_t size, const std::vector<std::int64_t>& column_start,
+                          const std::vector<std::int64_t>& rows) {
+  SparseMatrix matrix(size, size);
+  matrix.resizeNonZeros(static_cast<Eigen::Index>(rows.size()));
+  std::copy(column_start.begin(), column_start.end(), matrix.outerIndexPtr());
+  std::copy(rows.begin(), rows.end(), matrix.innerIndexPtr());
+  std::fill(matrix.valuePtr(), matrix.valuePtr() + rows.size(), 0.0);
+  return matrix;
+}
+
+}  // namespace
+
+SparseMatrix assemble_stiffness(const TetMesh& mesh, const NodeGraph& graph,
+                                const std::vector<Tet4Geometry>& geometry, const Material& material) {
+  const std::int64_t n_nodes = mesh.node_count();
+  const double lambda = lame_lambda(material);
+  const double mu = shear_modulus(material);
+
+  // DOF pattern of the upper triangle. Node column j has degree d_j (itself last); DOF column 3j+c
+  // holds rows 3i..3i+2 for each neighbour i < j, then rows 3j..3j+c of the diagonal block. So the
+  // entry (3i+r, 3j+c) of the k-th neighbour sits at start(3j+c) + 3k + r in both cases.
+  std::vector<std::int64_t> column_start(3 * n_nodes + 1, 0);
+  for (std::int64_t j = 0; j < n_nodes; ++j) {
+    const std::int64_t degree = graph.column_start[j + 1] - graph.column_start[j];
+    for (int c = 0; c < 3; ++c)
+      column_start[3 * j + c + 1] = column_start[3 * j + c] + 3 * (degree - 1) + c + 1;
+  }
+  std::vector<std::int64_t> rows(column_start.back());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t j = 0; j < n_nodes; ++j) {
+    const std::int64_t degree = graph.column_start[j + 1] - graph.column_start[j];
+    for (int c = 0; c < 3; ++c)
+      for (std::int64_t k = 0; k < degree; ++k) {
+        const std::int64_t i = graph.rows[graph.column_start[j] + k];
+        const int last_row = (k + 1 == degree) ? c : 2;
+        for (int r = 0; r <= last_row; ++r) rows[column_start[3 * j + c] + 3 * k + r] = 3 * i + r;
+      }
+  }
+  SparseMatrix stiffness = make_pattern(3 * n_nodes, column_start, rows);
+  std::vector<std::int64_t>().swap(rows);
+  double* values = stiffness.valuePtr();
+
+  // Each thread owns whole node columns: deterministic sums, no write conflicts.
+#pragma omp parallel for schedule(dynamic, 64)
+  for (std::int64_t j = 0; j < n_nodes; ++j) {
+    for (std::int64_t s = graph.incidence_start[j]; s < graph.incidence_start[j + 1]; ++s) {
+      const std::int64_t e = graph.incidence[s] / 4;
+      const int a = static_cast<int>(graph.incidence[s] % 4);
+      for (int b = 0; b < 4; ++b) {
+        const std::int32_t i = mesh.tets(e, b);
+        if (i > j) continue;
+        const std::int64_t k = position_in_column(graph, j, i);
+        const Eigen::Matrix3d block = tet4_stiffness_block(geometry[e], b, a, lambda, mu);
+        for (int c = 0; c < 3; ++c)
+          for (int r = 0; r <= (i == j ? c : 2); ++r) values[column_start[3 * j + c] + 3 * k + r] += block(r, c);
+      }
+    }
+  }
+  return stiffness;
+}
+
+SparseMatrix assemble_scalar_mass(const TetMesh& mesh, const NodeGraph& graph,
+                                  const std::vector<Tet4Geometry>& geometry, double density,
+                                  MassScheme scheme) {
+  const std::int64_t n_nodes = mesh.node_count();
+  std::vector<std::int64_t> rows(graph.rows.begin(), graph.rows.end());
+  SparseMatrix mass = make_pattern(n_nodes, graph.column_start, rows);
+  double* values = mass.valuePtr();
+#pragma omp parallel for schedule(dynamic, 64)
+  for (std::int64_t j = 0; j < n_nodes; ++j) {
+    for (std::int64_t s = graph.incidence_start[j]; s < graph.incidence_start[j + 1]; ++s) {
+      const std::int64_t e = graph.incidence[s] / 4;
+      const int a = static_cast<int>(graph.incidence[s] % 4);
+      for (int b = 0; b < 4; ++b) {
+        const std::int32_t i = mesh.tets(e, b);
+        if (i > j) continue;
+        values[graph.column_start[j] + position_in_column(graph, j, i)] +=
+            tet4_mass_entry(density, geometry[e].volume, b, a, scheme);
+      }
+    }
+  }
+  if (scheme == MassScheme::lumped) mass.prune(0.0);
+  return mass;
+}
+
+void apply_vector_mass(const SparseMatrix& scalar_mass_upper, const Eigen::Ref<const Eigen::VectorXd>& x,
+                       Eigen::Ref<Eigen::VectorXd> y) {
+  using NodeField = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  const Eigen::Index n = scalar_mass_upper.rows();
+  Eigen::Map<const NodeField> xs(x.data(), n, 3);
+  Eigen::Map<NodeField> ys(y.data(), n, 3);
+  ys.noalias() = scalar_mass_upper.selfadjointView<Eigen::Upper>() * xs;
+}
+
+void apply_symmetric(const SparseMatrix& upper, const Eigen::Ref<const Eigen::VectorXd>& x,
+                     Eigen::Ref<Eigen::VectorXd> y) {
+  y.noalias() = upper.selfadjointView<Eigen::Upper>() * x;
+}
+
+}  // namespace flexbody::preprocess

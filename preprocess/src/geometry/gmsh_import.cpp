@@ -1,0 +1,213 @@
+#include "flexbody/preprocess/gmsh_import.hpp"
+
+#include "flexbody/preprocess/mesh_topology.hpp"
+#include "gmsh_session.hpp"
+#include "step_unit.hpp"
+
+#include <fmt/format.h>
+#include <gmsh.h>
+
+#include <algorithm>
+#include <fstream>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace flexbody::preprocess {
+namespace {
+
+constexpr int kGmshTet4 = 4;  // gmsh element type of the 4-node tetrahedron
+// Refuse a mesh size that would give more tetrahedra than this: 2e7 tets are ~1e7 DOFs, several times
+// what fits in 24 GiB, and such a request is nearly always a unit mistake.
+constexpr double kMaxEstimatedElements = 2e7;
+
+// Tetrahedra gmsh would make at element size h: about 6 per cube of side h (at least 6 V / h^3 / 1.2
+// for gmsh's nearly regular tets, whose volume is h^3 / 8.5).
+double estimated_elements(double volume, double h) { return 8.5 * volume / (h * h * h); }
+
+double volume_of(const gmsh::vectorpair& volumes, double bounding_box_volume) {
+  double total = 0.0;
+  try {
+    for (const auto& [dim, tag] : volumes) {
+      double mass = 0.0;
+      gmsh::model::occ::getMass(dim, tag, mass);
+      total += mass;
+    }
+  } catch (const std::string&) {  // not an OpenCASCADE model: fall back to the bounding box
+    return bounding_box_volume;
+  }
+  return total > 0.0 ? total : bounding_box_volume;
+}
+
+std::string lowercase(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
+  return text;
+}
+
+// Decides the unit of the geometry as gmsh delivers it, and the factor to metres.
+struct UnitDecision {
+  LengthUnit geometry_unit;   // unit of the numbers in the file
+  double gmsh_to_metres;      // factor from gmsh's coordinates to metres
+  double size_unit_to_gmsh;   // factor from the --mesh-size unit to gmsh's coordinates
+  std::string reason;
+};
+
+UnitDecision decide_unit(const std::filesystem::path& path, InputFormat format, std::optional<LengthUnit> unit) {
+  const std::string name = path.filename().string();
+  if (format == InputFormat::step || format == InputFormat::iges) {
+    // OpenCASCADE converts the declared unit to mm; gmsh's coordinates are then millimetres.
+    std::optional<LengthUnit> declared;
+    if (format == InputFormat::step) declared = detail::declared_step_unit(path);
+    UnitDecision d{declared.value_or(LengthUnit::millimetre), 1e-3, 0.0, ""};
+    const std::string kind = format == InputFormat::step ? "STEP" : "IGES";
+    d.reason = declared ? fmt::format("declared in the {} file ({}); OpenCASCADE converts it to mm", kind,
+                                      to_string(*declared))
+                        : fmt::format("as declared in the {} file; OpenCASCADE converts it to mm", kind);
+    const LengthUnit size_unit = unit.value_or(declared.value_or(LengthUnit::millimetre));
+    d.size_unit_to_gmsh = metres_per(size_unit) / 1e-3;
+    if (unit) d.reason += fmt::format("; --mesh-size read in {} (--unit)", to_string(*unit));
+    return d;
+  }
+  if (!unit)
+    throw std::runtime_error(fmt::format("{}: {} files carry no length unit; pass --unit mm|cm|m|in", name,
+                                         to_string(format)));
+  return UnitDecision{*unit, metres_per(*unit), 1.0, fmt::format("given with --unit ({} carries no unit)", to_string(format))};
+}
+
+void check_readable(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw std::runtime_error(fmt::format("{}: no such file", path.string()));
+  if (std::filesystem::is_directory(path, ec))
+    throw std::runtime_error(fmt::format("{}: is a directory, not a file", path.string()));
+  std::ifstream probe(path, std::ios::binary);
+  if (!probe) throw std::runtime_error(fmt::format("{}: cannot be opened for reading", path.string()));
+}
+
+TetMesh tetrahedra_from_gmsh(const std::string& name) {
+  std::vector<std::size_t> node_tags;
+  std::vector<double> coordinates, parametric;
+  gmsh::model::mesh::getNodes(node_tags, coordinates, parametric, -1, -1, /*includeBoundary=*/true, false);
+  std::vector<std::size_t> element_tags, element_nodes;
+  gmsh::model::mesh::getElementsByType(kGmshTet4, element_tags, element_nodes);
+  if (element_tags.empty()) {
+    std::vector<int> types;
+    gmsh::model::mesh::getElementTypes(types);
+    const bool quadratic = std::find(types.begin(), types.end(), 11) != types.end();
+    throw std::runtime_error(fmt::format("{}: the mesh has no linear tetrahedra{}", name,
+                                         quadratic ? " (it has quadratic ones; use --order 1 meshes)" : ""));
+  }
+  std::unordered_map<std::size_t, std::int32_t> index;
+  index.reserve(node_tags.size());
+  TetMesh mesh;
+  mesh.nodes.resize(static_cast<Eigen::Index>(node_tags.size()), 3);
+  for (std::size_t k = 0; k < node_tags.size(); ++k) {
+    index.emplace(node_tags[k], static_cast<std::int32_t>(k));
+    for (int c = 0; c < 3; ++c) mesh.nodes(static_cast<Eigen::Index>(k), c) = coordinates[3 * k + c];
+  }
+  mesh.tets.resize(static_cast<Eigen::Index>(element_tags.size()), 4);
+  for (std::size_t e = 0; e < element_tags.size(); ++e)
+    for (int a = 0; a < 4; ++a) {
+      const auto it = index.find(element_nodes[4 * e + a]);
+      if (it == index.end())
+        throw std::runtime_error(fmt::format("{}: tetrahedron {} refers to missing node {}", name, element_tags[e],
+                                             element_nodes[4 * e + a]));
+      mesh.tets(static_cast<Eigen::Index>(e), a) = it->second;
+    }
+  remove_unused_nodes(mesh);
+  return mesh;
+}
+
+}  // namespace
+
+std::string_view to_string(InputFormat format) {
+  switch (format) {
+    case InputFormat::step: return "STEP";
+    case InputFormat::iges: return "IGES";
+    case InputFormat::brep: return "BREP";
+    case InputFormat::geo: return "gmsh .geo";
+    case InputFormat::msh: return "gmsh .msh";
+  }
+  return "?";
+}
+
+InputFormat input_format_of(const std::filesystem::path& path) {
+  const std::string ext = lowercase(path.extension().string());
+  if (ext == ".step" || ext == ".stp") return InputFormat::step;
+  if (ext == ".iges" || ext == ".igs") return InputFormat::iges;
+  if (ext == ".brep") return InputFormat::brep;
+  if (ext == ".geo") return InputFormat::geo;
+  if (ext == ".msh") return InputFormat::msh;
+  throw std::invalid_argument(fmt::format("{}: unsupported file type '{}'; use .step/.stp, .iges/.igs, .brep, "
+                                          ".geo or .msh", path.string(), ext));
+}
+
+ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImportOptions& options) {
+  const std::string name = path.filename().string();
+  ImportedMesh result;
+  result.format = input_format_of(path);
+  check_readable(path);
+  if (options.order != 1)
+    throw std::invalid_argument(fmt::format("--order {}: only linear tetrahedra (--order 1) are implemented", options.order));
+  if (!(options.mesh_size >= 0.0) || !std::isfinite(options.mesh_size))
+    throw std::invalid_argument(fmt::format("--mesh-size must be a positive length, got {}", options.mesh_size));
+  const UnitDecision unit = decide_unit(path, result.format, options.unit);
+  result.unit = unit.geometry_unit;
+  result.unit_reason = unit.reason;
+
+  detail::GmshSession session;
+  if (options.progress) options.progress("reading " + name);
+  {
+    detail::SilencedStdStreams quiet;
+    detail::gmsh_call(name, [&] {
+      if (result.format == InputFormat::geo || result.format == InputFormat::msh) {
+        gmsh::open(path.string());
+      } else {
+        gmsh::model::add("part");
+        gmsh::vectorpair imported;
+        gmsh::model::occ::importShapes(path.string(), imported, /*highestDimOnly=*/true);
+        gmsh::model::occ::synchronize();
+      }
+    });
+  }
+
+  if (result.format == InputFormat::msh) {
+    result.meshed_here = false;
+  } else {
+    gmsh::vectorpair volumes, surfaces;
+    gmsh::model::getEntities(volumes, 3);
+    gmsh::model::getEntities(surfaces, 2);
+    result.volumes = static_cast<int>(volumes.size());
+    if (volumes.empty())
+      throw std::runtime_error(fmt::format("{}: the input has no volume ({} surfaces); fbprep needs a solid", name,
+                                           surfaces.size()));
+    double xmin, ymin, zmin, xmax, ymax, zmax;
+    gmsh::model::getBoundingBox(-1, -1, xmin, ymin, zmin, xmax, ymax, zmax);
+    const double diagonal = std::hypot(xmax - xmin, ymax - ymin, zmax - zmin);
+    const double size = options.mesh_size > 0.0 ? options.mesh_size * unit.size_unit_to_gmsh : diagonal / 25.0;
+    result.mesh_size_m = size * unit.gmsh_to_metres;
+    const double elements = estimated_elements(volume_of(volumes, (xmax - xmin) * (ymax - ymin) * (zmax - zmin)), size);
+    if (elements > kMaxEstimatedElements)
+      throw std::invalid_argument(fmt::format(
+          "{}: element size {:.4g} m would give about {:.2g} tetrahedra for a part of {:.4g} x {:.4g} x {:.4g} m "
+          "(limit {:.0e}); check --unit and --mesh-size", name, result.mesh_size_m, elements,
+          (xmax - xmin) * unit.gmsh_to_metres, (ymax - ymin) * unit.gmsh_to_metres, (zmax - zmin) * unit.gmsh_to_metres,
+          kMaxEstimatedElements));
+    gmsh::option::setNumber("Mesh.MeshSizeMax", size);
+    gmsh::option::setNumber("Mesh.ElementOrder", 1);
+    gmsh::option::setNumber("Mesh.Optimize", 1);
+    if (options.progress) options.progress(fmt::format("meshing {} volume(s), element size {:.4g} m", volumes.size(),
+                                                       result.mesh_size_m));
+    detail::SilencedStdStreams quiet;
+    detail::gmsh_call(name + ": meshing failed", [] { gmsh::model::mesh::generate(3); });
+  }
+  result.mesh = detail::gmsh_call(name, [&] { return tetrahedra_from_gmsh(name); });
+  result.mesh.nodes *= unit.gmsh_to_metres;
+
+  const MeshComponents components = connected_components(result.mesh);
+  if (components.count > 1)
+    throw std::runtime_error(fmt::format("{}: found {} disconnected solids; an assembly is not one body (export "
+                                         "each part on its own, or fuse them in CAD)", name, components.count));
+  check_element_volumes(result.mesh, name);
+  return result;
+}
+
+}  // namespace flexbody::preprocess

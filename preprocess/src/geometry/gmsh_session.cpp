@@ -1,0 +1,49 @@
+#include "gmsh_session.hpp"
+
+#include <gmsh.h>
+
+#include <cstdio>
+#include <fcntl.h>
+#include <unistd.h>
+
+namespace flexbody::preprocess::detail {
+
+SilencedStdStreams::SilencedStdStreams() {
+  std::fflush(stdout);
+  std::fflush(stderr);
+  const int null = ::open("/dev/null", O_WRONLY);
+  if (null < 0) return;
+  saved_stdout_ = ::dup(STDOUT_FILENO);
+  saved_stderr_ = ::dup(STDERR_FILENO);
+  ::dup2(null, STDOUT_FILENO);
+  ::dup2(null, STDERR_FILENO);
+  ::close(null);
+}
+
+SilencedStdStreams::~SilencedStdStreams() {
+  std::fflush(stdout);
+  std::fflush(stderr);
+  if (saved_stdout_ >= 0) {
+    ::dup2(saved_stdout_, STDOUT_FILENO);
+    ::close(saved_stdout_);
+  }
+  if (saved_stderr_ >= 0) {
+    ::dup2(saved_stderr_, STDERR_FILENO);
+    ::close(saved_stderr_);
+  }
+}
+
+GmshSession::GmshSession() {
+  gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
+  gmsh::option::setNumber("General.Terminal", 0);
+  gmsh::option::setNumber("General.Verbosity", 2);  // errors and warnings only
+}
+
+GmshSession::~GmshSession() {
+  try {
+    gmsh::finalize();
+  } catch (...) {  // never throw from a destructor
+  }
+}
+
+}  // namespace flexbody::preprocess::detail

@@ -1,0 +1,169 @@
+#include "flexbody/preprocess/shift_invert_operator.hpp"
+
+#include "flexbody/preprocess/assembly.hpp"
+
+#include <cholmod.h>
+
+#include <algorithm>
+#include <chrono>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace flexbody::preprocess {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// A cholmod_dense header over caller-owned column-major memory (no copy).
+cholmod_dense dense_view(double* data, std::size_t rows, std::size_t cols) {
+  cholmod_dense view{};
+  view.nrow = rows;
+  view.ncol = cols;
+  view.nzmax = rows * cols;
+  view.d = rows;
+  view.x = data;
+  view.z = nullptr;
+  view.xtype = CHOLMOD_REAL;
+  view.dtype = CHOLMOD_DOUBLE;
+  return view;
+}
+
+}  // namespace
+
+void VectorMassOperator::perform_op(const double* x, double* y) const {
+  const Eigen::Index n = rows();
+  apply_vector_mass(mass_, Eigen::Map<const Eigen::VectorXd>(x, n), Eigen::Map<Eigen::VectorXd>(y, n));
+}
+
+struct CholmodShiftSolve::Impl {
+  const SparseMatrix& stiffness;
+  const SparseMatrix& mass;
+  Eigen::MatrixXd deflation;       // R, M̄-orthonormal
+  Eigen::MatrixXd mass_deflation;  // M̄ R
+  std::vector<std::int64_t> mass_positions;  // where each (3i+c, 3j+c) of M̄ sits in K's pattern
+  cholmod_common common{};
+  cholmod_sparse* matrix = nullptr;
+  cholmod_factor* factor = nullptr;
+  cholmod_dense* x = nullptr;  // solve2 workspaces, reused between solves
+  cholmod_dense* y = nullptr;
+  cholmod_dense* e = nullptr;
+
+  Impl(const SparseMatrix& k, const SparseMatrix& m) : stiffness(k), mass(m) {
+    cholmod_l_start(&common);
+    common.print = 0;
+    common.supernodal = CHOLMOD_SUPERNODAL;
+  }
+  ~Impl() {
+    cholmod_l_free_dense(&x, &common);
+    cholmod_l_free_dense(&y, &common);
+    cholmod_l_free_dense(&e, &common);
+    cholmod_l_free_factor(&factor, &common);
+    cholmod_l_free_sparse(&matrix, &common);
+    cholmod_l_finish(&common);
+  }
+
+  void locate_mass_entries() {
+    mass_positions.reserve(3 * static_cast<std::size_t>(mass.nonZeros()));
+    const std::int64_t* col = stiffness.outerIndexPtr();
+    const std::int64_t* row = stiffness.innerIndexPtr();
+    for (Eigen::Index j = 0; j < mass.outerSize(); ++j)
+      for (SparseMatrix::InnerIterator it(mass, j); it; ++it)
+        for (int c = 0; c < 3; ++c) {
+          const std::int64_t target_col = 3 * j + c;
+          const std::int64_t target_row = 3 * it.row() + c;
+          const std::int64_t* first = row + col[target_col];
+          const std::int64_t* last = row + col[target_col + 1];
+          const std::int64_t* found = std::lower_bound(first, last, target_row);
+          if (found == last || *found != target_row)
+            throw std::logic_error("shift-invert: the mass pattern is not contained in the stiffness pattern");
+          mass_positions.push_back(found - row);
+        }
+  }
+};
+
+CholmodShiftSolve::CholmodShiftSolve(const SparseMatrix& stiffness_upper, const SparseMatrix& scalar_mass_upper,
+                                     Eigen::MatrixXd deflation)
+    : impl_(std::make_unique<Impl>(stiffness_upper, scalar_mass_upper)) {
+  if (stiffness_upper.rows() != 3 * scalar_mass_upper.rows() || !stiffness_upper.isCompressed() ||
+      !scalar_mass_upper.isCompressed())
+    throw std::logic_error("shift-invert: K must be 3 n_n square and both matrices compressed");
+  impl_->deflation = std::move(deflation);
+  impl_->mass_deflation.resize(impl_->deflation.rows(), impl_->deflation.cols());
+  for (Eigen::Index k = 0; k < impl_->deflation.cols(); ++k)
+    apply_vector_mass(scalar_mass_upper, impl_->deflation.col(k), impl_->mass_deflation.col(k));
+  impl_->locate_mass_entries();
+
+  const auto n = static_cast<std::size_t>(stiffness_upper.rows());
+  const auto nnz = static_cast<std::size_t>(stiffness_upper.nonZeros());
+  impl_->matrix = cholmod_l_allocate_sparse(n, n, nnz, /*sorted=*/1, /*packed=*/1, /*stype=*/1, CHOLMOD_REAL,
+                                            &impl_->common);
+  if (impl_->matrix == nullptr) throw std::runtime_error("shift-invert: out of memory for K - sigma M");
+  std::copy_n(stiffness_upper.outerIndexPtr(), n + 1, static_cast<std::int64_t*>(impl_->matrix->p));
+  std::copy_n(stiffness_upper.innerIndexPtr(), nnz, static_cast<std::int64_t*>(impl_->matrix->i));
+
+  const auto start = std::chrono::steady_clock::now();
+  impl_->factor = cholmod_l_analyze(impl_->matrix, &impl_->common);
+  if (impl_->factor == nullptr) throw std::runtime_error("shift-invert: CHOLMOD analysis failed (out of memory?)");
+  stats_.analyze_seconds = seconds_since(start);
+}
+
+CholmodShiftSolve::~CholmodShiftSolve() = default;
+
+Eigen::Index CholmodShiftSolve::rows() const { return impl_->stiffness.rows(); }
+
+void CholmodShiftSolve::set_shift(double sigma) {
+  sigma_ = sigma;
+  auto* values = static_cast<double*>(impl_->matrix->x);
+  std::copy_n(impl_->stiffness.valuePtr(), impl_->stiffness.nonZeros(), values);
+  std::size_t next = 0;
+  const double* mass_values = impl_->mass.valuePtr();
+  for (Eigen::Index k = 0; k < impl_->mass.nonZeros(); ++k)
+    for (int c = 0; c < 3; ++c) values[impl_->mass_positions[next++]] -= sigma * mass_values[k];
+
+  const auto start = std::chrono::steady_clock::now();
+  const int ok = cholmod_l_factorize(impl_->matrix, impl_->factor, &impl_->common);
+  stats_.factorize_seconds += seconds_since(start);
+  if (!ok || impl_->common.status != CHOLMOD_OK)
+    throw std::runtime_error(impl_->common.status == CHOLMOD_NOT_POSDEF
+                                 ? "shift-invert: K - sigma M is not positive definite at sigma = " +
+                                       std::to_string(sigma) + " (column " +
+                                       std::to_string(impl_->factor->minor) + ")"
+                                 : "shift-invert: CHOLMOD factorization failed (status " +
+                                       std::to_string(impl_->common.status) + ")");
+  stats_.factor_nonzeros = impl_->common.lnz;
+  stats_.factor_flops = impl_->common.fl;
+}
+
+void CholmodShiftSolve::perform_op(const double* x, double* y) {
+  const auto n = static_cast<std::size_t>(rows());
+  cholmod_dense rhs = dense_view(const_cast<double*>(x), n, 1);
+  const auto start = std::chrono::steady_clock::now();
+  if (!cholmod_l_solve2(CHOLMOD_A, impl_->factor, &rhs, nullptr, &impl_->x, nullptr, &impl_->y, &impl_->e,
+                        &impl_->common))
+    throw std::runtime_error("shift-invert: CHOLMOD solve failed");
+  stats_.solve_seconds += seconds_since(start);
+  ++stats_.solves;
+  Eigen::Map<Eigen::VectorXd> result(y, static_cast<Eigen::Index>(n));
+  result = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(impl_->x->x), static_cast<Eigen::Index>(n));
+  if (impl_->deflation.cols() > 0)  // y <- y - R (M̄ R)ᵀ y
+    result.noalias() -= impl_->deflation * (impl_->mass_deflation.transpose() * result);
+}
+
+void CholmodShiftSolve::solve_block(const Eigen::MatrixXd& x, Eigen::MatrixXd& y) {
+  const auto n = static_cast<std::size_t>(rows());
+  cholmod_dense rhs = dense_view(const_cast<double*>(x.data()), n, static_cast<std::size_t>(x.cols()));
+  cholmod_dense* solution = nullptr;
+  const auto start = std::chrono::steady_clock::now();
+  solution = cholmod_l_solve(CHOLMOD_A, impl_->factor, &rhs, &impl_->common);
+  if (solution == nullptr) throw std::runtime_error("shift-invert: CHOLMOD block solve failed");
+  stats_.solve_seconds += seconds_since(start);
+  stats_.solves += x.cols();
+  y = Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(solution->x), x.rows(), x.cols());
+  cholmod_l_free_dense(&solution, &impl_->common);
+  if (impl_->deflation.cols() > 0) y.noalias() -= impl_->deflation * (impl_->mass_deflation.transpose() * y);
+}
+
+}  // namespace flexbody::preprocess

@@ -1,0 +1,135 @@
+#include "flexbody/preprocess/free_free_modes.hpp"
+
+#include "flexbody/preprocess/assembly.hpp"
+#include "flexbody/preprocess/rigid_body_modes.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace flexbody::preprocess {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+// A mode whose residual exceeds this is not accepted (issue: every mode below 1e-8).
+constexpr double kMaxRelativeResidual = 1e-8;
+// Elastic eigenvalues below this fraction of the reference bar's (2 pi f_ref)^2 are zero-energy modes:
+// a real part is 1e5 times less stiff than a bar only as a mechanism (f below 1e-5 f_ref, i.e. below
+// 0.03 Hz for a 1 m steel part, where a real first mode is tens of Hz or more).
+constexpr double kZeroEnergyFraction = 1e-10;
+
+double reference_frequency(const RowMatrixX3d& nodes, const Material& material) {
+  const double diagonal = (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm();
+  return std::sqrt(material.youngs_modulus / material.density) / (2.0 * diagonal);
+}
+
+double one_norm(const SparseMatrix& upper) {
+  const SparseMatrix full = full_from_upper(upper);
+  double norm = 0.0;
+  for (Eigen::Index j = 0; j < full.outerSize(); ++j) {
+    double column = 0.0;
+    for (SparseMatrix::InnerIterator it(full, j); it; ++it) column += std::abs(it.value());
+    norm = std::max(norm, column);
+  }
+  return norm;
+}
+
+}  // namespace
+
+double automatic_shift(const RowMatrixX3d& nodes, const Material& material) {
+  const double f_shift = reference_frequency(nodes, material) / 20.0;
+  return -(kTwoPi * f_shift) * (kTwoPi * f_shift);
+}
+
+Eigen::MatrixXd upsilon_from_modes(const Eigen::MatrixXd& modes) {
+  const Eigen::Index n_nodes = modes.rows() / 3;
+  Eigen::MatrixXd upsilon(n_nodes, 3 * modes.cols());
+  for (Eigen::Index m = 0; m < modes.cols(); ++m)
+    for (Eigen::Index i = 0; i < n_nodes; ++i)
+      for (int k = 0; k < 3; ++k) upsilon(i, 3 * m + k) = modes(3 * i + k, m);
+  return upsilon;
+}
+
+FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
+                              const SparseMatrix& scalar_mass_upper, const Material& material,
+                              const FreeFreeOptions& options) {
+  if (options.modes < 0) throw std::invalid_argument(fmt::format("modes: must be >= 0, got {}", options.modes));
+  if (options.fmax_hz < 0.0 || !std::isfinite(options.fmax_hz))
+    throw std::invalid_argument(fmt::format("fmax: must be a positive frequency, got {}", options.fmax_hz));
+  if (options.shift > 0.0 || !std::isfinite(options.shift))
+    throw std::invalid_argument(fmt::format("shift: must be negative, got {}", options.shift));
+  const Eigen::Index n = stiffness_upper.rows();
+  const int available = static_cast<int>(std::min<Eigen::Index>(n - 6 - 2, 100000));
+  if (available < 1) throw std::invalid_argument("free-free modes: the mesh has too few nodes");
+
+  FreeFreeModes result;
+  const Eigen::MatrixXd rigid = rigid_body_modes(nodes, scalar_mass_upper);
+  {  // K must annihilate the rigid fields; this also checks the assembly.
+    const double k_norm = one_norm(stiffness_upper);
+    Eigen::VectorXd kr(n);
+    for (int k = 0; k < 6; ++k) {
+      apply_symmetric(stiffness_upper, rigid.col(k), kr);
+      result.rigid_body_residual = std::max(result.rigid_body_residual, kr.norm() / (k_norm * rigid.col(k).norm()));
+    }
+  }
+  result.shift = options.shift < 0.0 ? options.shift : automatic_shift(nodes, material);
+  CholmodShiftSolve op(stiffness_upper, scalar_mass_upper, rigid);
+  op.set_shift(result.shift);
+  const VectorMassOperator mass(scalar_mass_upper);
+
+  int nev = std::min(options.modes > 0 ? options.modes : 12, available);
+  EigenPairs pairs;
+  while (true) {
+    if (options.progress) options.progress(fmt::format("eigensolver: {} modes by {}", nev, to_string(options.solver.backend)));
+    pairs = solve_shift_invert(op, mass, nev, options.solver);
+    ++result.solver_runs;
+    result.restarts += pairs.iterations;
+    result.operator_applies += pairs.operator_applies;
+    const double f_top = std::sqrt(std::max(pairs.eigenvalues(nev - 1), 0.0)) / kTwoPi;
+    const bool enough_for_fmax = options.fmax_hz <= 0.0 || f_top > options.fmax_hz;
+    const bool capped = options.modes > 0 && nev >= options.modes;
+    if (enough_for_fmax || capped || nev >= available) break;
+    nev = std::min(2 * nev, available);
+  }
+
+  const double zero_energy = kZeroEnergyFraction * std::pow(kTwoPi * reference_frequency(nodes, material), 2);
+  int zero_modes = 0;
+  for (Eigen::Index k = 0; k < pairs.eigenvalues.size(); ++k) zero_modes += pairs.eigenvalues(k) < zero_energy;
+  if (zero_modes > 0)
+    throw std::runtime_error(fmt::format(
+        "free-free modes: {} zero-energy modes beyond the 6 rigid-body modes (lowest {:.3g} Hz): the mesh "
+        "has a mechanism (parts joined only at an edge or a node) or is not one connected solid",
+        zero_modes, std::sqrt(std::max(pairs.eigenvalues(0), 0.0)) / kTwoPi));
+
+  Eigen::Index keep = pairs.eigenvalues.size();
+  if (options.fmax_hz > 0.0) {
+    keep = 0;
+    while (keep < pairs.eigenvalues.size() && std::sqrt(pairs.eigenvalues(keep)) / kTwoPi <= options.fmax_hz) ++keep;
+  }
+  if (options.modes > 0) keep = std::min<Eigen::Index>(keep, options.modes);
+  if (keep == 0)
+    throw std::runtime_error(fmt::format("free-free modes: no elastic mode at or below fmax = {} Hz (the first is "
+                                         "{:.6g} Hz)", options.fmax_hz, std::sqrt(pairs.eigenvalues(0)) / kTwoPi));
+  result.eigenvalues = pairs.eigenvalues.head(keep);
+  result.vectors = pairs.vectors.leftCols(keep);
+  result.frequencies_hz = result.eigenvalues.cwiseSqrt() / kTwoPi;
+  result.relative_residuals.resize(keep);
+  Eigen::VectorXd kphi(n), mphi(n);
+  for (Eigen::Index k = 0; k < keep; ++k) {
+    apply_symmetric(stiffness_upper, result.vectors.col(k), kphi);
+    mass.perform_op(result.vectors.col(k).data(), mphi.data());
+    result.relative_residuals(k) = (kphi - result.eigenvalues(k) * mphi).norm() / kphi.norm();
+    result.rigid_body_coupling = std::max(result.rigid_body_coupling, (rigid.transpose() * mphi).cwiseAbs().maxCoeff());
+  }
+  result.stats = op.stats();
+  const Eigen::Index worst = [&] { Eigen::Index w; result.relative_residuals.maxCoeff(&w); return w; }();
+  if (!(result.relative_residuals(worst) <= kMaxRelativeResidual))
+    throw std::runtime_error(fmt::format("free-free modes: mode {} ({:.6g} Hz) has relative residual {:.3g} > {:.0e}",
+                                         worst + 1, result.frequencies_hz(worst), result.relative_residuals(worst),
+                                         kMaxRelativeResidual));
+  return result;
+}
+
+}  // namespace flexbody::preprocess

@@ -1,0 +1,139 @@
+#include "flexbody/preprocess/fbprep_pipeline.hpp"
+
+#include "flexbody/format/body_file.hpp"
+#include "flexbody/preprocess/assembly.hpp"
+#include "flexbody/preprocess/mass_properties.hpp"
+
+#include <fmt/chrono.h>
+#include <fmt/format.h>
+
+#include <chrono>
+#include <ctime>
+
+namespace flexbody::preprocess {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+class StageTimer {
+ public:
+  StageTimer(PrepSummary& summary, std::string name) : summary_(summary), name_(std::move(name)), start_(Clock::now()) {}
+  void stop() {
+    summary_.stages.push_back({name_, std::chrono::duration<double>(Clock::now() - start_).count(), peak_memory_mb()});
+  }
+
+ private:
+  PrepSummary& summary_;
+  std::string name_;
+  Clock::time_point start_;
+};
+
+std::string utc_now() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  return fmt::format("{:%Y-%m-%dT%H:%M:%SZ}", utc);
+}
+
+void check_output_location(const std::filesystem::path& output) {
+  if (output.empty()) throw std::invalid_argument("no output file given (-o FILE.fbh5)");
+  const std::filesystem::path directory = output.has_parent_path() ? output.parent_path() : ".";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(directory, ec))
+    throw std::invalid_argument(fmt::format("{}: the output directory does not exist", directory.string()));
+  if (std::filesystem::is_directory(output, ec))
+    throw std::invalid_argument(fmt::format("{}: the output is a directory, not a file", output.string()));
+}
+
+}  // namespace
+
+PrepSummary run_fbprep(const PrepOptions& options) {
+  const auto start = Clock::now();
+  check_material(options.material);
+  check_output_location(options.output);
+  PrepSummary summary;
+  summary.input = options.input;
+  summary.output = options.output;
+  summary.material = options.material;
+
+  // 1. Geometry and mesh.
+  StageTimer mesh_timer(summary, "mesh");
+  GmshImportOptions mesh_options = options.mesh;
+  mesh_options.progress = options.progress;
+  ImportedMesh imported = import_tet_mesh(options.input, mesh_options);
+  summary.input_sha256 = sha256_of_file(options.input);
+  summary.format = imported.format;
+  summary.unit = std::string(to_string(imported.unit));
+  summary.unit_reason = imported.unit_reason;
+  summary.volumes = imported.volumes;
+  summary.meshed_here = imported.meshed_here;
+  summary.mesh_size_m = imported.mesh_size_m;
+  TetMesh& mesh = imported.mesh;
+  summary.nodes = mesh.node_count();
+  summary.elements = mesh.element_count();
+  summary.dofs = mesh.dof_count();
+  summary.quality = mesh_quality(mesh);
+  mesh_timer.stop();
+
+  // 2. FE: K̄ and M_s in the input frame, then the body frame (origin at the centre of mass).
+  StageTimer fe_timer(summary, "assembly");
+  if (options.progress) options.progress(fmt::format("assembling K and M ({} DOFs)", summary.dofs));
+  const NodeGraph graph = NodeGraph::build(mesh);
+  const std::vector<Tet4Geometry> geometry = element_geometries(mesh);
+  const SparseMatrix stiffness = assemble_stiffness(mesh, graph, geometry, options.material);
+  const SparseMatrix scalar_mass =
+      assemble_scalar_mass(mesh, graph, geometry, options.material.density, MassScheme::consistent);
+  summary.mass = mass_properties(scalar_mass, mesh.nodes);
+  fe_timer.stop();
+
+  format::BodyData body;
+  body.mesh.nodes = mesh.nodes.rowwise() - summary.mass.center_of_mass_input.transpose();
+  body.mesh.tets = mesh.tets;
+  body.mesh.surface_triangles = boundary_triangles(mesh);
+  summary.surface_triangles = body.mesh.surface_triangles.rows();
+
+  // 3. Free-free modes.
+  StageTimer modes_timer(summary, "modes");
+  FreeFreeOptions mode_options = options.modes;
+  mode_options.progress = options.progress;
+  const FreeFreeModes modes = free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options);
+  summary.frequencies_hz = modes.frequencies_hz;
+  summary.relative_residuals = modes.relative_residuals;
+  summary.shift = modes.shift;
+  summary.eigensolver = std::string(to_string(options.modes.solver.backend));
+  summary.rigid_body_residual = modes.rigid_body_residual;
+  summary.rigid_body_coupling = modes.rigid_body_coupling;
+  summary.solver_runs = modes.solver_runs;
+  summary.restarts = modes.restarts;
+  summary.operator_applies = modes.operator_applies;
+  summary.factor = modes.stats;
+  modes_timer.stop();
+
+  // 4. The body file.
+  StageTimer write_timer(summary, "write");
+  if (options.progress) options.progress("writing " + options.output.string());
+  body.provenance.created_by = fmt::format("fbprep {}", kFbprepVersion);
+  body.provenance.created_utc = utc_now();
+  body.provenance.source_file = options.input.filename().string();
+  body.provenance.source_sha256 = summary.input_sha256;
+  body.provenance.input_unit = summary.unit;
+  body.provenance.unit_reason = summary.unit_reason;
+  body.provenance.options = options.recorded_options;
+  body.material = options.material;
+  body.mass = summary.mass;
+  body.modes.kind = "free-free";
+  body.modes.frequencies_hz = modes.frequencies_hz;
+  body.modes.relative_residuals = modes.relative_residuals;
+  body.modes.upsilon = upsilon_from_modes(modes.vectors);
+  body.modes.eigensolver = summary.eigensolver;
+  body.modes.shift = modes.shift;
+  format::write_body_file(body, options.output);
+  summary.output_bytes = std::filesystem::file_size(options.output);
+  write_timer.stop();
+
+  summary.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  summary.peak_memory_mb = peak_memory_mb();
+  return summary;
+}
+
+}  // namespace flexbody::preprocess

@@ -1,0 +1,129 @@
+// PrepSummary::full_report() and json(): what fbprep did, for people and for programs.
+#include "flexbody/preprocess/fbprep_pipeline.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <numbers>
+
+namespace flexbody::preprocess {
+namespace {
+
+std::string vector3(const Eigen::Vector3d& v) { return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", v(0), v(1), v(2)); }
+
+std::vector<double> to_std(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
+
+std::vector<std::vector<double>> to_rows(const Eigen::Matrix3d& m) {
+  return {{m(0, 0), m(0, 1), m(0, 2)}, {m(1, 0), m(1, 1), m(1, 2)}, {m(2, 0), m(2, 1), m(2, 2)}};
+}
+
+std::string shift_as_frequency(double sigma) {
+  return fmt::format("-(2 pi * {:.4g} Hz)^2", std::sqrt(-sigma) / (2.0 * std::numbers::pi));
+}
+
+}  // namespace
+
+std::string PrepSummary::full_report() const {
+  std::string r;
+  auto line = [&r](std::string_view label, const std::string& value) { r += fmt::format("  {:<22}{}\n", label, value); };
+  r += fmt::format("fbprep {} report\n\n", kFbprepVersion);
+  r += "Input\n";
+  line("file", fmt::format("{} ({})", input.string(), to_string(format)));
+  line("sha256", input_sha256);
+  line("length unit", fmt::format("{}: {}", unit, unit_reason));
+  if (meshed_here) line("volumes", std::to_string(volumes));
+  r += "\nMesh (linear tetrahedra)\n";
+  line("source", meshed_here ? fmt::format("gmsh, element size {:.4g} m", mesh_size_m) : "tetrahedra read from the .msh");
+  line("nodes", fmt::format("{}", nodes));
+  line("elements", fmt::format("{}", elements));
+  line("DOFs", fmt::format("{}", dofs));
+  line("surface triangles", fmt::format("{}", surface_triangles));
+  line("radius ratio", fmt::format("min {:.3f} (element {}), mean {:.3f}; {} below 0.1, {} below 0.3",
+                                   quality.min_radius_ratio, quality.worst_element, quality.mean_radius_ratio,
+                                   quality.below_0_1, quality.below_0_3));
+  line("edge length", fmt::format("{:.4g} .. {:.4g} m", quality.min_edge_m, quality.max_edge_m));
+  line("volume", fmt::format("{:.6g} m^3", quality.volume_m3));
+  r += "\nMaterial\n";
+  line(material.name, fmt::format("E = {:.4g} Pa, nu = {:.4g}, rho = {:.6g} kg/m^3", material.youngs_modulus,
+                                  material.poisson_ratio, material.density));
+  r += "\nMass properties (consistent mass: exact for the meshed volume)\n";
+  line("mass", fmt::format("{:.6g} kg", mass.mass));
+  line("centre of mass", vector3(mass.center_of_mass_input) + " m (input frame)");
+  for (int i = 0; i < 3; ++i)
+    line(i == 0 ? "inertia about CoM" : "", vector3(mass.inertia_about_com.row(i).transpose()) + (i == 0 ? " kg m^2" : ""));
+  r += fmt::format("\nFree-free modes ({}, shift-invert on CHOLMOD, sigma = {}, 6 rigid-body modes deflated)\n",
+                   eigensolver, shift_as_frequency(shift));
+  r += fmt::format("  {:>4}  {:>16}  {:>14}\n", "mode", "frequency [Hz]", "rel. residual");
+  for (Eigen::Index k = 0; k < frequencies_hz.size(); ++k)
+    r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}\n", k + 1, frequencies_hz(k), relative_residuals(k));
+  line("rigid-body check", fmt::format("|K r|/(|K| |r|) = {:.1e}, max |r^T M phi| = {:.1e}", rigid_body_residual,
+                                       rigid_body_coupling));
+  line("factorization", fmt::format("nnz(L) = {:.3g}, {:.3g} GFlop, {:.2f} s", factor.factor_nonzeros,
+                                    factor.factor_flops * 1e-9, factor.factorize_seconds));
+  line("solves", fmt::format("{} in {:.2f} s ({} Lanczos restarts, {} solver run{})", factor.solves,
+                             factor.solve_seconds, restarts, solver_runs, solver_runs == 1 ? "" : "s"));
+  r += fmt::format("\n  {:<22}{:>10}  {:>18}\n", "stage", "time [s]", "peak memory [MB]");
+  for (const auto& stage : stages) r += fmt::format("  {:<22}{:>10.3f}  {:>18.1f}\n", stage.name, stage.seconds, stage.peak_memory_mb);
+  r += fmt::format("  {:<22}{:>10.3f}  {:>18.1f}\n", "total", total_seconds, peak_memory_mb);
+  r += "\nOutput\n";
+  line("body file", fmt::format("{} ({:.3g} MB)", output.string(), static_cast<double>(output_bytes) / 1e6));
+  return r;
+}
+
+std::string PrepSummary::json() const {
+  nlohmann::ordered_json j;
+  j["input"] = input.string();
+  j["input_format"] = std::string(to_string(format));
+  j["input_sha256"] = input_sha256;
+  j["length_unit"] = unit;
+  j["length_unit_reason"] = unit_reason;
+  j["volumes"] = volumes;
+  j["mesh_size_m"] = mesh_size_m;
+  j["nodes"] = nodes;
+  j["elements"] = elements;
+  j["dofs"] = dofs;
+  j["surface_triangles"] = surface_triangles;
+  j["mesh_quality"] = {{"measure", "radius ratio 3 r_in / r_circ"},
+                       {"min", quality.min_radius_ratio},
+                       {"mean", quality.mean_radius_ratio},
+                       {"worst_element", quality.worst_element},
+                       {"below_0_1", quality.below_0_1},
+                       {"below_0_3", quality.below_0_3},
+                       {"min_edge_m", quality.min_edge_m},
+                       {"max_edge_m", quality.max_edge_m},
+                       {"volume_m3", quality.volume_m3}};
+  j["material"] = {{"name", material.name},
+                   {"E_pa", material.youngs_modulus},
+                   {"nu", material.poisson_ratio},
+                   {"rho_kgm3", material.density}};
+  j["mass_kg"] = mass.mass;
+  j["center_of_mass_m"] = {mass.center_of_mass_input(0), mass.center_of_mass_input(1), mass.center_of_mass_input(2)};
+  j["inertia_kgm2"] = to_rows(mass.inertia_about_com);
+  j["eigensolver"] = eigensolver;
+  j["shift_rad2_s2"] = shift;
+  j["frequencies_hz"] = to_std(frequencies_hz);
+  j["relative_residuals"] = to_std(relative_residuals);
+  j["max_relative_residual"] = relative_residuals.size() ? relative_residuals.maxCoeff() : 0.0;
+  j["rigid_body_residual"] = rigid_body_residual;
+  j["rigid_body_coupling"] = rigid_body_coupling;
+  j["factor_nonzeros"] = factor.factor_nonzeros;
+  j["solves"] = factor.solves;
+  nlohmann::ordered_json timings, memory;
+  for (const auto& stage : stages) {
+    timings[stage.name] = stage.seconds;
+    memory[stage.name] = stage.peak_memory_mb;
+  }
+  timings["factorize"] = factor.factorize_seconds;
+  timings["solve"] = factor.solve_seconds;
+  timings["total"] = total_seconds;
+  j["timings_s"] = timings;
+  j["stage_peak_memory_mb"] = memory;
+  j["peak_memory_mb"] = peak_memory_mb;
+  j["output"] = output.string();
+  j["output_bytes"] = output_bytes;
+  return j.dump();
+}
+
+}  // namespace flexbody::preprocess

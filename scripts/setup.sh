@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Installs what flexbody needs on Debian 12, and nothing twice: packages already present are skipped.
+# Run as root (or with sudo). Idempotent: a second run installs nothing.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config git
+  libeigen3-dev          # dense and sparse linear algebra everywhere
+  libhdf5-dev            # the body file (*.fbh5)
+  libgmsh-dev            # CAD import (OpenCASCADE: STEP/IGES/BREP) and tetrahedral meshing
+  gmsh                   # the gmsh command (meshes/make_bracket_step.sh, looking at meshes)
+  libsuitesparse-dev     # CHOLMOD: the sparse Cholesky factorization behind shift-invert
+  libarpack2-dev         # ARPACK: the default eigensolver
+  libspectra-dev         # Spectra: the second eigensolver backend
+  libopenblas0-pthread   # optimized BLAS: CHOLMOD is ~10x slower on Debian's reference BLAS
+  libcli11-dev           # fbprep's command line
+  libfmt-dev             # formatting of reports and messages
+  nlohmann-json3-dev     # --json output
+  libssl-dev             # SHA-256 of the source file (provenance in the body file)
+  libgtest-dev           # the test suite
+  calculix-ccx           # independent FE code the tests compare against
+  python3-matplotlib python3-h5py   # benchmark plots (bench/ only)
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "setup: all packages present"
+fi

@@ -1,0 +1,191 @@
+// body_file_errors_test.cpp: the reader refuses bad files with a message naming the file and the item.
+#include "test_body.hpp"
+
+#include "flexbody/format/body_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <initializer_list>
+#include <limits>
+#include <vector>
+
+namespace flexbody::format::test {
+namespace {
+
+class ReadErrors : public TempDirTest {
+ protected:
+  /// A valid file to be damaged by the test.
+  std::filesystem::path good_file(const std::string& name) {
+    const auto path = dir() / name;
+    write_body_file(make_body(), path);
+    return path;
+  }
+
+  /// Expects read_body_file(path) to throw a message that starts with the path and contains `parts`.
+  static void expect_read_error(const std::filesystem::path& path, std::initializer_list<std::string> parts) {
+    std::vector<std::string> expected{path.string() + ": "};
+    expected.insert(expected.end(), parts);
+    expect_body_file_error([&] { (void)read_body_file(path); }, expected);
+  }
+};
+
+TEST_F(ReadErrors, MissingFile) { expect_read_error(dir() / "absent.fbh5", {"absent.fbh5: no such file"}); }
+
+TEST_F(ReadErrors, Directory) {
+  std::filesystem::create_directory(dir() / "folder.fbh5");
+  expect_read_error(dir() / "folder.fbh5", {"is a directory"});
+}
+
+TEST_F(ReadErrors, NotHdf5) {
+  const auto path = dir() / "text.fbh5";
+  write_bytes(path, "this is not HDF5 but has more than eight bytes\n");
+  expect_read_error(path, {"text.fbh5: not an HDF5 file"});
+}
+
+TEST_F(ReadErrors, EmptyFile) {
+  const auto path = dir() / "empty.fbh5";
+  write_bytes(path, "");
+  expect_read_error(path, {"empty.fbh5: not an HDF5 file"});
+}
+
+TEST_F(ReadErrors, OtherFormat) {
+  const auto path = good_file("other.fbh5");
+  set_string_attribute(path, "/", "format", "other");
+  expect_read_error(path, {"other.fbh5: /format is \"other\", expected \"flexbody\""});
+}
+
+TEST_F(ReadErrors, FixedLengthStringsAreAccepted) {
+  const auto path = good_file("fixed.fbh5");
+  set_string_attribute(path, "/", "format", "flexbody", true);
+  set_string_attribute(path, "/material", "name", "aluminium", true);
+  EXPECT_EQ(read_body_file(path).material.name, "aluminium");
+}
+
+TEST_F(ReadErrors, PlainHdf5WithoutFormat) {
+  const auto path = good_file("plain.fbh5");
+  delete_attribute(path, "/", "format");
+  expect_read_error(path, {"plain.fbh5: missing root attribute /format"});
+}
+
+TEST_F(ReadErrors, FormatVersion2) {
+  const auto path = good_file("v2.fbh5");
+  set_int_attribute(path, "/", "format_version", 2);
+  expect_read_error(path, {"v2.fbh5: format_version 2 is not supported by this reader (supports 1)"});
+}
+
+TEST_F(ReadErrors, FormatVersionAsString) {
+  const auto path = good_file("vstr.fbh5");
+  set_string_attribute(path, "/", "format_version", "1");
+  expect_read_error(path, {"vstr.fbh5: /format_version is a string, expected an integer"});
+}
+
+TEST_F(ReadErrors, MissingUpsilon) {
+  const auto path = good_file("no_upsilon.fbh5");
+  delete_link(path, "/modes/upsilon");
+  expect_read_error(path, {"no_upsilon.fbh5: missing dataset /modes/upsilon"});
+}
+
+TEST_F(ReadErrors, MissingGroup) {
+  const auto path = good_file("no_mesh.fbh5");
+  delete_link(path, "/mesh");
+  expect_read_error(path, {"no_mesh.fbh5: missing group /mesh"});
+}
+
+TEST_F(ReadErrors, MissingAttribute) {
+  const auto path = good_file("no_density.fbh5");
+  delete_attribute(path, "/material", "density");
+  expect_read_error(path, {"no_density.fbh5: missing attribute /material/density"});
+}
+
+TEST_F(ReadErrors, MissingListedOption) {
+  const auto path = good_file("no_option.fbh5");
+  delete_attribute(path, "/provenance/options", "modes");
+  expect_read_error(path, {"no_option.fbh5: missing attribute /provenance/options/modes"});
+}
+
+TEST_F(ReadErrors, WrongUpsilonShape) {
+  const auto path = good_file("upsilon_shape.fbh5");
+  replace_double_dataset(path, "/modes/upsilon", 5, 9, std::vector<double>(45, 0.5));
+  expect_read_error(path, {"upsilon_shape.fbh5: /modes/upsilon has shape 5 x 9, expected 5 x 6 (n_n x 3 n_m)"});
+}
+
+TEST_F(ReadErrors, WrongNodeColumns) {
+  const auto path = good_file("nodes_2d.fbh5");
+  replace_double_dataset(path, "/mesh/nodes", 5, 2, std::vector<double>(10, 0.5));
+  expect_read_error(path, {"nodes_2d.fbh5: /mesh/nodes has shape 5 x 2, expected n_n x 3"});
+}
+
+TEST_F(ReadErrors, WrongInertiaShape) {
+  const auto path = good_file("inertia.fbh5");
+  replace_double_dataset(path, "/mass/inertia_about_com", 1, 3, {1.0, 1.0, 1.0});
+  expect_read_error(path, {"inertia.fbh5: /mass/inertia_about_com has shape 1 x 3, expected 3 x 3"});
+}
+
+TEST_F(ReadErrors, ResidualsOfWrongLength) {
+  const auto path = good_file("residuals.fbh5");
+  replace_double_dataset(path, "/modes/relative_residuals", 3, 1, {0.0, 0.0, 0.0});
+  expect_read_error(path, {"residuals.fbh5: /modes/relative_residuals has shape 3 x 1, expected a 1-D dataset"});
+}
+
+TEST_F(ReadErrors, TetIndexOutOfRange) {
+  const auto path = good_file("tets.fbh5");
+  replace_int_dataset(path, "/mesh/tets", 2, 4, {0, 1, 2, 3, 1, 4, 9, 3});
+  expect_read_error(path, {"tets.fbh5: /mesh/tets[1] refers to node 9 but the mesh has 5 nodes"});
+}
+
+TEST_F(ReadErrors, TetsStoredAsFloats) {
+  const auto path = good_file("float_tets.fbh5");
+  replace_double_dataset(path, "/mesh/tets", 2, 4, std::vector<double>(8, 1.0));
+  expect_read_error(path, {"float_tets.fbh5: /mesh/tets does not hold integer values"});
+}
+
+TEST_F(ReadErrors, NanInNodes) {
+  const auto path = good_file("nan.fbh5");
+  std::vector<double> nodes(15, 0.25);
+  nodes[2 * 3 + 1] = std::numeric_limits<double>::quiet_NaN();
+  replace_double_dataset(path, "/mesh/nodes", 5, 3, nodes);
+  expect_read_error(path, {"nan.fbh5: /mesh/nodes[2][1] is nan, expected a finite number"});
+}
+
+TEST_F(ReadErrors, InfinityInUpsilon) {
+  const auto path = good_file("inf.fbh5");
+  std::vector<double> upsilon(30, 0.5);
+  upsilon[4 * 6 + 5] = -std::numeric_limits<double>::infinity();
+  replace_double_dataset(path, "/modes/upsilon", 5, 6, upsilon);
+  expect_read_error(path, {"inf.fbh5: /modes/upsilon[4][5] is -inf, expected a finite number"});
+}
+
+TEST_F(ReadErrors, UnitOtherThanSi) {
+  const auto path = good_file("mm.fbh5");
+  set_string_attribute(path, "/", "length_unit", "mm");
+  expect_read_error(path, {"mm.fbh5: /length_unit is \"mm\", expected \"m\""});
+}
+
+TEST_F(ReadErrors, PhysicalRangeViolation) {
+  const auto path = good_file("nu.fbh5");
+  delete_attribute(path, "/material", "poisson_ratio");
+  set_int_attribute(path, "/material", "poisson_ratio", 1);
+  expect_read_error(path, {"nu.fbh5: /material/poisson_ratio is 1, expected -1 < nu < 0.5"});
+}
+
+TEST_F(ReadErrors, TruncatedFile) {
+  const auto good = good_file("whole.fbh5");
+  const std::string bytes = read_bytes(good);
+  const auto path = dir() / "half.fbh5";
+  write_bytes(path, bytes.substr(0, bytes.size() / 2));
+  expect_read_error(path, {"half.fbh5: ", "truncated"});
+}
+
+TEST_F(ReadErrors, EveryTruncationIsRefusedWithoutCrashing) {
+  const auto good = good_file("whole.fbh5");
+  const std::string bytes = read_bytes(good);
+  const auto path = dir() / "cut.fbh5";
+  for (std::size_t size = 0; size < bytes.size(); size += std::max<std::size_t>(1, bytes.size() / 97)) {
+    write_bytes(path, bytes.substr(0, size));
+    expect_read_error(path, {"cut.fbh5: "});
+  }
+}
+
+}  // namespace
+}  // namespace flexbody::format::test

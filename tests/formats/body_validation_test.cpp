@@ -1,0 +1,117 @@
+// body_validation_test.cpp: validate() accepts a consistent body and names the first problem otherwise.
+#include "test_body.hpp"
+
+#include "flexbody/format/body_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+
+namespace flexbody::format::test {
+namespace {
+
+void expect_invalid(const BodyData& body, const std::string& message) {
+  expect_body_file_error([&] { validate(body); }, {"body data: " + message});
+}
+
+TEST(Validate, AcceptsTheSyntheticBody) { EXPECT_NO_THROW(validate(make_body())); }
+
+TEST(Validate, AcceptsRepeatedFrequencies) {
+  BodyData body = make_body();
+  body.modes.frequencies_hz[1] = body.modes.frequencies_hz[0];
+  EXPECT_NO_THROW(validate(body));
+}
+
+TEST(Validate, NodeIndexOutOfRange) {
+  BodyData body = make_body();
+  body.mesh.tets(1, 3) = 57;
+  expect_invalid(body, "/mesh/tets[1] refers to node 57 but the mesh has 5 nodes");
+  body = make_body();
+  body.mesh.surface_triangles(4, 0) = -1;
+  expect_invalid(body, "/mesh/surface_triangles[4] refers to node -1 but the mesh has 5 nodes");
+}
+
+TEST(Validate, TooSmallMesh) {
+  BodyData body = make_body();
+  body.mesh.nodes.conservativeResize(3, 3);
+  expect_invalid(body, "/mesh/nodes has 3 rows, expected at least 4 nodes");
+  body = make_body();
+  body.mesh.tets.resize(0, 4);
+  expect_invalid(body, "/mesh/tets has no rows, expected at least 1 tetrahedron");
+}
+
+TEST(Validate, ElementOrder) {
+  BodyData body = make_body();
+  body.mesh.element_order = 2;
+  expect_invalid(body, "/mesh/element_order is 2, expected 1");
+}
+
+TEST(Validate, ModeShapes) {
+  BodyData body = make_body();
+  body.modes.upsilon.conservativeResize(5, 5);
+  expect_invalid(body, "/modes/upsilon has shape 5 x 5, expected 5 x 6 (n_n x 3 n_m)");
+  body = make_body();
+  body.modes.relative_residuals.resize(3);
+  body.modes.relative_residuals.setZero();
+  expect_invalid(body, "/modes/relative_residuals has 3 entries, expected 2");
+}
+
+TEST(Validate, NonFiniteValues) {
+  BodyData body = make_body();
+  body.mass.inertia_about_com(2, 1) = std::numeric_limits<double>::infinity();
+  expect_invalid(body, "/mass/inertia_about_com[2][1] is inf, expected a finite number");
+  body = make_body();
+  body.modes.frequencies_hz[1] = std::numeric_limits<double>::quiet_NaN();
+  expect_invalid(body, "/modes/frequencies_hz[1] is nan, expected a finite number");
+  body = make_body();
+  body.material.density = std::numeric_limits<double>::quiet_NaN();
+  expect_invalid(body, "/material/density is nan, expected a finite number");
+}
+
+TEST(Validate, PhysicalRanges) {
+  BodyData body = make_body();
+  body.mass.mass = 0.0;
+  expect_invalid(body, "/mass/total is 0 kg, expected > 0");
+  body = make_body();
+  body.material.youngs_modulus = -1.0;
+  expect_invalid(body, "/material/youngs_modulus is -1 Pa, expected > 0");
+  body = make_body();
+  body.material.density = 0.0;
+  expect_invalid(body, "/material/density is 0 kg/m^3, expected > 0");
+  body = make_body();
+  body.material.poisson_ratio = 0.5;
+  expect_invalid(body, "/material/poisson_ratio is 0.5, expected -1 < nu < 0.5");
+  body = make_body();
+  body.material.poisson_ratio = -1.0;
+  expect_invalid(body, "/material/poisson_ratio is -1, expected -1 < nu < 0.5");
+}
+
+TEST(Validate, Frequencies) {
+  BodyData body = make_body();
+  body.modes.frequencies_hz[0] = 0.0;
+  expect_invalid(body, "/modes/frequencies_hz[0] is 0 Hz, expected > 0");
+  body = make_body();
+  body.modes.frequencies_hz << 12.0, 10.5;
+  expect_invalid(body, "/modes/frequencies_hz[1] = 10.5 Hz is below /modes/frequencies_hz[0] = 12 Hz");
+  body = make_body();
+  body.modes.relative_residuals[1] = -1e-3;
+  expect_invalid(body, "/modes/relative_residuals[1] is -0.001, expected >= 0");
+}
+
+TEST(Validate, OptionNames) {
+  BodyData body = make_body();
+  body.provenance.options.emplace_back("order", "x");
+  expect_invalid(body, "/provenance/options: option 4 is named \"order\"");
+  body = make_body();
+  body.provenance.options.emplace_back("unit", "m");
+  expect_invalid(body, "/provenance/options: option 4 repeats the name \"unit\"");
+  body = make_body();
+  body.provenance.options.emplace_back("a,b", "x");
+  expect_invalid(body, "/provenance/options: option 4 is named \"a,b\"; option names must not contain ','");
+  body = make_body();
+  body.provenance.options.emplace_back("", "x");
+  expect_invalid(body, "/provenance/options: option 4 has an empty name");
+}
+
+}  // namespace
+}  // namespace flexbody::format::test

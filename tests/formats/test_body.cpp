@@ -1,0 +1,223 @@
+// test_body.cpp: fixtures and HDF5 surgery for the format tests.
+#include "test_body.hpp"
+
+#include "flexbody/format/body_file.hpp"
+
+#include <hdf5.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <fstream>
+#include <iterator>
+
+namespace flexbody::format::test {
+namespace {
+
+/// Closes an HDF5 identifier at scope exit and fails the test if it could not be opened.
+class Id {
+ public:
+  Id(hid_t id, herr_t (*closer)(hid_t), const std::string& what) : id_(id), closer_(closer) {
+    EXPECT_GE(id_, 0) << "HDF5 could not open/create " << what;
+  }
+  ~Id() {
+    if (id_ >= 0) closer_(id_);
+  }
+  Id(const Id&) = delete;
+  Id& operator=(const Id&) = delete;
+  [[nodiscard]] hid_t get() const { return id_; }
+
+ private:
+  hid_t id_;
+  herr_t (*closer_)(hid_t);
+};
+
+Id open_rw(const std::filesystem::path& file) {
+  return {H5Fopen(file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose, file.string()};
+}
+
+void replace_attribute(const std::filesystem::path& file, const std::string& object, const std::string& name,
+                       hid_t type, const void* value) {
+  const Id f = open_rw(file);
+  const Id o(H5Oopen(f.get(), object.c_str(), H5P_DEFAULT), H5Oclose, object);
+  if (H5Aexists(o.get(), name.c_str()) > 0) {
+    ASSERT_GE(H5Adelete(o.get(), name.c_str()), 0);
+  }
+  const Id space(H5Screate(H5S_SCALAR), H5Sclose, "scalar space");
+  const Id a(H5Acreate2(o.get(), name.c_str(), type, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, name);
+  ASSERT_GE(H5Awrite(a.get(), type, value), 0);
+}
+
+void replace_dataset(const std::filesystem::path& file, const std::string& path, std::size_t rows,
+                     std::size_t cols, hid_t type, const void* values) {
+  const Id f = open_rw(file);
+  if (H5Lexists(f.get(), path.c_str(), H5P_DEFAULT) > 0) {
+    ASSERT_GE(H5Ldelete(f.get(), path.c_str(), H5P_DEFAULT), 0);
+  }
+  const hsize_t dims[2] = {rows, cols};
+  const Id space(H5Screate_simple(2, dims, nullptr), H5Sclose, "space");
+  const Id d(H5Dcreate2(f.get(), path.c_str(), type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+             H5Dclose, path);
+  ASSERT_GE(H5Dwrite(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values), 0);
+}
+
+}  // namespace
+
+BodyData make_body() {
+  BodyData body;
+  body.provenance.created_by = "formats_tests 0.1.0";
+  body.provenance.created_utc = "2026-11-21T14:38:08Z";
+  body.provenance.source_file = "bracket w\xc3\xb6lfer.step";  // UTF-8 survives
+  body.provenance.source_sha256 = std::string(64, 'a');
+  body.provenance.input_unit = "mm";
+  body.provenance.unit_reason = "declared by the STEP file";
+  body.provenance.options = {{"unit", "mm"}, {"modes", "2"}, {"mesh-size", "0.5"}, {"note", ""}};
+
+  body.material = {"steel", 210.0e9 / 3.0, 0.3, 7850.0 + 1.0 / 7.0};
+
+  body.mass.mass = 1.0 / 3.0;
+  body.mass.center_of_mass_input = Eigen::Vector3d(0.1 / 3.0, -0.2 / 7.0, 0.3 / 11.0);
+  body.mass.inertia_about_com << 1.0 / 3.0, 0.01 / 7.0, 0.02 / 9.0,  //
+      0.01 / 7.0, 2.0 / 3.0, 0.03 / 11.0,                            //
+      0.02 / 9.0, 0.03 / 11.0, 1.0 / 13.0;
+
+  body.mesh.nodes.resize(5, 3);
+  body.mesh.nodes << 0.0, 0.0, 0.0, 0.1 / 3.0, 0.0, 0.0, 0.0, 0.1 / 7.0, 0.0, 0.0, 0.0, 0.1 / 9.0,  //
+      0.1 / 3.0, 0.1 / 7.0, 0.1 / 9.0;
+  body.mesh.tets.resize(2, 4);
+  body.mesh.tets << 0, 1, 2, 3,  //
+      1, 4, 2, 3;
+  body.mesh.surface_triangles.resize(6, 3);
+  body.mesh.surface_triangles << 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 4, 1, 4, 3, 2, 3, 4;
+  body.mesh.element_order = 1;
+
+  body.modes.kind = "free-free";
+  body.modes.eigensolver = "spectra";
+  body.modes.shift = -1.0 / 3.0;
+  body.modes.frequencies_hz = Eigen::Vector2d(1234.0 / 7.0, 5678.0 / 9.0);
+  body.modes.relative_residuals = Eigen::Vector2d(1e-12 / 3.0, 2e-11 / 7.0);
+  body.modes.upsilon.resize(5, 6);
+  for (Eigen::Index i = 0; i < 5; ++i) {
+    for (Eigen::Index j = 0; j < 6; ++j) body.modes.upsilon(i, j) = static_cast<double>(10 * i + j) / 3.0 - 7.0;
+  }
+  return body;
+}
+
+void TempDirTest::SetUp() {
+  static std::atomic<int> counter{0};
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = std::string(info->test_suite_name()) + "-" + info->name();
+  std::replace(name.begin(), name.end(), '/', '_');
+  dir_ = std::filesystem::temp_directory_path() /
+         ("flexbody-formats-" + name + "-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+  std::filesystem::remove_all(dir_);
+  std::filesystem::create_directories(dir_);
+}
+
+void TempDirTest::TearDown() {
+  std::error_code ignored;
+  std::filesystem::remove_all(dir_, ignored);
+}
+
+std::vector<std::string> TempDirTest::entries() const {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir_)) names.push_back(entry.path().filename());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+void expect_body_file_error(const std::function<void()>& action, const std::vector<std::string>& parts) {
+  try {
+    action();
+    ADD_FAILURE() << "expected a BodyFileError, but nothing was thrown";
+  } catch (const BodyFileError& error) {
+    const std::string message = error.what();
+    for (const std::string& part : parts) {
+      EXPECT_NE(message.find(part), std::string::npos) << "message \"" << message << "\" lacks \"" << part << "\"";
+    }
+  } catch (const std::exception& error) {
+    ADD_FAILURE() << "expected a BodyFileError, got another exception: " << error.what();
+  }
+}
+
+std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_bytes(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  ASSERT_TRUE(out.good()) << "cannot write " << path;
+}
+
+void set_string_attribute(const std::filesystem::path& file, const std::string& object, const std::string& name,
+                          const std::string& value, bool fixed_length) {
+  const Id type(H5Tcopy(H5T_C_S1), H5Tclose, "string type");
+  if (fixed_length) {
+    ASSERT_GE(H5Tset_size(type.get(), value.size()), 0);
+    ASSERT_GE(H5Tset_strpad(type.get(), H5T_STR_NULLPAD), 0);
+    replace_attribute(file, object, name, type.get(), value.data());
+  } else {
+    ASSERT_GE(H5Tset_size(type.get(), H5T_VARIABLE), 0);
+    const char* text = value.c_str();
+    replace_attribute(file, object, name, type.get(), static_cast<const void*>(&text));
+  }
+}
+
+void set_int_attribute(const std::filesystem::path& file, const std::string& object, const std::string& name,
+                       int value) {
+  replace_attribute(file, object, name, H5T_NATIVE_INT, &value);
+}
+
+void delete_attribute(const std::filesystem::path& file, const std::string& object, const std::string& name) {
+  const Id f = open_rw(file);
+  ASSERT_GE(H5Adelete_by_name(f.get(), object.c_str(), name.c_str(), H5P_DEFAULT), 0);
+}
+
+void delete_link(const std::filesystem::path& file, const std::string& path) {
+  const Id f = open_rw(file);
+  ASSERT_GE(H5Ldelete(f.get(), path.c_str(), H5P_DEFAULT), 0);
+}
+
+void replace_double_dataset(const std::filesystem::path& file, const std::string& path, std::size_t rows,
+                            std::size_t cols, const std::vector<double>& values) {
+  ASSERT_EQ(values.size(), rows * cols);
+  replace_dataset(file, path, rows, cols, H5T_NATIVE_DOUBLE, values.data());
+}
+
+void replace_int_dataset(const std::filesystem::path& file, const std::string& path, std::size_t rows,
+                         std::size_t cols, const std::vector<int>& values) {
+  ASSERT_EQ(values.size(), rows * cols);
+  replace_dataset(file, path, rows, cols, H5T_NATIVE_INT, values.data());
+}
+
+RawDataset read_raw_dataset(const std::filesystem::path& file, const std::string& path) {
+  RawDataset raw;
+  const Id f(H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, file.string());
+  const Id d(H5Dopen2(f.get(), path.c_str(), H5P_DEFAULT), H5Dclose, path);
+  const Id space(H5Dget_space(d.get()), H5Sclose, "space of " + path);
+  std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space.get())));
+  H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  raw.shape.assign(dims.begin(), dims.end());
+  raw.values.resize(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get())));
+  EXPECT_GE(H5Dread(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, raw.values.data()), 0);
+  return raw;
+}
+
+std::string read_raw_string_attribute(const std::filesystem::path& file, const std::string& object,
+                                      const std::string& name) {
+  const Id f(H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, file.string());
+  const Id a(H5Aopen_by_name(f.get(), object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, name);
+  const Id type(H5Tcopy(H5T_C_S1), H5Tclose, "string type");
+  H5Tset_size(type.get(), H5T_VARIABLE);
+  H5Tset_cset(type.get(), H5T_CSET_UTF8);
+  char* text = nullptr;
+  EXPECT_GE(H5Aread(a.get(), type.get(), static_cast<void*>(&text)), 0);
+  std::string result = text != nullptr ? text : "";
+  H5free_memory(text);
+  return result;
+}
+
+}  // namespace flexbody::format::test

@@ -1,0 +1,158 @@
+// Agreement with CalculiX (ccx 2.20), an independent FE code, on the same mesh written as an Abaqus
+// .inp with C3D4 elements. ccx integrates the C3D4 mass with one point (rho V / 16 in every entry of
+// the element's scalar mass), so frequencies are compared with that mass scheme; the consistent-mass
+// pipeline shares K̄ with it, which static deflections compare directly.
+#include "flexbody/preprocess/assembly.hpp"
+#include "flexbody/preprocess/free_free_modes.hpp"
+#include "test_meshes.hpp"
+
+#include <Eigen/SparseCholesky>
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+namespace fp = flexbody::preprocess;
+
+namespace {
+
+const fp::Material kSteel{"steel", 210e9, 0.3, 7850.0};
+constexpr double kLength = 0.2;
+
+fp::TetMesh beam() { return flexbody::test::box_mesh(kLength, 0.02, 0.02, 20, 2, 2); }
+
+bool have_ccx() { return std::system("command -v ccx > /dev/null 2>&1") == 0; }
+
+// Mesh and material as Abaqus input; `step` is appended verbatim.
+void write_inp(const std::filesystem::path& path, const fp::TetMesh& mesh, const std::string& model_extra,
+               const std::string& step) {
+  std::ofstream inp(path);
+  inp << "*NODE\n";
+  for (Eigen::Index i = 0; i < mesh.node_count(); ++i)
+    inp << fmt::format("{}, {:.17g}, {:.17g}, {:.17g}\n", i + 1, mesh.nodes(i, 0), mesh.nodes(i, 1), mesh.nodes(i, 2));
+  inp << "*ELEMENT, TYPE=C3D4, ELSET=EALL\n";
+  for (Eigen::Index e = 0; e < mesh.element_count(); ++e)
+    inp << fmt::format("{}, {}, {}, {}, {}\n", e + 1, mesh.tets(e, 0) + 1, mesh.tets(e, 1) + 1, mesh.tets(e, 2) + 1,
+                       mesh.tets(e, 3) + 1);
+  inp << fmt::format("*NSET, NSET=NALL, GENERATE\n1, {}\n", mesh.node_count());
+  inp << fmt::format("*MATERIAL, NAME=STEEL\n*ELASTIC\n{:.17g}, {:.17g}\n*DENSITY\n{:.17g}\n", kSteel.youngs_modulus,
+                     kSteel.poisson_ratio, kSteel.density);
+  inp << "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n" << model_extra << "*STEP\n" << step << "*END STEP\n";
+}
+
+void run_ccx(const std::filesystem::path& dir, const std::string& job) {
+  // One solver thread: CCX_NPROC_EQUATION_SOLVER=2 made its eigen phase erratically slow here.
+  const std::string command = fmt::format("cd '{}' && CCX_NPROC_EQUATION_SOLVER=1 OMP_NUM_THREADS=1 ccx -i {} > {}.log 2>&1",
+                                          dir.string(), job, job);
+  ASSERT_EQ(std::system(command.c_str()), 0) << "ccx failed, see " << (dir / (job + ".log"));
+}
+
+// The EIGENVALUE column of ccx's eigenvalue table [rad^2/s^2].
+std::vector<double> read_eigenvalues(const std::filesystem::path& dat) {
+  std::ifstream file(dat);
+  std::string line;
+  std::vector<double> values;
+  bool in_table = false;
+  while (std::getline(file, line)) {
+    if (line.find("E I G E N V A L U E   O U T P U T") != std::string::npos) in_table = true;
+    else if (line.find("P A R T I C I P A T I O N") != std::string::npos) break;
+    else if (in_table) {
+      std::istringstream in(line);
+      int mode = 0;
+      double eigenvalue = 0.0;
+      if (in >> mode >> eigenvalue) values.push_back(eigenvalue);
+    }
+  }
+  return values;
+}
+
+// Node displacements from *NODE PRINT U (node label order), node-interleaved.
+Eigen::VectorXd read_displacements(const std::filesystem::path& dat, Eigen::Index nodes) {
+  std::ifstream file(dat);
+  std::string line;
+  Eigen::VectorXd u = Eigen::VectorXd::Constant(3 * nodes, std::nan(""));
+  while (std::getline(file, line)) {
+    std::istringstream in(line);
+    long label = 0;
+    double x = 0, y = 0, z = 0;
+    if (in >> label >> x >> y >> z && label >= 1 && label <= nodes) u.segment<3>(3 * (label - 1)) << x, y, z;
+  }
+  return u;
+}
+
+}  // namespace
+
+TEST(CalculiX, FrequenciesWithTheOnePointMassAgreeTo1e6) {
+  if (!have_ccx()) GTEST_SKIP() << "ccx not installed (scripts/setup.sh installs calculix-ccx)";
+  const fp::TetMesh mesh = beam();
+  const auto dir = flexbody::test::scratch_dir();
+  write_inp(dir / "modes.inp", mesh, "", "*FREQUENCY\n14\n");
+  run_ccx(dir, "modes");
+  const std::vector<double> ccx = read_eigenvalues(dir / "modes.dat");
+  ASSERT_EQ(ccx.size(), 14u);
+
+  const auto graph = fp::NodeGraph::build(mesh);
+  const auto geometry = fp::element_geometries(mesh);
+  const auto k = fp::assemble_stiffness(mesh, graph, geometry, kSteel);
+  const auto m = fp::assemble_scalar_mass(mesh, graph, geometry, kSteel.density, fp::MassScheme::one_point);
+  fp::FreeFreeOptions options;
+  options.modes = 8;
+  const auto ours = fp::free_free_modes(mesh.nodes, k, m, kSteel, options);
+  // ccx's first six are its (numerically zero) rigid-body modes; it prints 7 significant digits.
+  for (int mode = 0; mode < 8; ++mode) {
+    SCOPED_TRACE(mode);
+    EXPECT_NEAR(ours.eigenvalues(mode), ccx[6 + mode], 1e-6 * ccx[6 + mode]);
+  }
+}
+
+TEST(CalculiX, StaticDeflectionOfTheCantileverAgreesTo1e6) {
+  if (!have_ccx()) GTEST_SKIP() << "ccx not installed (scripts/setup.sh installs calculix-ccx)";
+  const fp::TetMesh mesh = beam();
+  const Eigen::Index n = mesh.node_count();
+  std::vector<Eigen::Index> clamped, tip;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (mesh.nodes(i, 0) < 1e-12) clamped.push_back(i);
+    if (mesh.nodes(i, 0) > kLength - 1e-12) tip.push_back(i);
+  }
+  const double load = -100.0 / static_cast<double>(tip.size());  // 100 N down, spread over the tip nodes
+  std::string boundary = "*BOUNDARY\n", step = "*STATIC\n*CLOAD\n";
+  for (Eigen::Index i : clamped) boundary += fmt::format("{}, 1, 3\n", i + 1);
+  for (Eigen::Index i : tip) step += fmt::format("{}, 3, {:.17g}\n", i + 1, load);
+  step += "*NODE PRINT, NSET=NALL\nU\n";
+  const auto dir = flexbody::test::scratch_dir();
+  write_inp(dir / "static.inp", mesh, boundary, step);
+  run_ccx(dir, "static");
+  const Eigen::VectorXd ccx = read_displacements(dir / "static.dat", n);
+  ASSERT_TRUE(ccx.allFinite()) << "ccx printed no displacement for some node";
+
+  // Our K̄, clamped DOFs removed, solved directly.
+  const auto graph = fp::NodeGraph::build(mesh);
+  const fp::SparseMatrix k = fp::full_from_upper(fp::assemble_stiffness(mesh, graph, fp::element_geometries(mesh), kSteel));
+  std::vector<Eigen::Index> free_index(3 * n, 0);
+  for (Eigen::Index i : clamped)
+    for (int c = 0; c < 3; ++c) free_index[3 * i + c] = -1;
+  Eigen::Index free_count = 0;
+  for (auto& index : free_index)
+    if (index == 0) index = free_count++;
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (Eigen::Index j = 0; j < k.outerSize(); ++j)
+    for (fp::SparseMatrix::InnerIterator it(k, j); it; ++it)
+      if (free_index[it.row()] >= 0 && free_index[j] >= 0) triplets.emplace_back(free_index[it.row()], free_index[j], it.value());
+  Eigen::SparseMatrix<double> kff(free_count, free_count);
+  kff.setFromTriplets(triplets.begin(), triplets.end());
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(free_count);
+  for (Eigen::Index i : tip) f(free_index[3 * i + 2]) = load;
+  const Eigen::VectorXd uf = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(kff).solve(f);
+  Eigen::VectorXd ours = Eigen::VectorXd::Zero(3 * n);
+  for (Eigen::Index d = 0; d < 3 * n; ++d)
+    if (free_index[d] >= 0) ours(d) = uf(free_index[d]);
+
+  // ccx prints 7 significant digits: each value is off by at most 5e-7 of itself.
+  const double scale = ccx.cwiseAbs().maxCoeff();
+  EXPECT_LT((ours - ccx).cwiseAbs().maxCoeff(), 1e-6 * scale);
+  // Sanity: the tip deflects about PL^3/(3EI) (Euler-Bernoulli 1.52e-4 m), stiffer for linear tets.
+  EXPECT_GT(-ours(3 * tip.front() + 2), 0.5 * 100.0 * std::pow(kLength, 3) / (3 * 210e9 * std::pow(0.02, 4) / 12));
+}

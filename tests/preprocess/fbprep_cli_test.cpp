@@ -1,0 +1,154 @@
+// fbprep as a user runs it: the bundled bracket end to end, units, and every refused input (one line
+// on stderr naming the problem, a non-zero exit, and no file under the output name).
+#include "flexbody/format/body_file.hpp"
+#include "test_meshes.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace {
+
+struct CliRun {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const std::filesystem::path& path) {
+  std::ifstream file(path);
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+CliRun fbprep(const std::filesystem::path& dir, const std::string& arguments) {
+  const std::string command = fmt::format("cd '{}' && '{}' {} > stdout.txt 2> stderr.txt", dir.string(),
+                                          FLEXBODY_FBPREP, arguments);
+  const int status = std::system(command.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir / "stdout.txt"), slurp(dir / "stderr.txt")};
+}
+
+std::filesystem::path bracket_step() { return std::filesystem::path(FLEXBODY_SOURCE_DIR) / "meshes" / "bracket.step"; }
+
+// Only the files the test itself wrote remain in `dir` (no body file, no temporary).
+void expect_no_output(const std::filesystem::path& dir) {
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_TRUE(name == "stdout.txt" || name == "stderr.txt" || name.rfind("input", 0) == 0)
+        << "left behind: " << name;
+  }
+}
+
+void expect_refusal(const std::filesystem::path& dir, const std::string& arguments, const std::string& message) {
+  SCOPED_TRACE(arguments);
+  const CliRun run = fbprep(dir, arguments + " -o out.fbh5");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_EQ(run.out, "");
+  EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
+  EXPECT_EQ(run.err.rfind("fbprep: error: ", 0), 0u) << run.err;
+  EXPECT_NE(run.err.find(message), std::string::npos) << run.err;
+  expect_no_output(dir);
+}
+
+void write(const std::filesystem::path& path, const std::string& text) { std::ofstream(path) << text; }
+
+constexpr const char* kOcc = "SetFactory(\"OpenCASCADE\");\n";
+
+}  // namespace
+
+TEST(FbprepCli, BracketEndToEnd) {
+  const auto dir = flexbody::test::scratch_dir();
+  const CliRun run = fbprep(dir, fmt::format("'{}' -o bracket.fbh5 --modes 6 --json", bracket_step().string()));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.err, "");
+  const auto json = nlohmann::json::parse(run.out);
+  for (const char* key : {"nodes", "elements", "dofs", "mass_kg", "center_of_mass_m", "inertia_kgm2", "frequencies_hz",
+                          "max_relative_residual", "mesh_quality", "timings_s", "peak_memory_mb", "output"})
+    EXPECT_TRUE(json.contains(key)) << key;
+  EXPECT_EQ(json["length_unit"], "mm");
+  EXPECT_EQ(json["frequencies_hz"].size(), 6u);
+  EXPECT_LT(json["max_relative_residual"].get<double>(), 1e-8);
+  EXPECT_EQ(json["dofs"].get<long>(), 3 * json["nodes"].get<long>());
+  // Mass = rho x meshed volume exactly; the meshed volume is within 1 % of the CAD volume
+  // (bores and fillet are faceted): 90x40x8 + 8x40x52 + fillet 10x10x40 (1 - pi/4) - 3 bores, mm^3.
+  const double cad_volume_mm3 = 90 * 40 * 8 + 8 * 40 * 52 + 100 * 40 * (1 - std::numbers::pi / 4) -
+                                std::numbers::pi * (25 * 8 + 25 * 8 + 36 * 8);
+  EXPECT_NEAR(json["mass_kg"].get<double>(), 7850 * json["mesh_quality"]["volume_m3"].get<double>(), 1e-9);
+  EXPECT_NEAR(json["mesh_quality"]["volume_m3"].get<double>(), cad_volume_mm3 * 1e-9, 0.01 * cad_volume_mm3 * 1e-9);
+
+  const auto body = flexbody::format::read_body_file(dir / "bracket.fbh5");
+  EXPECT_EQ(body.mesh.nodes.rows(), json["nodes"].get<long>());
+  EXPECT_EQ(body.modes.upsilon.cols(), 3 * 6);
+  for (int k = 0; k < 6; ++k) EXPECT_DOUBLE_EQ(body.modes.frequencies_hz(k), json["frequencies_hz"][k].get<double>());
+  // Body frame: origin at the centre of mass.
+  EXPECT_LT(body.mesh.nodes.colwise().mean().norm(), 0.1);  // not exact (node density varies), but near
+  EXPECT_EQ(body.provenance.source_file, "bracket.step");
+  EXPECT_EQ(body.provenance.source_sha256.size(), 64u);
+}
+
+TEST(FbprepCli, GeoInMillimetresGivesTheSameBodyAsTheStep) {
+  const auto dir = flexbody::test::scratch_dir();
+  const auto geo = std::filesystem::path(FLEXBODY_SOURCE_DIR) / "meshes" / "bracket.geo";
+  const CliRun step = fbprep(dir, fmt::format("'{}' -o a.fbh5 --modes 1 --mesh-size 6 --json", bracket_step().string()));
+  const CliRun mm = fbprep(dir, fmt::format("'{}' -o b.fbh5 --modes 1 --mesh-size 6 --unit mm --json", geo.string()));
+  const CliRun m = fbprep(dir, fmt::format("'{}' -o c.fbh5 --modes 1 --mesh-size 6 --unit m --json", geo.string()));
+  ASSERT_EQ(step.exit_code, 0) << step.err;
+  ASSERT_EQ(mm.exit_code, 0) << mm.err;
+  ASSERT_EQ(m.exit_code, 0) << m.err;
+  const auto a = nlohmann::json::parse(step.out), b = nlohmann::json::parse(mm.out), c = nlohmann::json::parse(m.out);
+  // Same geometry and element size: the same mesh. The STEP file stores the geometry through
+  // OpenCASCADE's tolerances (1e-7 mm), so the masses agree to ~1e-7, not to round-off.
+  EXPECT_EQ(a["nodes"], b["nodes"]);
+  EXPECT_NEAR(a["mass_kg"].get<double>(), b["mass_kg"].get<double>(), 1e-6 * b["mass_kg"].get<double>());
+  // Read as metres (with the same numbers), the bracket is 1000 times larger: 1e9 times the mass, 1/1000 the frequency.
+  EXPECT_NEAR(c["mass_kg"].get<double>() / b["mass_kg"].get<double>(), 1e9, 1e-3);
+  EXPECT_NEAR(b["frequencies_hz"][0].get<double>() / c["frequencies_hz"][0].get<double>(), 1e3, 1e-6);
+  EXPECT_EQ(b["length_unit"], "mm");
+}
+
+TEST(FbprepCli, RefusesBadInputsWithOneLine) {
+  const auto dir = flexbody::test::scratch_dir();
+  expect_refusal(dir, "nothing-here.step", "nothing-here.step: no such file");
+  write(dir / "input-garbage.step", "this is not a STEP file\n");
+  expect_refusal(dir, "input-garbage.step", "input-garbage.step: Could not read file");
+  write(dir / "input-sheet.geo", std::string(kOcc) + "Rectangle(1) = {0, 0, 0, 1, 1};\n");
+  expect_refusal(dir, "input-sheet.geo --unit m", "input-sheet.geo: the input has no volume (1 surfaces)");
+  write(dir / "input-two.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\nBox(2) = {3, 0, 0, 1, 1, 1};\n");
+  expect_refusal(dir, "input-two.geo --unit m", "input-two.geo: found 2 disconnected solids; an assembly is not one body");
+  expect_refusal(dir, "input-two.geo", "gmsh .geo files carry no length unit; pass --unit");
+  write(dir / "input-inverted.msh",
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n$EndNodes\n"
+        "$Elements\n2\n1 4 2 1 1 1 2 3 4\n2 4 2 1 1 2 4 3 5\n$EndElements\n");
+  expect_refusal(dir, "input-inverted.msh --unit m",
+                 "input-inverted.msh: 1 inverted or zero-volume element, first is tetrahedron 1");
+  write(dir / "input-cube.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+  expect_refusal(dir, "input-cube.geo --unit m --material E=-1,nu=0.3,rho=7850", "E must be positive, got -1");
+  expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,nu=0.3,rho=0", "rho must be positive, got 0");
+  expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,nu=0.5,rho=1000", "nu must lie in (-1, 0.5), got 0.5");
+  expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,nu=-1.2,rho=1000", "nu must lie in (-1, 0.5), got -1.2");
+  expect_refusal(dir, "input-cube.geo --unit m --material unobtainium", "'unobtainium' is unknown");
+  expect_refusal(dir, "input-cube.geo --unit furlong", "--unit 'furlong' is not one of mm, cm, m, in");
+  expect_refusal(dir, "input-cube.geo --unit m --eigensolver lapack", "'lapack' is unknown; use arpack or spectra");
+  expect_refusal(dir, "input-cube.geo --unit m --order 2", "only linear tetrahedra (--order 1) are implemented");
+  expect_refusal(dir, "input-cube.txt --unit m", "unsupported file type '.txt'");
+  // A bracket in mm read as metres with a size meant in mm: a unit mistake, refused before meshing.
+  const auto geo = std::filesystem::path(FLEXBODY_SOURCE_DIR) / "meshes" / "bracket.geo";
+  expect_refusal(dir, fmt::format("'{}' --unit m --mesh-size 0.006", geo.string()),
+                 "element size 0.006 m would give about 1.7e+12 tetrahedra");
+}
+
+TEST(FbprepCli, FailedRunLeavesAnExistingTargetUntouched) {
+  const auto dir = flexbody::test::scratch_dir();
+  write(dir / "input-sheet.geo", std::string(kOcc) + "Rectangle(1) = {0, 0, 0, 1, 1};\n");
+  write(dir / "input-old.fbh5", "previous contents");
+  const CliRun run = fbprep(dir, "input-sheet.geo --unit m -o input-old.fbh5");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_EQ(slurp(dir / "input-old.fbh5"), "previous contents");
+  expect_no_output(dir);
+}

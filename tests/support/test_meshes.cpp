@@ -1,0 +1,115 @@
+#include "test_meshes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace flexbody::test {
+
+std::filesystem::path data_dir() { return FLEXBODY_TEST_DATA_DIR; }
+
+std::filesystem::path scratch_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "flexbody";
+  for (char& c : name)
+    if (c == '/') c = '_';
+  const auto dir = std::filesystem::temp_directory_path() / ("flexbody-test-" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+preprocess::TetMesh box_mesh(double lx, double ly, double lz, int nx, int ny, int nz) {
+  preprocess::TetMesh mesh;
+  auto id = [&](int i, int j, int k) { return static_cast<std::int32_t>((k * (ny + 1) + j) * (nx + 1) + i); };
+  mesh.nodes.resize(static_cast<Eigen::Index>(nx + 1) * (ny + 1) * (nz + 1), 3);
+  for (int k = 0; k <= nz; ++k)
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i) mesh.nodes.row(id(i, j, k)) << lx * i / nx, ly * j / ny, lz * k / nz;
+  // Kuhn split of the unit cube: the 6 paths from corner 0 to corner 7 that add one axis at a time.
+  static constexpr std::array<std::array<int, 3>, 6> kPaths = {
+      {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+  mesh.tets.resize(6 * static_cast<Eigen::Index>(nx) * ny * nz, 4);
+  Eigen::Index e = 0;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        for (const auto& path : kPaths) {
+          std::array<int, 3> offset = {0, 0, 0};
+          std::array<std::int32_t, 4> corners{};
+          corners[0] = id(i, j, k);
+          for (int step = 0; step < 3; ++step) {
+            offset[path[step]] = 1;
+            corners[step + 1] = id(i + offset[0], j + offset[1], k + offset[2]);
+          }
+          // Orientation: an odd permutation of the axes gives a negative volume; swap to fix it.
+          const bool odd = (path[0] == 0 && path[1] == 2) || (path[0] == 1 && path[1] == 0) ||
+                           (path[0] == 2 && path[1] == 1);
+          if (odd) std::swap(corners[2], corners[3]);
+          for (int a = 0; a < 4; ++a) mesh.tets(e, a) = corners[a];
+          ++e;
+        }
+  return mesh;
+}
+
+preprocess::TetMesh read_abaqus_c3d4(const std::filesystem::path& path) {
+  std::ifstream file(path);
+  if (!file) throw std::runtime_error(path.string() + ": cannot open");
+  std::vector<std::array<double, 3>> nodes;
+  std::vector<std::array<std::int32_t, 4>> tets;
+  enum class Block { none, nodes, elements } block = Block::none;
+  std::string line;
+  while (std::getline(file, line)) {
+    if (line.rfind("**", 0) == 0) continue;
+    if (line.rfind('*', 0) == 0) {
+      if (line.rfind("*Node", 0) == 0 && nodes.empty()) block = Block::nodes;
+      else if (line.find("type=C3D4") != std::string::npos && tets.empty()) block = Block::elements;
+      else block = Block::none;
+      continue;
+    }
+    for (char& c : line)
+      if (c == ',') c = ' ';
+    std::istringstream in(line);
+    long label = 0;
+    in >> label;
+    if (block == Block::nodes) {
+      std::array<double, 3> x{};
+      in >> x[0] >> x[1] >> x[2];
+      if (label != static_cast<long>(nodes.size()) + 1) throw std::runtime_error("unexpected node numbering");
+      nodes.push_back(x);
+    } else if (block == Block::elements) {
+      std::array<std::int32_t, 4> t{};
+      for (auto& n : t) {
+        in >> n;
+        --n;
+      }
+      tets.push_back(t);
+    }
+  }
+  preprocess::TetMesh mesh;
+  mesh.nodes.resize(static_cast<Eigen::Index>(nodes.size()), 3);
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    for (int c = 0; c < 3; ++c) mesh.nodes(static_cast<Eigen::Index>(i), c) = nodes[i][c];
+  mesh.tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
+  for (std::size_t e = 0; e < tets.size(); ++e)
+    for (int a = 0; a < 4; ++a) mesh.tets(static_cast<Eigen::Index>(e), a) = tets[e][a];
+  return mesh;
+}
+
+preprocess::SparseMatrix read_abaqus_matrix(const std::filesystem::path& path, Eigen::Index size) {
+  std::ifstream file(path);
+  if (!file) throw std::runtime_error(path.string() + ": cannot open");
+  std::vector<Eigen::Triplet<double, std::int64_t>> triplets;
+  long row = 0, col = 0;
+  double value = 0.0;
+  while (file >> row >> col >> value) triplets.emplace_back(row - 1, col - 1, value);
+  preprocess::SparseMatrix matrix(size, size);
+  matrix.setFromTriplets(triplets.begin(), triplets.end());
+  return matrix;
+}
+
+}  // namespace flexbody::test

@@ -1,0 +1,27 @@
+#pragma once
+// Meshes and references the tests build themselves: structured boxes, the Abaqus block.
+
+#include "flexbody/preprocess/tet_mesh.hpp"
+
+#include <filesystem>
+#include <string>
+
+namespace flexbody::test {
+
+/// The tests' data directory (tests/data in the source tree).
+[[nodiscard]] std::filesystem::path data_dir();
+/// A fresh empty directory under the system's temporary directory, named after the running test.
+[[nodiscard]] std::filesystem::path scratch_dir();
+
+/// A structured mesh of the box [0, lx] x [0, ly] x [0, lz] with nx x ny x nz cells, each split into
+/// six positively oriented tetrahedra around its main diagonal (Kuhn split: conforming across cells).
+[[nodiscard]] preprocess::TetMesh box_mesh(double lx, double ly, double lz, int nx, int ny, int nz);
+
+/// Nodes and C3D4 elements of an Abaqus .inp file (first *Node and *Element, type=C3D4 blocks),
+/// node order as in the file (node k of the file is row k-1).
+[[nodiscard]] preprocess::TetMesh read_abaqus_c3d4(const std::filesystem::path& path);
+
+/// A symmetric matrix exported by Abaqus (*_STIF1.mtx, *_MASS1.mtx: "row col value", 1-based), full.
+[[nodiscard]] preprocess::SparseMatrix read_abaqus_matrix(const std::filesystem::path& path, Eigen::Index size);
+
+}  // namespace flexbody::test

@@ -20,8 +20,8 @@ constexpr int kGmshTet4 = 4;  // gmsh element type of the 4-node tetrahedron
 // what fits in 24 GiB, and such a request is nearly always a unit mistake.
 constexpr double kMaxEstimatedElements = 2e7;
 
-// Tetrahedra gmsh would make at element size h: about 6 per cube of side h (at least 6 V / h^3 / 1.2
-// for gmsh's nearly regular tets, whose volume is h^3 / 8.5).
+// Tetrahedra gmsh would make at element size h: its nearly regular tetrahedra of edge h have volume
+// h^3 / 8.5.
 double estimated_elements(double volume, double h) { return 8.5 * volume / (h * h * h); }
 
 double volume_of(const gmsh::vectorpair& volumes, double bounding_box_volume) {
@@ -58,10 +58,12 @@ UnitDecision decide_unit(const std::filesystem::path& path, InputFormat format, 
     std::optional<LengthUnit> declared;
     if (format == InputFormat::step) declared = detail::declared_step_unit(path);
     UnitDecision d{declared.value_or(LengthUnit::millimetre), 1e-3, 0.0, ""};
-    const std::string kind = format == InputFormat::step ? "STEP" : "IGES";
-    d.reason = declared ? fmt::format("declared in the {} file ({}); OpenCASCADE converts it to mm", kind,
-                                      to_string(*declared))
-                        : fmt::format("as declared in the {} file; OpenCASCADE converts it to mm", kind);
+    if (format == InputFormat::iges)
+      d.reason = "IGES: OpenCASCADE converts the file's declared unit to mm (fbprep does not read IGES headers)";
+    else if (declared)
+      d.reason = fmt::format("declared in the STEP file ({}); OpenCASCADE converts it to mm", to_string(*declared));
+    else
+      d.reason = "the STEP file declares no length unit fbprep recognizes; OpenCASCADE reads it as mm";
     const LengthUnit size_unit = unit.value_or(declared.value_or(LengthUnit::millimetre));
     d.size_unit_to_gmsh = metres_per(size_unit) / 1e-3;
     if (unit) d.reason += fmt::format("; --mesh-size read in {} (--unit)", to_string(*unit));
@@ -171,7 +173,7 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
 
   if (result.format == InputFormat::msh) {
     result.meshed_here = false;
-  } else {
+  } else detail::gmsh_call(name, [&] {
     gmsh::vectorpair volumes, surfaces;
     gmsh::model::getEntities(volumes, 3);
     gmsh::model::getEntities(surfaces, 2);
@@ -198,7 +200,7 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
                                                        result.mesh_size_m));
     detail::SilencedStdStreams quiet;
     detail::gmsh_call(name + ": meshing failed", [] { gmsh::model::mesh::generate(3); });
-  }
+  });
   result.mesh = detail::gmsh_call(name, [&] { return tetrahedra_from_gmsh(name); });
   result.mesh.nodes *= unit.gmsh_to_metres;
 

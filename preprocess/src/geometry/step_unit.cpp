@@ -7,27 +7,26 @@
 namespace flexbody::preprocess::detail {
 
 std::optional<LengthUnit> declared_step_unit(const std::filesystem::path& path) {
+  // Unit entities may sit anywhere in the DATA section (OpenCASCADE writes them near the end), so the
+  // whole file is streamed; only lines that mention units are kept.
   std::ifstream file(path);
-  std::string line;
-  // The unit entities sit in the first part of the DATA section; read a bounded prefix.
   std::ostringstream text;
-  std::size_t read = 0;
-  while (read < (8u << 20) && std::getline(file, line)) {
-    if (line.find("LENGTH_UNIT") != std::string::npos || line.find("SI_UNIT") != std::string::npos ||
-        line.find("CONVERSION_BASED_UNIT") != std::string::npos)
-      text << line << ' ';
-    read += line.size();
-  }
+  std::string line;
+  while (std::getline(file, line))
+    if (line.find("UNIT") != std::string::npos) text << line << ' ';
   const std::string units = text.str();
-  static const std::regex si(R"(SI_UNIT\s*\(\s*(\.MILLI\.|\.CENTI\.|\$)\s*,\s*\.METRE\.\s*\))");
-  static const std::regex inch(R"(CONVERSION_BASED_UNIT\s*\(\s*'INCH')", std::regex::icase);
+  // An inch file declares CONVERSION_BASED_UNIT('INCH', #k) with #k pointing at an SI_UNIT (often mm
+  // or m), so the conversion-based unit takes precedence over any SI_UNIT.
+  static const std::regex inch(R"(LENGTH_UNIT[^;]*CONVERSION_BASED_UNIT\s*\(\s*'INCH')", std::regex::icase);
+  static const std::regex inch_reversed(R"(CONVERSION_BASED_UNIT\s*\(\s*'INCH'[^;]*LENGTH_UNIT)", std::regex::icase);
+  if (std::regex_search(units, inch) || std::regex_search(units, inch_reversed)) return LengthUnit::inch;
+  static const std::regex si(R"(LENGTH_UNIT[^;]*SI_UNIT\s*\(\s*(\.MILLI\.|\.CENTI\.|\$)\s*,\s*\.METRE\.\s*\))");
   std::smatch match;
   if (std::regex_search(units, match, si)) {
     if (match[1] == ".MILLI.") return LengthUnit::millimetre;
     if (match[1] == ".CENTI.") return LengthUnit::centimetre;
     return LengthUnit::metre;
   }
-  if (std::regex_search(units, inch)) return LengthUnit::inch;
   return std::nullopt;
 }
 

@@ -2,7 +2,9 @@
 //
 //   fbprep part.step -o part.fbh5 --material steel --modes 12
 //
-// Errors: one line on stderr, exit code 1 (2 for a bad command line); no file under the output name.
+// Errors: one line on stderr and no file under the output name. Exit code 2 when the command line asks
+// for something impossible (an unknown option, a bad value, a request the part cannot meet: library
+// functions signal these with std::invalid_argument), 1 when reading the input or computing fails.
 #include "flexbody/preprocess/fbprep_pipeline.hpp"
 
 #include <CLI/CLI.hpp>
@@ -10,6 +12,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -18,11 +21,16 @@ namespace fp = flexbody::preprocess;
 
 namespace {
 
-int fail(const std::string& message, int code) {
+// One line on stderr, whatever the message holds (gmsh and OpenCASCADE messages may span lines).
+int fail(std::string message, int code) {
+  std::replace(message.begin(), message.end(), '\n', ' ');
   std::fflush(stdout);
   std::fprintf(stderr, "fbprep: error: %s\n", message.c_str());
   return code;
 }
+
+constexpr int kBadCommandLine = 2;
+constexpr int kFailed = 1;
 
 }  // namespace
 
@@ -36,9 +44,11 @@ int main(int argc, char** argv) {
   bool json = false, quiet = false;
   app.add_option("INPUT", input, "STEP/STP, IGES/IGS, BREP, gmsh .geo, or gmsh .msh with tetrahedra")->required();
   app.add_option("-o,--output", output, "body file to write (default: INPUT's name with .fbh5, here)");
-  app.add_option("--unit", unit_text, "length unit of INPUT: mm|cm|m|in (required for BREP/.geo/.msh; "
-                                      "STEP/IGES declare their own, then it is the unit of --mesh-size)");
-  app.add_option("--mesh-size", mesh_size, "target element size in --unit (default: bounding-box diagonal / 25)");
+  app.add_option("--unit", unit_text, "length unit of INPUT: mm|cm|m|in (required for BREP/.geo/.msh; STEP and "
+                                      "IGES declare their own: then only the unit of --mesh-size, default the "
+                                      "STEP's declared unit, mm for IGES)");
+  app.add_option("--mesh-size", mesh_size, "largest element size in --unit (default: bounding-box diagonal / 25; "
+                                           "a .msh is used as it is)");
   app.add_option("--order", order, "element order: 1 (linear tetrahedra)");
   app.add_option("--material", material_text, "steel|aluminium|titanium or E=210e9,nu=0.3,rho=7850 (SI)");
   app.add_option("--modes", modes, "number of elastic free-free modes (rigid-body modes never count)");
@@ -51,9 +61,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    return fail(std::string(e.what()) + " (see fbprep --help)", 2);
+    return fail(std::string(e.what()) + " (see fbprep --help)", kBadCommandLine);
   }
 
+  // Option values: a bad one is a bad command line (exit 2).
   fp::PrepOptions options;
   const auto start = std::chrono::steady_clock::now();
   try {
@@ -62,11 +73,13 @@ int main(int argc, char** argv) {
                                     : std::filesystem::path(output);
     if (!unit_text.empty()) {
       options.mesh.unit = fp::length_unit_from_string(unit_text);
-      if (!options.mesh.unit) return fail("--unit '" + unit_text + "' is not one of mm, cm, m, in", 2);
+      if (!options.mesh.unit) throw std::invalid_argument("--unit '" + unit_text + "' is not one of mm, cm, m, in");
     }
-    if (mesh_size < 0.0) return fail(fmt::format("--mesh-size must be positive, got {}", mesh_size), 2);
-    if (modes < 0) return fail(fmt::format("--modes must be positive, got {}", modes), 2);
-    if (fmax < 0.0) return fail(fmt::format("--fmax must be positive, got {}", fmax), 2);
+    if (!(mesh_size >= 0.0)) throw std::invalid_argument(fmt::format("--mesh-size must be positive, got {}", mesh_size));
+    if (modes < 0) throw std::invalid_argument(fmt::format("--modes must be positive, got {}", modes));
+    if (!(fmax >= 0.0)) throw std::invalid_argument(fmt::format("--fmax must be positive, got {}", fmax));
+    if (order != 1)
+      throw std::invalid_argument(fmt::format("--order {}: only linear tetrahedra (--order 1) are implemented", order));
     options.mesh.mesh_size = mesh_size;
     options.mesh.order = order;
     options.material = fp::parse_material(material_text);
@@ -82,6 +95,11 @@ int main(int argc, char** argv) {
                                 {"modes", std::to_string(options.modes.modes)},
                                 {"fmax", fmt::format("{}", fmax)},
                                 {"eigensolver", solver_text}};
+  } catch (const std::exception& e) {
+    return fail(e.what(), kBadCommandLine);
+  }
+
+  try {
     if (!quiet && !json && ::isatty(STDERR_FILENO)) {
       options.progress = [start](const std::string& message) {
         const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -91,8 +109,12 @@ int main(int argc, char** argv) {
     const fp::PrepSummary summary = fp::run_fbprep(options);
     if (json) std::cout << summary.json() << '\n';
     else if (!quiet) std::cout << summary.full_report();
+  } catch (const std::invalid_argument& e) {
+    return fail(e.what(), kBadCommandLine);
   } catch (const std::exception& e) {
-    return fail(e.what(), 1);
+    return fail(e.what(), kFailed);
+  } catch (...) {  // a library throwing something that is not a std::exception
+    return fail("internal error: unexpected exception type", kFailed);
   }
   return 0;
 }

@@ -15,6 +15,13 @@ SilencedStdStreams::SilencedStdStreams() {
   if (null < 0) return;
   saved_stdout_ = ::dup(STDOUT_FILENO);
   saved_stderr_ = ::dup(STDERR_FILENO);
+  if (saved_stdout_ < 0 || saved_stderr_ < 0) {  // could not save them: better noisy than mute for good
+    if (saved_stdout_ >= 0) ::close(saved_stdout_);
+    if (saved_stderr_ >= 0) ::close(saved_stderr_);
+    saved_stdout_ = saved_stderr_ = -1;
+    ::close(null);
+    return;
+  }
   ::dup2(null, STDOUT_FILENO);
   ::dup2(null, STDERR_FILENO);
   ::close(null);

@@ -3,6 +3,7 @@
 #include "flexbody/preprocess/tet4_element.hpp"
 
 #include <Eigen/Dense>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <array>
@@ -90,7 +91,7 @@ void check_element_volumes(const TetMesh& mesh, const std::string& source) {
   if (bad > 0)
     throw std::runtime_error(source + ": " + std::to_string(bad) + " inverted or zero-volume element" +
                              (bad > 1 ? "s" : "") + ", first is tetrahedron " + std::to_string(first) +
-                             " (0-based, volume " + std::to_string(first_volume) + " m^3)");
+                             fmt::format(" (0-based, volume {:.3g} m^3)", first_volume));
 }
 
 RowMatrixX3i boundary_triangles(const TetMesh& mesh) {

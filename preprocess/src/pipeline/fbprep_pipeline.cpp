@@ -35,8 +35,11 @@ std::string utc_now() {
   return fmt::format("{:%Y-%m-%dT%H:%M:%SZ}", utc);
 }
 
-void check_output_location(const std::filesystem::path& output) {
+void check_output_location(const std::filesystem::path& input, const std::filesystem::path& output) {
   if (output.empty()) throw std::invalid_argument("no output file given (-o FILE.fbh5)");
+  std::error_code same;
+  if (std::filesystem::equivalent(input, output, same))
+    throw std::invalid_argument(fmt::format("{}: the output would overwrite the input", output.string()));
   const std::filesystem::path directory = output.has_parent_path() ? output.parent_path() : ".";
   std::error_code ec;
   if (!std::filesystem::is_directory(directory, ec))
@@ -50,7 +53,7 @@ void check_output_location(const std::filesystem::path& output) {
 PrepSummary run_fbprep(const PrepOptions& options) {
   const auto start = Clock::now();
   check_material(options.material);
-  check_output_location(options.output);
+  check_output_location(options.input, options.output);
   PrepSummary summary;
   summary.input = options.input;
   summary.output = options.output;
@@ -75,14 +78,30 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.quality = mesh_quality(mesh);
   mesh_timer.stop();
 
+  // Errors of the numerical stages name the input they came from.
+  const std::string name = options.input.filename().string();
+  auto in_stage = [&name](const char* stage, auto&& run) {
+    try {
+      return run();
+    } catch (const std::bad_alloc&) {
+      throw std::runtime_error(fmt::format("{}: out of memory in the {} stage", name, stage));
+    } catch (const std::invalid_argument& e) {  // keeps its type: an impossible request (exit code 2)
+      throw std::invalid_argument(fmt::format("{}: {}", name, e.what()));
+    } catch (const std::exception& e) {
+      throw std::runtime_error(fmt::format("{}: {}", name, e.what()));
+    }
+  };
+
   // 2. FE: K̄ and M_s in the input frame, then the body frame (origin at the centre of mass).
   StageTimer fe_timer(summary, "assembly");
   if (options.progress) options.progress(fmt::format("assembling K and M ({} DOFs)", summary.dofs));
-  const NodeGraph graph = NodeGraph::build(mesh);
-  const std::vector<Tet4Geometry> geometry = element_geometries(mesh);
-  const SparseMatrix stiffness = assemble_stiffness(mesh, graph, geometry, options.material);
-  const SparseMatrix scalar_mass =
-      assemble_scalar_mass(mesh, graph, geometry, options.material.density, MassScheme::consistent);
+  SparseMatrix stiffness, scalar_mass;
+  in_stage("assembly", [&] {
+    const NodeGraph graph = NodeGraph::build(mesh);  // graph and geometry die here: memory for the modes
+    const std::vector<Tet4Geometry> geometry = element_geometries(mesh);
+    stiffness = assemble_stiffness(mesh, graph, geometry, options.material);
+    scalar_mass = assemble_scalar_mass(mesh, graph, geometry, options.material.density, MassScheme::consistent);
+  });
   summary.mass = mass_properties(scalar_mass, mesh.nodes);
   fe_timer.stop();
 
@@ -96,7 +115,9 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   StageTimer modes_timer(summary, "modes");
   FreeFreeOptions mode_options = options.modes;
   mode_options.progress = options.progress;
-  const FreeFreeModes modes = free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options);
+  const FreeFreeModes modes = in_stage("modes", [&] {
+    return free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options);
+  });
   summary.frequencies_hz = modes.frequencies_hz;
   summary.relative_residuals = modes.relative_residuals;
   summary.shift = modes.shift;

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <fmt/format.h>
+
 namespace flexbody::preprocess {
 namespace {
 
@@ -66,7 +68,7 @@ Material parse_material(std::string_view text) {
 }
 
 void check_material(const Material& m) {
-  auto show = [](double v) { return std::to_string(v); };
+  auto show = [](double v) { return fmt::format("{}", v); };
   if (!std::isfinite(m.youngs_modulus) || m.youngs_modulus <= 0.0)
     throw std::invalid_argument("material: E must be positive, got " + show(m.youngs_modulus));
   if (!std::isfinite(m.density) || m.density <= 0.0)

@@ -125,7 +125,8 @@ std::string PrepSummary::json() const {
   j["peak_memory_mb"] = peak_memory_mb;
   j["output"] = output.string();
   j["output_bytes"] = output_bytes;
-  return j.dump();
+  // Paths need not be UTF-8: replace invalid bytes rather than throw after the body file exists.
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 }  // namespace flexbody::preprocess

@@ -74,8 +74,10 @@ struct PrepSummary {
   [[nodiscard]] std::string json() const;
 };
 
-/// Runs every stage and writes options.output atomically. Throws std::runtime_error or
-/// std::invalid_argument with one line naming the problem; then no file is left under options.output.
+/// Runs every stage and writes options.output atomically. Throws with one line naming the problem, and
+/// then leaves no file under options.output: std::invalid_argument when the options ask for something
+/// impossible (a bad value, more modes than the mesh has, an output that is the input, ...),
+/// std::runtime_error when the input cannot be read or a computation fails.
 [[nodiscard]] PrepSummary run_fbprep(const PrepOptions& options);
 
 /// SHA-256 of a file's bytes, lowercase hex.

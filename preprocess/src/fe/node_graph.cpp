@@ -13,8 +13,17 @@ NodeGraph NodeGraph::build(const TetMesh& mesh) {
   // Node-to-element incidence (CSR), entries in element order.
   graph.incidence_start.assign(n_nodes + 1, 0);
   for (std::int64_t e = 0; e < n_elements; ++e)
+    for (int a = 0; a < 4; ++a)
+      if (mesh.tets(e, a) < 0 || mesh.tets(e, a) >= n_nodes)
+        throw std::invalid_argument("mesh: tetrahedron " + std::to_string(e) + " refers to node " +
+                                    std::to_string(mesh.tets(e, a)) + " of " + std::to_string(n_nodes));
+  for (std::int64_t e = 0; e < n_elements; ++e)
     for (int a = 0; a < 4; ++a) ++graph.incidence_start[mesh.tets(e, a) + 1];
-  for (std::int64_t i = 0; i < n_nodes; ++i) graph.incidence_start[i + 1] += graph.incidence_start[i];
+  for (std::int64_t i = 0; i < n_nodes; ++i) {
+    if (graph.incidence_start[i + 1] == 0)  // the assembly's column layout needs every node in an element
+      throw std::invalid_argument("mesh: node " + std::to_string(i) + " belongs to no element (remove_unused_nodes)");
+    graph.incidence_start[i + 1] += graph.incidence_start[i];
+  }
   graph.incidence.resize(graph.incidence_start.back());
   std::vector<std::int64_t> fill(graph.incidence_start.begin(), graph.incidence_start.end() - 1);
   for (std::int64_t e = 0; e < n_elements; ++e)

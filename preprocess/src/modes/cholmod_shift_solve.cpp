@@ -3,6 +3,7 @@
 #include "flexbody/preprocess/assembly.hpp"
 
 #include <cholmod.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <chrono>
@@ -112,6 +113,9 @@ CholmodShiftSolve::CholmodShiftSolve(const SparseMatrix& stiffness_upper, const 
 
 CholmodShiftSolve::~CholmodShiftSolve() = default;
 
+static_assert(ShiftSolveOperator<CholmodShiftSolve>);
+static_assert(MassOperator<VectorMassOperator>);
+
 Eigen::Index CholmodShiftSolve::rows() const { return impl_->stiffness.rows(); }
 
 void CholmodShiftSolve::set_shift(double sigma) {
@@ -128,8 +132,8 @@ void CholmodShiftSolve::set_shift(double sigma) {
   stats_.factorize_seconds += seconds_since(start);
   if (!ok || impl_->common.status != CHOLMOD_OK)
     throw std::runtime_error(impl_->common.status == CHOLMOD_NOT_POSDEF
-                                 ? "shift-invert: K - sigma M is not positive definite at sigma = " +
-                                       std::to_string(sigma) + " (column " +
+                                 ? fmt::format("shift-invert: K - sigma M is not positive definite at sigma = {:.6g}", sigma) +
+                                       " (column " +
                                        std::to_string(impl_->factor->minor) + ")"
                                  : "shift-invert: CHOLMOD factorization failed (status " +
                                        std::to_string(impl_->common.status) + ")");
@@ -150,20 +154,6 @@ void CholmodShiftSolve::perform_op(const double* x, double* y) {
   result = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(impl_->x->x), static_cast<Eigen::Index>(n));
   if (impl_->deflation.cols() > 0)  // y <- y - R (M̄ R)ᵀ y
     result.noalias() -= impl_->deflation * (impl_->mass_deflation.transpose() * result);
-}
-
-void CholmodShiftSolve::solve_block(const Eigen::MatrixXd& x, Eigen::MatrixXd& y) {
-  const auto n = static_cast<std::size_t>(rows());
-  cholmod_dense rhs = dense_view(const_cast<double*>(x.data()), n, static_cast<std::size_t>(x.cols()));
-  cholmod_dense* solution = nullptr;
-  const auto start = std::chrono::steady_clock::now();
-  solution = cholmod_l_solve(CHOLMOD_A, impl_->factor, &rhs, &impl_->common);
-  if (solution == nullptr) throw std::runtime_error("shift-invert: CHOLMOD block solve failed");
-  stats_.solve_seconds += seconds_since(start);
-  stats_.solves += x.cols();
-  y = Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(solution->x), x.rows(), x.cols());
-  cholmod_l_free_dense(&solution, &impl_->common);
-  if (impl_->deflation.cols() > 0) y.noalias() -= impl_->deflation * (impl_->mass_deflation.transpose() * y);
 }
 
 }  // namespace flexbody::preprocess

@@ -14,9 +14,14 @@
 namespace flexbody::preprocess {
 namespace {
 
+}  // namespace
+
 int lanczos_basis_size(int nev, Eigen::Index n) {
-  return static_cast<int>(std::min<Eigen::Index>(n, std::max(2 * nev + 1, nev + 20)));
+  // The deflated operator has rank n - 6: a larger basis would only hold round-off.
+  return static_cast<int>(std::min<Eigen::Index>(n - 6, std::max(2 * nev + 1, nev + 20)));
 }
+
+namespace {
 
 // A reproducible start vector inside the deflated space: P (random).
 Eigen::VectorXd start_vector(CholmodShiftSolve& op, const VectorMassOperator& mass) {
@@ -145,9 +150,9 @@ EigensolverBackend eigensolver_backend_from_string(std::string_view text) {
 EigenPairs solve_shift_invert(CholmodShiftSolve& op, const VectorMassOperator& mass, int nev,
                               const EigensolverOptions& options) {
   const Eigen::Index n = op.rows();
-  if (nev < 1 || nev >= n - 1)
-    throw std::invalid_argument("eigensolver: the number of modes must satisfy 1 <= nev < " +
-                                std::to_string(n - 1) + ", got " + std::to_string(nev));
+  if (nev < 1 || nev > n - 8)
+    throw std::invalid_argument("eigensolver: the number of modes must satisfy 1 <= nev <= " +
+                                std::to_string(n - 8) + " (DOFs - 6 rigid-body modes - 2), got " + std::to_string(nev));
   return options.backend == EigensolverBackend::arpack ? solve_arpack(op, mass, nev, options)
                                                        : solve_spectra(op, mass, nev, options);
 }

@@ -19,21 +19,25 @@ constexpr double kMaxRelativeResidual = 1e-8;
 // a real part is 1e5 times less stiff than a bar only as a mechanism (f below 1e-5 f_ref, i.e. below
 // 0.03 Hz for a 1 m steel part, where a real first mode is tens of Hz or more).
 constexpr double kZeroEnergyFraction = 1e-10;
+// The Lanczos basis may take at most this much memory (it is n x ncv doubles besides the factor).
+constexpr double kMaxBasisBytes = 4.0 * (1ull << 30);
+// K̄ r for the six rigid-body fields cancels terms of size ||K|| ||r||; more than this is an assembly error.
+constexpr double kMaxRigidBodyResidual = 1e-10;
 
 double reference_frequency(const RowMatrixX3d& nodes, const Material& material) {
   const double diagonal = (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm();
   return std::sqrt(material.youngs_modulus / material.density) / (2.0 * diagonal);
 }
 
+// ||K||_1 (= ||K||_inf) of the symmetric matrix from its upper triangle, without forming it.
 double one_norm(const SparseMatrix& upper) {
-  const SparseMatrix full = full_from_upper(upper);
-  double norm = 0.0;
-  for (Eigen::Index j = 0; j < full.outerSize(); ++j) {
-    double column = 0.0;
-    for (SparseMatrix::InnerIterator it(full, j); it; ++it) column += std::abs(it.value());
-    norm = std::max(norm, column);
-  }
-  return norm;
+  Eigen::VectorXd column_sums = Eigen::VectorXd::Zero(upper.cols());
+  for (Eigen::Index j = 0; j < upper.outerSize(); ++j)
+    for (SparseMatrix::InnerIterator it(upper, j); it; ++it) {
+      column_sums(j) += std::abs(it.value());
+      if (it.row() != j) column_sums(it.row()) += std::abs(it.value());
+    }
+  return column_sums.maxCoeff();
 }
 
 }  // namespace
@@ -61,8 +65,16 @@ FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& sti
   if (options.shift > 0.0 || !std::isfinite(options.shift))
     throw std::invalid_argument(fmt::format("shift: must be negative, got {}", options.shift));
   const Eigen::Index n = stiffness_upper.rows();
-  const int available = static_cast<int>(std::min<Eigen::Index>(n - 6 - 2, 100000));
+  const int available = static_cast<int>(n - 6 - 2);  // the solvers need nev < ncv <= n - 6
   if (available < 1) throw std::invalid_argument("free-free modes: the mesh has too few nodes");
+  // Largest nev whose Lanczos basis (about 2 nev + 1 vectors of n doubles) fits in kMaxBasisBytes.
+  const auto affordable = static_cast<int>(std::max<long>(1, (static_cast<long>(kMaxBasisBytes / (8.0 * n)) - 1) / 2));
+  const int limit = std::min(available, affordable);
+  if (options.modes > limit)
+    throw std::invalid_argument(fmt::format(
+        "--modes {}: at most {} modes for this mesh ({})", options.modes, limit,
+        limit == available ? fmt::format("{} DOFs less the 6 rigid-body modes and 2", n)
+                           : fmt::format("their Lanczos basis would exceed {:.0f} GiB", kMaxBasisBytes / (1ull << 30))));
 
   FreeFreeModes result;
   const Eigen::MatrixXd rigid = rigid_body_modes(nodes, scalar_mass_upper);
@@ -73,13 +85,17 @@ FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& sti
       apply_symmetric(stiffness_upper, rigid.col(k), kr);
       result.rigid_body_residual = std::max(result.rigid_body_residual, kr.norm() / (k_norm * rigid.col(k).norm()));
     }
+    if (!(result.rigid_body_residual <= kMaxRigidBodyResidual))
+      throw std::logic_error(fmt::format("free-free modes: the stiffness does not annihilate the rigid-body fields "
+                                         "(||K r|| / (||K|| ||r||) = {:.3g}): an assembly error",
+                                         result.rigid_body_residual));
   }
   result.shift = options.shift < 0.0 ? options.shift : automatic_shift(nodes, material);
   CholmodShiftSolve op(stiffness_upper, scalar_mass_upper, rigid);
   op.set_shift(result.shift);
   const VectorMassOperator mass(scalar_mass_upper);
 
-  int nev = std::min(options.modes > 0 ? options.modes : 12, available);
+  int nev = std::min(options.modes > 0 ? options.modes : 12, limit);
   EigenPairs pairs;
   while (true) {
     if (options.progress) options.progress(fmt::format("eigensolver: {} modes by {}", nev, to_string(options.solver.backend)));
@@ -90,8 +106,12 @@ FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& sti
     const double f_top = std::sqrt(std::max(pairs.eigenvalues(nev - 1), 0.0)) / kTwoPi;
     const bool enough_for_fmax = options.fmax_hz <= 0.0 || f_top > options.fmax_hz;
     const bool capped = options.modes > 0 && nev >= options.modes;
-    if (enough_for_fmax || capped || nev >= available) break;
-    nev = std::min(2 * nev, available);
+    if (enough_for_fmax || capped) break;
+    if (nev >= limit)
+      throw std::invalid_argument(fmt::format(
+          "--fmax {}: more than {} modes lie below it (the {}th is at {:.6g} Hz); lower --fmax or cap with --modes",
+          options.fmax_hz, nev, nev, f_top));
+    nev = std::min(2 * nev, limit);
   }
 
   const double zero_energy = kZeroEnergyFraction * std::pow(kTwoPi * reference_frequency(nodes, material), 2);

@@ -21,7 +21,6 @@ struct EigensolverOptions {
   /// Relative accuracy of the Ritz values of the shift-inverted operator; 0 = machine precision.
   /// Machine precision costs a few more iterations and gives residuals near 1e-12.
   double tolerance = 0.0;
-  /// Lanczos basis size as a function of nev: max(2 nev + 1, nev + 20), capped by the dimension.
   int max_restarts = 1000;
 };
 
@@ -32,6 +31,10 @@ struct EigenPairs {
   int iterations = 0;      ///< restarts of the implicitly restarted Lanczos method
   int operator_applies = 0;
 };
+
+/// Lanczos basis size used for nev eigenpairs of an operator of dimension n (deflated rank n - 6):
+/// min(n - 6, max(2 nev + 1, nev + 20)) vectors of n doubles.
+[[nodiscard]] int lanczos_basis_size(int nev, Eigen::Index n);
 
 /// The `nev` eigenvalues nearest to (and above) sigma of K̄ phi = lambda M̄ phi within the range of
 /// the deflated operator. `op` must already be factorized at `sigma` (set_shift). Throws

@@ -17,7 +17,7 @@
 
 namespace flexbody::preprocess {
 
-/// What an eigensolver backend needs from a shift-solve operator.
+/// What an eigensolver backend needs from a shift-solve operator (Spectra's shift-solve concept).
 template <typename Op>
 concept ShiftSolveOperator = requires(Op op, const double* x, double* y, double sigma) {
   { op.rows() } -> std::convertible_to<Eigen::Index>;
@@ -73,8 +73,6 @@ class CholmodShiftSolve {
   void set_shift(double sigma);
   /// y = P (K̄ - sigma M̄)^-1 x.
   void perform_op(const double* x, double* y);
-  /// Y = P (K̄ - sigma M̄)^-1 X for a block of right-hand sides (one pass over the factor).
-  void solve_block(const Eigen::MatrixXd& x, Eigen::MatrixXd& y);
 
   [[nodiscard]] double shift() const { return sigma_; }
   [[nodiscard]] const ShiftSolveStats& stats() const { return stats_; }

@@ -73,7 +73,7 @@ TEST(FbprepCli, BracketEndToEnd) {
     EXPECT_TRUE(json.contains(key)) << key;
   EXPECT_EQ(json["length_unit"], "mm");
   EXPECT_EQ(json["frequencies_hz"].size(), 6u);
-  EXPECT_LT(json["max_relative_residual"].get<double>(), 1e-8);
+  EXPECT_LT(json["max_relative_residual"].get<double>(), 1e-10);  // fbprep refuses above 1e-8
   EXPECT_EQ(json["dofs"].get<long>(), 3 * json["nodes"].get<long>());
   // Mass = rho x meshed volume exactly; the meshed volume is within 1 % of the CAD volume
   // (bores and fillet are faceted): 90x40x8 + 8x40x52 + fillet 10x10x40 (1 - pi/4) - 3 bores, mm^3.
@@ -86,8 +86,13 @@ TEST(FbprepCli, BracketEndToEnd) {
   EXPECT_EQ(body.mesh.nodes.rows(), json["nodes"].get<long>());
   EXPECT_EQ(body.modes.upsilon.cols(), 3 * 6);
   for (int k = 0; k < 6; ++k) EXPECT_DOUBLE_EQ(body.modes.frequencies_hz(k), json["frequencies_hz"][k].get<double>());
-  // Body frame: origin at the centre of mass.
-  EXPECT_LT(body.mesh.nodes.colwise().mean().norm(), 0.1);  // not exact (node density varies), but near
+  // Body frame: origin at the centre of mass, which the file records in the input frame.
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(body.mass.center_of_mass_input(c), json["center_of_mass_m"][c].get<double>(), 1e-15);
+  // The bracket's corner (0, 0, 0) mm is a node; in the body frame it sits at minus the centre of mass.
+  const Eigen::RowVector3d corner = -body.mass.center_of_mass_input.transpose();
+  EXPECT_LT((body.mesh.nodes.rowwise() - corner).rowwise().norm().minCoeff(), 1e-12);
+  EXPECT_GT(body.mass.center_of_mass_input.norm(), 0.02);  // so the check above can fail
   EXPECT_EQ(body.provenance.source_file, "bracket.step");
   EXPECT_EQ(body.provenance.source_sha256.size(), 64u);
 }
@@ -137,6 +142,7 @@ TEST(FbprepCli, RefusesBadInputsWithOneLine) {
   expect_refusal(dir, "input-cube.geo --unit m --eigensolver lapack", "'lapack' is unknown; use arpack or spectra");
   expect_refusal(dir, "input-cube.geo --unit m --order 2", "only linear tetrahedra (--order 1) are implemented");
   expect_refusal(dir, "input-cube.txt --unit m", "unsupported file type '.txt'");
+  expect_refusal(dir, "input-cube.geo --unit m --modes 100000", "--modes 100000: at most");
   // A bracket in mm read as metres with a size meant in mm: a unit mistake, refused before meshing.
   const auto geo = std::filesystem::path(FLEXBODY_SOURCE_DIR) / "meshes" / "bracket.geo";
   expect_refusal(dir, fmt::format("'{}' --unit m --mesh-size 0.006", geo.string()),
@@ -151,4 +157,47 @@ TEST(FbprepCli, FailedRunLeavesAnExistingTargetUntouched) {
   EXPECT_NE(run.exit_code, 0);
   EXPECT_EQ(slurp(dir / "input-old.fbh5"), "previous contents");
   expect_no_output(dir);
+}
+
+TEST(FbprepCli, BadOptionValuesExitWith2AndFailuresWith1) {
+  const auto dir = flexbody::test::scratch_dir();
+  write(dir / "input-cube.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+  for (const char* options : {"--unit furlong", "--unit m --material steel2", "--unit m --eigensolver lapack",
+                              "--unit m --order 2", "--unit m --modes -1", "--unit m --bogus"}) {
+    SCOPED_TRACE(options);
+    EXPECT_EQ(fbprep(dir, fmt::format("input-cube.geo {} -o out.fbh5", options)).exit_code, 2);
+  }
+  EXPECT_EQ(fbprep(dir, "input-missing.geo --unit m -o out.fbh5").exit_code, 1);
+  // The output may not overwrite the input.
+  const CliRun same = fbprep(dir, "input-cube.geo --unit m -o input-cube.geo");
+  EXPECT_EQ(same.exit_code, 2);
+  EXPECT_NE(same.err.find("the output would overwrite the input"), std::string::npos) << same.err;
+  expect_no_output(dir);
+}
+
+TEST(FbprepCli, StepDeclaredInInchesIsReadInInches) {
+  // The bracket's STEP file with its length unit changed from mm to inch (the form CAD systems write:
+  // a conversion-based unit pointing at an SI unit): OpenCASCADE scales the geometry by 25.4, and
+  // fbprep must say inches, not the mm of the SI unit the inch refers to.
+  const auto dir = flexbody::test::scratch_dir();
+  std::string step = slurp(bracket_step());
+  const std::string mm_unit = "( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );";
+  const auto at = step.find(mm_unit);
+  ASSERT_NE(at, std::string::npos);
+  step.replace(at, mm_unit.size(),
+               "( CONVERSION_BASED_UNIT('INCH',#9000) LENGTH_UNIT() NAMED_UNIT(#9001) );\n"
+               "#9000 = LENGTH_MEASURE_WITH_UNIT(LENGTH_MEASURE(25.4),#9002);\n"
+               "#9001 = DIMENSIONAL_EXPONENTS(1.,0.,0.,0.,0.,0.,0.);\n"
+               "#9002 = ( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );");
+  write(dir / "input-inch.step", step);
+  // The geometry is 25.4 times larger; an element size of 6 (in the declared unit) gives the same mesh.
+  const CliRun mm = fbprep(dir, fmt::format("'{}' -o a.fbh5 --modes 1 --mesh-size 6 --json", bracket_step().string()));
+  const CliRun inch = fbprep(dir, fmt::format("input-inch.step -o b.fbh5 --modes 1 --mesh-size 6 --json"));
+  ASSERT_EQ(mm.exit_code, 0) << mm.err;
+  ASSERT_EQ(inch.exit_code, 0) << inch.err;
+  const auto a = nlohmann::json::parse(mm.out), b = nlohmann::json::parse(inch.out);
+  EXPECT_EQ(b["length_unit"], "in");
+  EXPECT_EQ(a["nodes"], b["nodes"]);
+  // Same node count, but gmsh's placement tolerances scale with the model: measured 2.5e-4 apart.
+  EXPECT_NEAR(b["mass_kg"].get<double>() / a["mass_kg"].get<double>(), std::pow(25.4, 3), 1e-3 * std::pow(25.4, 3));
 }

@@ -8,6 +8,7 @@
 #include "test_meshes.hpp"
 
 #include <fstream>
+#include <unistd.h>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -49,7 +50,9 @@ struct Model {
 // along the cube diagonal and split the pairs by 20 %.
 const Model& square_beam() {
   static const Model model = [] {
-    const auto path = std::filesystem::temp_directory_path() / "flexbody-test-square-beam.geo";
+    // One file per process: ctest -j runs the tests of this suite in parallel processes.
+    const auto path = std::filesystem::temp_directory_path() /
+                      ("flexbody-test-square-beam-" + std::to_string(::getpid()) + ".geo");
     std::ofstream(path) << "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 0.05, 0.05};\n";
     fp::GmshImportOptions options;
     options.unit = fp::LengthUnit::metre;
@@ -84,7 +87,7 @@ TEST(FreeFreeModes, ModesAreMassOrthonormalAndFreeOfRigidMotion) {
   const auto modes = beam.modes(8, fp::EigensolverBackend::arpack);
   const Eigen::MatrixXd gram = modes.vectors.transpose() * beam.mass_times(modes.vectors);
   EXPECT_LT((gram - Eigen::MatrixXd::Identity(8, 8)).cwiseAbs().maxCoeff(), 1e-10);
-  EXPECT_LT(modes.relative_residuals.maxCoeff(), 1e-8);
+  EXPECT_LT(modes.relative_residuals.maxCoeff(), 1e-10);  // free_free_modes itself refuses above 1e-8
   EXPECT_LT(modes.rigid_body_coupling, 1e-10);
   EXPECT_LT(modes.rigid_body_residual, 1e-13);
   // The pairs: the two first bending frequencies of the square section differ only by the unstructured

@@ -199,7 +199,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--fbprep", type=Path, default=REPO / "build/bin/fbprep")
     p.add_argument("--part", type=Path, default=REPO / "meshes/bracket.step")
-    p.add_argument("--sizes", default="3.5,2.2,1.5,1.0,0.75,0.6", help="mesh sizes [mm], comma list")
+    p.add_argument("--sizes", default="3.5,2.2,1.5,1.0,0.75,0.6,0.48", help="mesh sizes [mm], comma list")
     p.add_argument("--modes", type=int, default=26, help="elastic modes")
     p.add_argument("--eigensolvers", default="arpack", help="comma list of --eigensolver values")
     p.add_argument("--ccx-max-dofs", type=int, default=300000, help="skip ccx above this many DOFs")

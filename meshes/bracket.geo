@@ -1,7 +1,7 @@
 // Angle bracket with three bores: the sample part of the quick start. Lengths in millimetres.
 // A 90 x 40 x 8 base plate, a 8 x 40 x 60 upright, a 10 mm rib radius at the inner corner, two
 // 10 mm bores through the base and one 12 mm bore through the upright.
-// make_bracket_step.sh turns it into bracket.step (STEP, declared in mm) with gmsh.
+// make_bracket_cad.sh turns it into bracket.step (STEP, declared in mm) and bracket.brep with gmsh.
 SetFactory("OpenCASCADE");
 
 Box(1) = {0, 0, 0, 90, 40, 8};       // base plate

@@ -8,7 +8,7 @@ packages=(
   libeigen3-dev          # dense and sparse linear algebra everywhere
   libhdf5-dev            # the body file (*.fbh5)
   libgmsh-dev            # CAD import (OpenCASCADE: STEP/IGES/BREP) and tetrahedral meshing
-  gmsh                   # the gmsh command (meshes/make_bracket_step.sh, looking at meshes)
+  gmsh                   # the gmsh command (meshes/make_bracket_cad.sh, looking at meshes)
   libsuitesparse-dev     # CHOLMOD: the sparse Cholesky factorization behind shift-invert
   libarpack2-dev         # ARPACK: the default eigensolver
   libspectra-dev         # Spectra: the second eigensolver backend

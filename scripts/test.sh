@@ -4,4 +4,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
-ctest --test-dir build --output-on-failure -j"$(nproc)"
+# The CalculiX comparisons fail instead of skipping when ccx is missing.
+FLEXBODY_REQUIRE_CCX=1 ctest --test-dir build --output-on-failure -j"$(nproc)"

@@ -15,14 +15,12 @@ TEST(BeamConvergence, FreeFreeBendingApproachesTimoshenko) {
   const double timoshenko = 263.46;  // first free-free bending pair, Cowper kappa = 0.8497
   std::vector<double> errors, frequencies;
   for (int refinement : {1, 2, 4}) {
-    const fp::TetMesh mesh = flexbody::test::box_mesh(1.0, 0.05, 0.05, 40 * refinement, 2 * refinement, 2 * refinement);
-    const auto graph = fp::NodeGraph::build(mesh);
-    const auto geometry = fp::element_geometries(mesh);
-    const auto k = fp::assemble_stiffness(mesh, graph, geometry, steel);
-    const auto m = fp::assemble_scalar_mass(mesh, graph, geometry, steel.density, fp::MassScheme::consistent);
+    const auto beam = flexbody::test::assemble(
+        flexbody::test::box_mesh(1.0, 0.05, 0.05, 40 * refinement, 2 * refinement, 2 * refinement), steel);
+    const fp::TetMesh& mesh = beam.mesh;
     fp::FreeFreeOptions options;
     options.modes = 2;
-    const auto modes = fp::free_free_modes(mesh.nodes, k, m, steel, options);
+    const auto modes = fp::free_free_modes(mesh.nodes, beam.stiffness, beam.scalar_mass, steel, options);
     const double f = 0.5 * (modes.frequencies_hz(0) + modes.frequencies_hz(1));
     frequencies.push_back(f);
     errors.push_back(f / timoshenko - 1.0);

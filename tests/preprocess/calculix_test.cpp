@@ -101,13 +101,10 @@ TEST(CalculiX, FrequenciesWithTheOnePointMassAgreeTo1e6) {
   const std::vector<double> ccx = read_eigenvalues(dir / "modes.dat");
   ASSERT_EQ(ccx.size(), 14u);
 
-  const auto graph = fp::NodeGraph::build(mesh);
-  const auto geometry = fp::element_geometries(mesh);
-  const auto k = fp::assemble_stiffness(mesh, graph, geometry, kSteel);
-  const auto m = fp::assemble_scalar_mass(mesh, graph, geometry, kSteel.density, fp::MassScheme::one_point);
+  const auto model = flexbody::test::assemble(mesh, kSteel, fp::MassScheme::one_point);
   fp::FreeFreeOptions options;
   options.modes = 8;
-  const auto ours = fp::free_free_modes(mesh.nodes, k, m, kSteel, options);
+  const auto ours = fp::free_free_modes(mesh.nodes, model.stiffness, model.scalar_mass, kSteel, options);
   // ccx's first six are its (numerically zero) rigid-body modes; it prints 7 significant digits.
   for (int mode = 0; mode < 8; ++mode) {
     SCOPED_TRACE(mode);
@@ -139,8 +136,7 @@ TEST(CalculiX, StaticDeflectionOfTheCantileverAgreesTo1e6) {
   ASSERT_TRUE(ccx.allFinite()) << "ccx printed no displacement for some node";
 
   // Our K̄, clamped DOFs removed, solved directly.
-  const auto graph = fp::NodeGraph::build(mesh);
-  const fp::SparseMatrix k = fp::full_from_upper(fp::assemble_stiffness(mesh, graph, fp::element_geometries(mesh), kSteel));
+  const fp::SparseMatrix k = fp::full_from_upper(flexbody::test::assemble(mesh, kSteel).stiffness);
   std::vector<Eigen::Index> free_index(3 * n, 0);
   for (Eigen::Index i : clamped)
     for (int c = 0; c < 3; ++c) free_index[3 * i + c] = -1;

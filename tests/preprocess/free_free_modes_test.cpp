@@ -24,11 +24,11 @@ const fp::Material kSteel{"steel", 210e9, 0.3, 7850.0};
 struct Model {
   fp::TetMesh mesh;
   fp::SparseMatrix stiffness, scalar_mass;
-  explicit Model(fp::TetMesh m) : mesh(std::move(m)) {
-    const auto graph = fp::NodeGraph::build(mesh);
-    const auto geometry = fp::element_geometries(mesh);
-    stiffness = fp::assemble_stiffness(mesh, graph, geometry, kSteel);
-    scalar_mass = fp::assemble_scalar_mass(mesh, graph, geometry, kSteel.density, fp::MassScheme::consistent);
+  explicit Model(fp::TetMesh m) {
+    auto assembled = flexbody::test::assemble(std::move(m), kSteel);
+    mesh = std::move(assembled.mesh);
+    stiffness = std::move(assembled.stiffness);
+    scalar_mass = std::move(assembled.scalar_mass);
   }
   fp::FreeFreeModes modes(int count, fp::EigensolverBackend backend, double shift = 0.0) const {
     fp::FreeFreeOptions options;

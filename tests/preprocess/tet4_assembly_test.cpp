@@ -16,18 +16,7 @@ using flexbody::test::box_mesh;
 
 namespace {
 
-struct Assembled {
-  fp::TetMesh mesh;
-  fp::SparseMatrix stiffness, scalar_mass;
-};
-
-Assembled assemble(fp::TetMesh mesh, const fp::Material& material, fp::MassScheme scheme) {
-  const auto graph = fp::NodeGraph::build(mesh);
-  const auto geometry = fp::element_geometries(mesh);
-  Assembled a{mesh, fp::assemble_stiffness(mesh, graph, geometry, material),
-              fp::assemble_scalar_mass(mesh, graph, geometry, material.density, scheme)};
-  return a;
-}
+using flexbody::test::assemble;
 
 double max_abs(const fp::SparseMatrix& m) {
   double v = 0.0;

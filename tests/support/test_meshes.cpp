@@ -1,5 +1,7 @@
 #include "test_meshes.hpp"
 
+#include "flexbody/preprocess/assembly.hpp"
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -21,6 +23,16 @@ std::filesystem::path scratch_dir() {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+AssembledMesh assemble(preprocess::TetMesh mesh, const preprocess::Material& material, preprocess::MassScheme scheme) {
+  const auto graph = preprocess::NodeGraph::build(mesh);
+  const auto geometry = preprocess::element_geometries(mesh);
+  AssembledMesh result;
+  result.stiffness = preprocess::assemble_stiffness(mesh, graph, geometry, material);
+  result.scalar_mass = preprocess::assemble_scalar_mass(mesh, graph, geometry, material.density, scheme);
+  result.mesh = std::move(mesh);
+  return result;
 }
 
 preprocess::TetMesh box_mesh(double lx, double ly, double lz, int nx, int ny, int nz) {

@@ -1,6 +1,8 @@
 #pragma once
 // Meshes and references the tests build themselves: structured boxes, the Abaqus block.
 
+#include "flexbody/preprocess/material.hpp"
+#include "flexbody/preprocess/tet4_element.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
 
 #include <filesystem>
@@ -23,5 +25,13 @@ namespace flexbody::test {
 
 /// A symmetric matrix exported by Abaqus (*_STIF1.mtx, *_MASS1.mtx: "row col value", 1-based), full.
 [[nodiscard]] preprocess::SparseMatrix read_abaqus_matrix(const std::filesystem::path& path, Eigen::Index size);
+
+/// A mesh with its assembled stiffness and scalar mass (upper triangles).
+struct AssembledMesh {
+  preprocess::TetMesh mesh;
+  preprocess::SparseMatrix stiffness, scalar_mass;
+};
+[[nodiscard]] AssembledMesh assemble(preprocess::TetMesh mesh, const preprocess::Material& material,
+                                     preprocess::MassScheme scheme = preprocess::MassScheme::consistent);
 
 }  // namespace flexbody::test

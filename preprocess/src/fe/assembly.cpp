@@ -23,6 +23,25 @@ SparseMatrix make_pattern(std::int64_t size, const std::vector<std::int64_t>& co
   return matrix;
 }
 
+// Calls add(j, e, a, b, k) for every element contribution to the upper node column j: element e has
+// node j as local node a and node i = tets(e, b) <= j, found at position k of column j. Each thread
+// owns whole node columns and sums in element order: deterministic results, no write conflicts.
+template <typename Add>
+void for_each_upper_contribution(const TetMesh& mesh, const NodeGraph& graph, Add&& add) {
+  const std::int64_t n_nodes = mesh.node_count();
+#pragma omp parallel for schedule(dynamic, 64)
+  for (std::int64_t j = 0; j < n_nodes; ++j) {
+    for (std::int64_t s = graph.incidence_start[j]; s < graph.incidence_start[j + 1]; ++s) {
+      const std::int64_t e = graph.incidence[s] / 4;
+      const int a = static_cast<int>(graph.incidence[s] % 4);
+      for (int b = 0; b < 4; ++b) {
+        const std::int32_t i = mesh.tets(e, b);
+        if (i <= j) add(j, e, a, b, i, position_in_column(graph, j, i));
+      }
+    }
+  }
+}
+
 }  // namespace
 
 SparseMatrix assemble_stiffness(const TetMesh& mesh, const NodeGraph& graph,
@@ -55,45 +74,25 @@ SparseMatrix assemble_stiffness(const TetMesh& mesh, const NodeGraph& graph,
   std::vector<std::int64_t>().swap(rows);
   double* values = stiffness.valuePtr();
 
-  // Each thread owns whole node columns: deterministic sums, no write conflicts.
-#pragma omp parallel for schedule(dynamic, 64)
-  for (std::int64_t j = 0; j < n_nodes; ++j) {
-    for (std::int64_t s = graph.incidence_start[j]; s < graph.incidence_start[j + 1]; ++s) {
-      const std::int64_t e = graph.incidence[s] / 4;
-      const int a = static_cast<int>(graph.incidence[s] % 4);
-      for (int b = 0; b < 4; ++b) {
-        const std::int32_t i = mesh.tets(e, b);
-        if (i > j) continue;
-        const std::int64_t k = position_in_column(graph, j, i);
-        const Eigen::Matrix3d block = tet4_stiffness_block(geometry[e], b, a, lambda, mu);
-        for (int c = 0; c < 3; ++c)
-          for (int r = 0; r <= (i == j ? c : 2); ++r) values[column_start[3 * j + c] + 3 * k + r] += block(r, c);
-      }
-    }
-  }
+  for_each_upper_contribution(mesh, graph, [&](std::int64_t j, std::int64_t e, int a, int b, std::int32_t i,
+                                               std::int64_t k) {
+    const Eigen::Matrix3d block = tet4_stiffness_block(geometry[e], b, a, lambda, mu);
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r <= (i == j ? c : 2); ++r) values[column_start[3 * j + c] + 3 * k + r] += block(r, c);
+  });
   return stiffness;
 }
 
 SparseMatrix assemble_scalar_mass(const TetMesh& mesh, const NodeGraph& graph,
                                   const std::vector<Tet4Geometry>& geometry, double density,
                                   MassScheme scheme) {
-  const std::int64_t n_nodes = mesh.node_count();
   std::vector<std::int64_t> rows(graph.rows.begin(), graph.rows.end());
-  SparseMatrix mass = make_pattern(n_nodes, graph.column_start, rows);
+  SparseMatrix mass = make_pattern(mesh.node_count(), graph.column_start, rows);
   double* values = mass.valuePtr();
-#pragma omp parallel for schedule(dynamic, 64)
-  for (std::int64_t j = 0; j < n_nodes; ++j) {
-    for (std::int64_t s = graph.incidence_start[j]; s < graph.incidence_start[j + 1]; ++s) {
-      const std::int64_t e = graph.incidence[s] / 4;
-      const int a = static_cast<int>(graph.incidence[s] % 4);
-      for (int b = 0; b < 4; ++b) {
-        const std::int32_t i = mesh.tets(e, b);
-        if (i > j) continue;
-        values[graph.column_start[j] + position_in_column(graph, j, i)] +=
-            tet4_mass_entry(density, geometry[e].volume, b, a, scheme);
-      }
-    }
-  }
+  for_each_upper_contribution(mesh, graph, [&](std::int64_t j, std::int64_t e, int a, int b, std::int32_t,
+                                               std::int64_t k) {
+    values[graph.column_start[j] + k] += tet4_mass_entry(density, geometry[e].volume, b, a, scheme);
+  });
   if (scheme == MassScheme::lumped) mass.prune(0.0);
   return mass;
 }

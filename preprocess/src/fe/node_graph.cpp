@@ -56,11 +56,7 @@ NodeGraph NodeGraph::build(const TetMesh& mesh) {
 std::vector<Tet4Geometry> element_geometries(const TetMesh& mesh) {
   std::vector<Tet4Geometry> geometry(mesh.element_count());
 #pragma omp parallel for schedule(static)
-  for (std::int64_t e = 0; e < mesh.element_count(); ++e) {
-    Eigen::Matrix<double, 4, 3> corners;
-    for (int a = 0; a < 4; ++a) corners.row(a) = mesh.nodes.row(mesh.tets(e, a));
-    geometry[e] = tet4_geometry(corners);
-  }
+  for (std::int64_t e = 0; e < mesh.element_count(); ++e) geometry[e] = tet4_geometry(element_corners(mesh, e));
   return geometry;
 }
 

@@ -22,11 +22,9 @@ std::int32_t find_root(std::vector<std::int32_t>& parent, std::int32_t i) {
   return i;
 }
 
-Eigen::Matrix<double, 4, 3> corners_of(const TetMesh& mesh, Eigen::Index e) {
-  Eigen::Matrix<double, 4, 3> corners;
-  for (int a = 0; a < 4; ++a) corners.row(a) = mesh.nodes.row(mesh.tets(e, a));
-  return corners;
-}
+// Faces opposite each corner, ordered so that their normal points away from that corner for a
+// positively oriented tetrahedron.
+constexpr std::array<std::array<int, 3>, 4> kFaces = {{{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
 
 }  // namespace
 
@@ -80,7 +78,7 @@ void check_element_volumes(const TetMesh& mesh, const std::string& source) {
   Eigen::Index first = -1;
   double first_volume = 0.0;
   for (Eigen::Index e = 0; e < mesh.element_count(); ++e) {
-    const double volume = tet4_geometry(corners_of(mesh, e)).volume;
+    const double volume = tet4_geometry(element_corners(mesh, e)).volume;
     if (!(volume > tiny)) {
       if (bad++ == 0) {
         first = e;
@@ -95,9 +93,6 @@ void check_element_volumes(const TetMesh& mesh, const std::string& source) {
 }
 
 RowMatrixX3i boundary_triangles(const TetMesh& mesh) {
-  // Faces opposite each corner, ordered so that their normal points away from that corner for a
-  // positively oriented tetrahedron.
-  static constexpr std::array<std::array<int, 3>, 4> kFaces = {{{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
   struct Face {
     std::array<std::int32_t, 3> sorted;
     std::array<std::int32_t, 3> oriented;
@@ -130,7 +125,6 @@ double radius_ratio(const Eigen::Matrix<double, 4, 3>& corners) {
   // r_in = 3V / (sum of face areas); r_circ from the circumcentre solve; q = 3 r_in / r_circ.
   const double volume = std::abs(tet4_geometry(corners).volume);
   if (volume == 0.0) return 0.0;
-  static constexpr std::array<std::array<int, 3>, 4> kFaces = {{{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
   double area = 0.0;
   for (const auto& f : kFaces) {
     const Eigen::Vector3d u = (corners.row(f[1]) - corners.row(f[0])).transpose();
@@ -155,7 +149,7 @@ MeshQuality mesh_quality(const TetMesh& mesh) {
   q.min_edge_m = std::numeric_limits<double>::infinity();
   double sum = 0.0;
   for (Eigen::Index e = 0; e < mesh.element_count(); ++e) {
-    const auto corners = corners_of(mesh, e);
+    const auto corners = element_corners(mesh, e);
     const double ratio = radius_ratio(corners);
     sum += ratio;
     if (ratio < q.min_radius_ratio) {

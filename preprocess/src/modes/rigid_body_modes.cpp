@@ -1,6 +1,7 @@
 #include "flexbody/preprocess/rigid_body_modes.hpp"
 
 #include "flexbody/preprocess/assembly.hpp"
+#include "flexbody/preprocess/mass_properties.hpp"
 
 #include <Eigen/Dense>
 
@@ -10,8 +11,7 @@ namespace flexbody::preprocess {
 
 Eigen::MatrixXd rigid_body_modes(const RowMatrixX3d& nodes, const SparseMatrix& scalar_mass_upper) {
   const Eigen::Index n = nodes.rows();
-  const Eigen::VectorXd m_ones = scalar_mass_upper.selfadjointView<Eigen::Upper>() * Eigen::VectorXd::Ones(n);
-  const Eigen::RowVector3d centre = (m_ones.transpose() * nodes) / m_ones.sum();
+  const Eigen::RowVector3d centre = mass_properties(scalar_mass_upper, nodes).center_of_mass_input.transpose();
   Eigen::MatrixXd modes = Eigen::MatrixXd::Zero(3 * n, 6);
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::Vector3d x = (nodes.row(i) - centre).transpose();

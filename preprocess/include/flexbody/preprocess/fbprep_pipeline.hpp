@@ -30,7 +30,7 @@ struct PrepOptions {
   std::filesystem::path input;
   std::filesystem::path output;
   GmshImportOptions mesh;  ///< unit, mesh size, order
-  Material material{"steel", 210e9, 0.30, 7850.0};
+  Material material = parse_material("steel");
   FreeFreeOptions modes;   ///< number of modes, fmax, eigensolver backend
   /// The options as the user gave them, recorded in the body file's provenance.
   std::vector<std::pair<std::string, std::string>> recorded_options;

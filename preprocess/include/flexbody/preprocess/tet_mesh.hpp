@@ -29,6 +29,13 @@ struct TetMesh {
   [[nodiscard]] Eigen::Index dof_count() const { return 3 * nodes.rows(); }
 };
 
+/// Corner coordinates of tetrahedron e (row a = node a).
+[[nodiscard]] inline Eigen::Matrix<double, 4, 3> element_corners(const TetMesh& mesh, Eigen::Index e) {
+  Eigen::Matrix<double, 4, 3> corners;
+  for (int a = 0; a < 4; ++a) corners.row(a) = mesh.nodes.row(mesh.tets(e, a));
+  return corners;
+}
+
 /// The full symmetric matrix from its stored upper triangle (for tests and small problems).
 [[nodiscard]] SparseMatrix full_from_upper(const SparseMatrix& upper);
 

@@ -166,6 +166,9 @@ TEST(FbprepCli, RefusesBadInputsWithOneLine) {
   expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,nu=0.5,rho=1000", "nu must lie in (-1, 0.5), got 0.5");
   expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,nu=-1.2,rho=1000", "nu must lie in (-1, 0.5), got -1.2");
   expect_refusal(dir, "input-cube.geo --unit m --material unobtainium", "'unobtainium' is unknown");
+  expect_refusal(dir, "input-cube.geo --unit m --material E=nan,nu=0.3,rho=1", "E must be positive, got nan");
+  expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,E=2e9,nu=0.3,rho=1", "E is given twice");
+  expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,nu=0.3", "rho is missing");
   expect_refusal(dir, "input-cube.geo --unit furlong", "--unit 'furlong' is not one of mm, cm, m, in");
   expect_refusal(dir, "input-cube.geo --unit m --eigensolver lapack", "'lapack' is unknown; use arpack or spectra");
   expect_refusal(dir, "input-cube.geo --unit m --order 2", "only linear tetrahedra (--order 1) are implemented");

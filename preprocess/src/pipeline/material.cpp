@@ -43,7 +43,10 @@ Material parse_material(std::string_view text) {
   if (text.find('=') == std::string_view::npos)
     throw std::invalid_argument("material: '" + std::string(text) +
                                 "' is unknown; use steel, aluminium, titanium or E=...,nu=...,rho=...");
-  Material material{"custom", NAN, NAN, NAN};
+  Material material{"custom", 0.0, 0.0, 0.0};
+  std::map<std::string, double*, std::less<>> fields = {
+      {"E", &material.youngs_modulus}, {"nu", &material.poisson_ratio}, {"rho", &material.density}};
+  std::map<std::string, bool, std::less<>> given;
   std::size_t begin = 0;
   while (begin <= text.size()) {
     std::size_t end = text.find(',', begin);
@@ -53,16 +56,17 @@ Material parse_material(std::string_view text) {
     if (eq == std::string_view::npos)
       throw std::invalid_argument("material: '" + std::string(item) + "' is not KEY=VALUE");
     std::string_view key = item.substr(0, eq);
-    double value = parse_number(key, item.substr(eq + 1));
-    if (key == "E") material.youngs_modulus = value;
-    else if (key == "nu") material.poisson_ratio = value;
-    else if (key == "rho") material.density = value;
-    else throw std::invalid_argument("material: unknown key '" + std::string(key) + "'; keys are E, nu, rho");
+    const auto field = fields.find(key);
+    if (field == fields.end())
+      throw std::invalid_argument("material: unknown key '" + std::string(key) + "'; keys are E, nu, rho");
+    if (given[field->first])
+      throw std::invalid_argument("material: " + field->first + " is given twice");
+    *field->second = parse_number(key, item.substr(eq + 1));
+    given[field->first] = true;
     begin = end + 1;
   }
-  for (auto [key, value] : {std::pair{"E", material.youngs_modulus}, std::pair{"nu", material.poisson_ratio},
-                            std::pair{"rho", material.density}})
-    if (std::isnan(value)) throw std::invalid_argument(std::string("material: ") + key + " is missing");
+  for (const auto& [key, value] : fields)
+    if (!given[key]) throw std::invalid_argument("material: " + key + " is missing");
   check_material(material);
   return material;
 }

@@ -20,7 +20,9 @@ struct FreeFreeOptions {
   EigensolverOptions solver;
   /// Shift sigma [rad^2/s^2] (must be < 0); 0 = automatic: -(2 pi f_s)^2 with f_s one twentieth of the
   /// first axial frequency of a bar as long as the body's bounding-box diagonal, sqrt(E/rho)/(2L).
-  /// That lies below the first elastic frequency of any body but slender ones, where it is harmless.
+  /// That lies below the first elastic frequency of compact bodies. For slender ones |sigma| may exceed
+  /// the first eigenvalues: still accurate (the rigid-body modes are deflated), but Lanczos then needs
+  /// more iterations.
   double shift = 0.0;
   /// Called with a short message before each solver run (for progress on a terminal).
   std::function<void(const std::string&)> progress;

@@ -37,6 +37,7 @@ class VectorMassOperator {
  public:
   using Scalar = double;
   explicit VectorMassOperator(const SparseMatrix& scalar_mass_upper) : mass_(scalar_mass_upper) {}
+  explicit VectorMassOperator(SparseMatrix&&) = delete;  // borrows: a temporary would dangle
   [[nodiscard]] Eigen::Index rows() const { return 3 * mass_.rows(); }
   [[nodiscard]] Eigen::Index cols() const { return rows(); }
   void perform_op(const double* x, double* y) const;
@@ -62,6 +63,8 @@ class CholmodShiftSolve {
   /// (3 n_n x r, M̄-orthonormal) may be empty.
   CholmodShiftSolve(const SparseMatrix& stiffness_upper, const SparseMatrix& scalar_mass_upper,
                     Eigen::MatrixXd deflation);
+  CholmodShiftSolve(SparseMatrix&&, const SparseMatrix&, Eigen::MatrixXd) = delete;  // borrows K and M_s
+  CholmodShiftSolve(const SparseMatrix&, SparseMatrix&&, Eigen::MatrixXd) = delete;
   ~CholmodShiftSolve();
   CholmodShiftSolve(const CholmodShiftSolve&) = delete;
   CholmodShiftSolve& operator=(const CholmodShiftSolve&) = delete;

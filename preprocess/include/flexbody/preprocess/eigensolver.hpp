@@ -18,9 +18,11 @@ enum class EigensolverBackend { arpack, spectra };
 
 struct EigensolverOptions {
   EigensolverBackend backend = EigensolverBackend::arpack;
-  /// Relative accuracy of the Ritz values of the shift-inverted operator; 0 = machine precision.
-  /// Machine precision costs a few more iterations and gives residuals near 1e-12.
-  double tolerance = 0.0;
+  /// Relative accuracy of the Ritz values of the shift-inverted operator (ARPACK's and Spectra's tol).
+  /// Measured on the bracket at 17k-127k DOFs: 1e-14 ... 1e-10 all converge after 69 solves with the
+  /// same relative residuals ||K phi - lambda M phi|| / ||K phi|| (3e-11 ... 2e-10, the rounding floor),
+  /// while 0 (machine precision) needs 120-122 solves for the same residuals.
+  double tolerance = 1e-12;
   int max_restarts = 1000;
 };
 

@@ -14,7 +14,7 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
 COLUMNS = ["size_mm", "solver", "dofs", "mesh_s", "assembly_s", "analyze_s", "factorize_s", "solve_s", "modes_s",
-           "total_s", "fbprep_peak_mb", "solves", "max_residual", "ccx_s", "ccx_peak_mb",
+           "gcms_s", "total_s", "fbprep_peak_mb", "solves", "max_residual", "ccx_s", "ccx_peak_mb",
            "f1_rel_diff", "max_rel_diff"]
 
 
@@ -129,7 +129,7 @@ def row_of(size, solver, fb, ccx):
     t = fb["timings_s"]
     row = {"size_mm": size, "solver": solver, "dofs": fb["dofs"], "mesh_s": t.get("mesh"),
            "assembly_s": t.get("assembly"), "analyze_s": t.get("analyze"), "factorize_s": t.get("factorize"), "solve_s": t.get("solve"),
-           "modes_s": t.get("modes"), "total_s": t.get("total"), "fbprep_peak_mb": fb["rss_mb"],
+           "modes_s": t.get("modes"), "gcms_s": t.get("gcms"), "total_s": t.get("total"), "fbprep_peak_mb": fb["rss_mb"],
            "solves": fb.get("solves"), "max_residual": fb["max_relative_residual"],
            "ccx_s": ccx["status"], "ccx_peak_mb": None, "f1_rel_diff": None, "max_rel_diff": None}
     if ccx["status"] in ("ok", "timeout"):

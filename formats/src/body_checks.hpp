@@ -20,4 +20,9 @@ void check_finite(const BodyData& body, const std::string& context);
 /// ascending frequencies, non-negative residuals.
 void check_ranges(const BodyData& body, const std::string& context);
 
+/// The /gcms part of each check above (gcms_checks.cpp).
+void check_gcms_structure(const BodyData& body, const std::string& context);
+void check_gcms_finite(const BodyData& body, const std::string& context);
+void check_gcms_ranges(const BodyData& body, const std::string& context);
+
 }  // namespace flexbody::format::detail

@@ -1,7 +1,7 @@
-// body_file_reader.cpp: read_body_file(), checking a file against SCHEMA.md version 1.
+// body_file_reader.cpp: read_body_file(), checking a file against SCHEMA.md.
 //
 // Order of the checks: the file exists and is readable, is HDF5, says format "flexbody" and
-// format_version 1, holds every required group, dataset and attribute, has consistent shapes,
+// the supported format_version, holds every required group, dataset and attribute, has consistent shapes,
 // finite values, and finally passes the same checks as validate().
 #include "body_checks.hpp"
 #include "hdf5_io.hpp"
@@ -43,7 +43,12 @@ constexpr Required kRequired[] = {
     {Item::group, "/modes"},                    {Item::attribute, "/modes/kind"},
     {Item::attribute, "/modes/eigensolver"},    {Item::attribute, "/modes/shift"},
     {Item::dataset, "/modes/frequencies_hz"},   {Item::dataset, "/modes/relative_residuals"},
-    {Item::dataset, "/modes/upsilon"},
+    {Item::dataset, "/modes/upsilon"},          {Item::group, "/gcms"},
+    {Item::dataset, "/gcms/fields"},            {Item::dataset, "/gcms/field_mode"},
+    {Item::dataset, "/gcms/mode_coefficients"}, {Item::dataset, "/gcms/G"},
+    {Item::dataset, "/gcms/K_hat"},             {Item::attribute, "/gcms/drop_tolerance"},
+    {Item::attribute, "/gcms/dropped_fields"},  {Item::attribute, "/gcms/condition_mode_gram_before"},
+    {Item::attribute, "/gcms/condition_G_before"}, {Item::attribute, "/gcms/condition_G_after"},
 };
 
 void check_readable(const std::filesystem::path& path, const std::string& label) {
@@ -69,7 +74,7 @@ void check_identity(const Location& root) {
   const int version = detail::read_int_attribute(root, "format_version");
   if (version != kFormatVersion) {
     root.fail("format_version " + std::to_string(version) + " is not supported by this reader (supports " +
-              std::to_string(kFormatVersion) + ")");
+              std::to_string(kFormatVersion) + "); re-run fbprep to write the current version");
   }
 }
 
@@ -95,7 +100,7 @@ void check_presence(const Location& root) {
     const std::string found = detail::read_string_attribute(root, name);
     if (found != unit) {
       root.fail(std::string("/") + name + " is \"" + found + "\", expected \"" + unit +
-                "\" (version 1 stores SI units only)");
+                "\" (the format stores SI units only)");
     }
   }
 }
@@ -191,6 +196,26 @@ Modes read_modes(const Location& root) {
   return modes;
 }
 
+Gcms read_gcms(const Location& root) {
+  const Location group = detail::open_group(root, "gcms");
+  Gcms gcms;
+  gcms.fields = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(group, "fields"));
+  const std::vector<std::int32_t> field_mode = detail::read_int_vector(group, "field_mode");
+  gcms.field_mode = Eigen::Map<const Eigen::VectorXi>(field_mode.data(), static_cast<Eigen::Index>(field_mode.size()));
+  gcms.mode_coefficients = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(group, "mode_coefficients"));
+  gcms.mass_matrix = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(group, "G"));
+  gcms.stiffness = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(group, "K_hat"));
+  gcms.drop_tolerance = detail::read_double_attribute(group, "drop_tolerance");
+  gcms.condition_mode_gram_before = detail::read_double_attribute(group, "condition_mode_gram_before");
+  gcms.condition_mass_before = detail::read_double_attribute(group, "condition_G_before");
+  gcms.condition_mass_after = detail::read_double_attribute(group, "condition_G_after");
+  const int dropped = detail::read_int_attribute(group, "dropped_fields");
+  if (dropped != gcms.mode_coefficients.cols() - gcms.fields.cols())
+    group.fail("/gcms/dropped_fields is " + std::to_string(dropped) + ", expected 3 n_m - n_f = " +
+               std::to_string(gcms.mode_coefficients.cols() - gcms.fields.cols()));
+  return gcms;
+}
+
 }  // namespace
 
 BodyData read_body_file(const std::filesystem::path& path) {
@@ -208,6 +233,7 @@ BodyData read_body_file(const std::filesystem::path& path) {
     body.mass = read_mass(root);
     body.mesh = read_mesh(root);
     body.modes = read_modes(root);
+    body.gcms = read_gcms(root);
   }
   detail::check_structure(body, label);
   detail::check_finite(body, label);

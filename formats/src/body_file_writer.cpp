@@ -1,4 +1,4 @@
-// body_file_writer.cpp: write_body_file(), the layout of SCHEMA.md version 1, written atomically.
+// body_file_writer.cpp: write_body_file(), the layout of SCHEMA.md, written atomically.
 #include "hdf5_io.hpp"
 
 #include "flexbody/format/body_file.hpp"
@@ -86,6 +86,27 @@ void write_modes(const Location& root, const Modes& modes) {
   detail::write_matrix(group, "upsilon", rows_of(upsilon), cols_of(upsilon), upsilon.data(), "kg^-1/2");
 }
 
+void write_gcms(const Location& root, const Gcms& gcms) {
+  const Location group = detail::create_group(root, "gcms");
+  const RowMatrixXd fields = gcms.fields;
+  detail::write_matrix(group, "fields", rows_of(fields), cols_of(fields), fields.data(), "kg^-1/2");
+  const std::vector<std::int32_t> field_mode(gcms.field_mode.data(), gcms.field_mode.data() + gcms.field_mode.size());
+  detail::write_int_vector(group, "field_mode", field_mode, "");
+  const RowMatrixXd coefficients = gcms.mode_coefficients;
+  detail::write_matrix(group, "mode_coefficients", rows_of(coefficients), cols_of(coefficients), coefficients.data(),
+                       "1");
+  const RowMatrixXd g = gcms.mass_matrix;  // symmetric, but written in the file's row-major order anyway
+  detail::write_matrix(group, "G", rows_of(g), cols_of(g), g.data(), "mixed: see SCHEMA.md");
+  const RowMatrixXd k_hat = gcms.stiffness;
+  detail::write_matrix(group, "K_hat", rows_of(k_hat), cols_of(k_hat), k_hat.data(), "s^-2");
+  detail::write_double_attribute(group, "drop_tolerance", gcms.drop_tolerance);
+  detail::write_int_attribute(group, "dropped_fields",
+                              static_cast<int>(gcms.mode_coefficients.cols() - gcms.field_count()));
+  detail::write_double_attribute(group, "condition_mode_gram_before", gcms.condition_mode_gram_before);
+  detail::write_double_attribute(group, "condition_G_before", gcms.condition_mass_before);
+  detail::write_double_attribute(group, "condition_G_after", gcms.condition_mass_after);
+}
+
 /// Writes the whole layout into a new file at `path`; every handle is closed on return.
 void write_layout(const BodyData& body, const std::filesystem::path& path, const std::string& label) {
   Location file = detail::create_file(path, label);
@@ -95,6 +116,7 @@ void write_layout(const BodyData& body, const std::filesystem::path& path, const
   write_mass(file, body.mass);
   write_mesh(file, body.mesh);
   write_modes(file, body.modes);
+  write_gcms(file, body.gcms);
   detail::flush_and_close(file);
 }
 

@@ -1,9 +1,9 @@
 // body_validation.cpp: validate() and the checks it shares with the reader.
 #include "body_checks.hpp"
+#include "check_helpers.hpp"
 
 #include "flexbody/format/body_file.hpp"
 
-#include <charconv>
 #include <cmath>
 #include <set>
 #include <string_view>
@@ -11,41 +11,6 @@
 namespace flexbody::format {
 namespace detail {
 namespace {
-
-[[noreturn]] void fail(const std::string& context, const std::string& problem) {
-  throw BodyFileError(context + ": " + problem);
-}
-
-/// Shortest text that reads back as the same double ("10.5", "1e-09", "nan", "inf").
-std::string number(double value) {
-  if (std::isnan(value)) return "nan";
-  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
-
-std::string index(Eigen::Index i) {
-  std::string text(1, '[');  // built by appending: GCC 12 warns falsely on "literal" + std::string&&
-  text += std::to_string(i);
-  text += ']';
-  return text;
-}
-
-template <class Derived>
-void check_indices(const Eigen::MatrixBase<Derived>& elements, Eigen::Index node_count, const std::string& path,
-                   const std::string& context) {
-  for (Eigen::Index e = 0; e < elements.rows(); ++e) {
-    for (Eigen::Index k = 0; k < elements.cols(); ++k) {
-      const auto node = elements(e, k);
-      if (node < 0 || node >= node_count) {
-        fail(context, path + index(e) + " refers to node " + std::to_string(node) + " but the mesh has " +
-                          std::to_string(node_count) + " nodes (valid: 0 to " + std::to_string(node_count - 1) +
-                          ")");
-      }
-    }
-  }
-}
 
 void check_options(const Provenance& provenance, const std::string& context) {
   std::set<std::string_view> seen;
@@ -61,26 +26,6 @@ void check_options(const Provenance& provenance, const std::string& context) {
   }
 }
 
-void check_value(double value, const std::string& path, const std::string& context) {
-  if (!std::isfinite(value)) fail(context, path + " is " + number(value) + ", expected a finite number");
-}
-
-template <class Derived>
-void check_values(const Eigen::DenseBase<Derived>& values, const std::string& path, const std::string& context) {
-  for (Eigen::Index r = 0; r < values.rows(); ++r) {
-    for (Eigen::Index c = 0; c < values.cols(); ++c) {
-      if (!std::isfinite(values(r, c))) {
-        const std::string at = values.cols() == 1 ? index(r) : index(r) + index(c);
-        fail(context, path + at + " is " + number(values(r, c)) + ", expected a finite number");
-      }
-    }
-  }
-}
-
-void check_positive(double value, const std::string& path, const char* unit, const std::string& context) {
-  if (!(value > 0.0)) fail(context, path + " is " + number(value) + " " + unit + ", expected > 0");
-}
-
 }  // namespace
 
 void check_structure(const BodyData& body, const std::string& context) {
@@ -90,7 +35,7 @@ void check_structure(const BodyData& body, const std::string& context) {
   if (mesh.tets.rows() < 1) fail(context, "/mesh/tets has no rows, expected at least 1 tetrahedron");
   if (mesh.element_order != 1) {
     fail(context, "/mesh/element_order is " + std::to_string(mesh.element_order) +
-                      ", expected 1 (linear 4-node tetrahedra, the only kind version 1 stores)");
+                      ", expected 1 (linear 4-node tetrahedra, the only kind this format stores)");
   }
   check_indices(mesh.tets, n_n, "/mesh/tets", context);
   check_indices(mesh.surface_triangles, n_n, "/mesh/surface_triangles", context);
@@ -107,6 +52,7 @@ void check_structure(const BodyData& body, const std::string& context) {
                       std::to_string(3 * n_m) + " (n_n x 3 n_m)");
   }
   check_options(body.provenance, context);
+  check_gcms_structure(body, context);
 }
 
 void check_finite(const BodyData& body, const std::string& context) {
@@ -121,6 +67,7 @@ void check_finite(const BodyData& body, const std::string& context) {
   check_values(body.modes.frequencies_hz, "/modes/frequencies_hz", context);
   check_values(body.modes.relative_residuals, "/modes/relative_residuals", context);
   check_values(body.modes.upsilon, "/modes/upsilon", context);
+  check_gcms_finite(body, context);
 }
 
 void check_ranges(const BodyData& body, const std::string& context) {
@@ -146,6 +93,7 @@ void check_ranges(const BodyData& body, const std::string& context) {
   for (Eigen::Index m = 0; m < r.size(); ++m) {
     if (r[m] < 0.0) fail(context, "/modes/relative_residuals" + index(m) + " is " + number(r[m]) + ", expected >= 0");
   }
+  check_gcms_ranges(body, context);
 }
 
 }  // namespace detail

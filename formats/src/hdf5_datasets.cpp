@@ -112,6 +112,12 @@ void write_vector(const Location& loc, std::string_view name, std::span<const do
   write_dataset(loc, name, dims, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), unit);
 }
 
+void write_int_vector(const Location& loc, std::string_view name, std::span<const std::int32_t> values,
+                      std::string_view unit) {
+  const std::array<hsize_t, 1> dims{values.size()};
+  write_dataset(loc, name, dims, H5T_STD_I32LE, H5T_NATIVE_INT32, values.data(), unit);
+}
+
 Table<double> read_double_matrix(const Location& loc, std::string_view name) {
   return read_matrix<double>(loc, name, H5T_FLOAT, "floating-point", H5T_NATIVE_DOUBLE);
 }
@@ -123,6 +129,11 @@ Table<std::int32_t> read_int_matrix(const Location& loc, std::string_view name) 
 std::vector<double> read_double_vector(const Location& loc, std::string_view name) {
   const OpenDataset open = open_dataset(loc, name, 1, H5T_FLOAT, "floating-point");
   return read_values<double>(loc, name, open, H5T_NATIVE_DOUBLE);
+}
+
+std::vector<std::int32_t> read_int_vector(const Location& loc, std::string_view name) {
+  const OpenDataset open = open_dataset(loc, name, 1, H5T_INTEGER, "integer");
+  return read_values<std::int32_t>(loc, name, open, H5T_NATIVE_INT32);
 }
 
 }  // namespace flexbody::format::detail

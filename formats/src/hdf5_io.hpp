@@ -134,6 +134,11 @@ void write_matrix(const Location& loc, std::string_view name, std::size_t rows, 
 void write_vector(const Location& loc, std::string_view name, std::span<const double> values,
                   std::string_view unit);
 
+/// Writes a 1-D integer dataset.
+void write_int_vector(const Location& loc, std::string_view name, std::span<const std::int32_t> values,
+                      std::string_view unit);
+/// Reads a 1-D integer dataset into int32 values.
+[[nodiscard]] std::vector<std::int32_t> read_int_vector(const Location& loc, std::string_view name);
 /// Reads a 2-D floating-point dataset.
 [[nodiscard]] Table<double> read_double_matrix(const Location& loc, std::string_view name);
 /// Reads a 2-D integer dataset into int32 values.

@@ -68,10 +68,11 @@ TEST_F(ReadErrors, PlainHdf5WithoutFormat) {
   expect_read_error(path, {"plain.fbh5: missing root attribute /format"});
 }
 
-TEST_F(ReadErrors, FormatVersion2) {
-  const auto path = good_file("v2.fbh5");
-  set_int_attribute(path, "/", "format_version", 2);
-  expect_read_error(path, {"v2.fbh5: format_version 2 is not supported by this reader (supports 1)"});
+TEST_F(ReadErrors, FormatVersion1) {
+  const auto path = good_file("v1.fbh5");
+  set_int_attribute(path, "/", "format_version", 1);
+  expect_read_error(path, {"v1.fbh5: format_version 1 is not supported by this reader (supports 2); re-run "
+                           "fbprep to write the current version"});
 }
 
 TEST_F(ReadErrors, FormatVersionAsString) {
@@ -167,6 +168,53 @@ TEST_F(ReadErrors, PhysicalRangeViolation) {
   delete_attribute(path, "/material", "poisson_ratio");
   set_int_attribute(path, "/material", "poisson_ratio", 1);
   expect_read_error(path, {"nu.fbh5: /material/poisson_ratio is 1, expected -1 < nu < 0.5"});
+}
+
+TEST_F(ReadErrors, MissingGcmsMatrix) {
+  const auto path = good_file("no_g.fbh5");
+  delete_link(path, "/gcms/G");
+  expect_read_error(path, {"no_g.fbh5: missing dataset /gcms/G"});
+}
+
+TEST_F(ReadErrors, WrongStiffnessShape) {
+  const auto path = good_file("k_shape.fbh5");
+  replace_double_dataset(path, "/gcms/K_hat", 12, 12, std::vector<double>(144, 1.0));
+  expect_read_error(path, {"k_shape.fbh5: /gcms/K_hat has shape 12 x 12, expected 15 x 15 (3 n_f square)"});
+}
+
+TEST_F(ReadErrors, AsymmetricStiffness) {
+  const auto path = good_file("k_asym.fbh5");
+  std::vector<double> k(15 * 15, 0.0);
+  for (int i = 0; i < 15; ++i) k[i * 15 + i] = 1.0;
+  k[0 * 15 + 1] = 0.5;  // K̂[0][1] without K̂[1][0]
+  replace_double_dataset(path, "/gcms/K_hat", 15, 15, k);
+  expect_read_error(path, {"k_asym.fbh5: /gcms/K_hat is not symmetric: /gcms/K_hat[0][1] = 0.5 but /gcms/K_hat[1][0] = 0"});
+}
+
+TEST_F(ReadErrors, MassMatrixThatIsNotPositiveDefinite) {
+  const auto path = good_file("g_indef.fbh5");
+  BodyData body = make_body();
+  Eigen::MatrixXd g = body.gcms.mass_matrix;
+  g(4, 5) = g(5, 4) = 1.5;  // two unit fields with an M_s inner product above 1: impossible
+  std::vector<double> values(g.data(), g.data() + g.size());  // symmetric: column- = row-major
+  replace_double_dataset(path, "/gcms/G", 9, 9, values);
+  expect_read_error(path, {"g_indef.fbh5: /gcms/G is not positive definite"});
+}
+
+TEST_F(ReadErrors, MassMatrixThatContradictsTheMass) {
+  const auto path = good_file("g_mass.fbh5");
+  BodyData body = make_body();
+  Eigen::MatrixXd g = body.gcms.mass_matrix;
+  g(0, 0) *= 2.0;
+  std::vector<double> values(g.data(), g.data() + g.size());
+  replace_double_dataset(path, "/gcms/G", 9, 9, values);
+  expect_read_error(path, {"g_mass.fbh5: /gcms/G[0][0] = ", "differs from /mass/total"});
+}
+
+TEST_F(ReadErrors, FieldModeStoredAsAMatrix) {
+  const auto path = good_file("field_mode.fbh5");
+  replace_int_dataset(path, "/gcms/field_mode", 5, 1, {0, 1, 0, 1, 1});
+  expect_read_error(path, {"field_mode.fbh5: /gcms/field_mode has shape 5 x 1, expected a 1-D dataset"});
 }
 
 TEST_F(ReadErrors, TruncatedFile) {

@@ -45,6 +45,18 @@ void expect_same(const BodyData& a, const BodyData& b) {
   ASSERT_EQ(a.modes.upsilon.rows(), b.modes.upsilon.rows());
   ASSERT_EQ(a.modes.upsilon.cols(), b.modes.upsilon.cols());
   EXPECT_EQ(a.modes.upsilon, b.modes.upsilon);
+
+  const Gcms &ga = a.gcms, &gb = b.gcms;
+  ASSERT_EQ(ga.fields.cols(), gb.fields.cols());
+  EXPECT_EQ(ga.fields, gb.fields);
+  EXPECT_EQ(ga.field_mode, gb.field_mode);
+  EXPECT_EQ(ga.mode_coefficients, gb.mode_coefficients);
+  EXPECT_EQ(ga.mass_matrix, gb.mass_matrix);
+  EXPECT_EQ(ga.stiffness, gb.stiffness);
+  EXPECT_EQ(ga.drop_tolerance, gb.drop_tolerance);
+  EXPECT_EQ(ga.condition_mode_gram_before, gb.condition_mode_gram_before);
+  EXPECT_EQ(ga.condition_mass_before, gb.condition_mass_before);
+  EXPECT_EQ(ga.condition_mass_after, gb.condition_mass_after);
 }
 
 using RoundTrip = TempDirTest;
@@ -63,6 +75,11 @@ TEST_F(RoundTrip, KeepsEmptyOptionsTrianglesAndModes) {
   body.modes.frequencies_hz.resize(0);
   body.modes.relative_residuals.resize(0);
   body.modes.upsilon.resize(5, 0);
+  body.gcms.fields.resize(5, 0);
+  body.gcms.field_mode.resize(0);
+  body.gcms.mode_coefficients.resize(0, 0);
+  body.gcms.mass_matrix = Eigen::MatrixXd(body.gcms.mass_matrix.topLeftCorner(4, 4));  // rigid: [1, X̄] only
+  body.gcms.stiffness.resize(0, 0);
   const auto path = dir() / "bare.fbh5";
   write_body_file(body, path);
   expect_same(body, read_body_file(path));

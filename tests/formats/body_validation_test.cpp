@@ -113,5 +113,29 @@ TEST(Validate, OptionNames) {
   expect_invalid(body, "/provenance/options: option 4 has an empty name");
 }
 
+TEST(Validate, GcmsConstants) {
+  BodyData body = make_body();
+  body.gcms.field_mode << 0, 1, 0, 1, 1;
+  expect_invalid(body, "/gcms/field_mode[2] is 0, expected a mode index in [0, n_m) not below the previous entry");
+  body = make_body();
+  body.gcms.field_mode(4) = 2;
+  expect_invalid(body, "/gcms/field_mode[4] is 2, expected a mode index in [0, n_m)");
+  body = make_body();
+  body.gcms.stiffness(3, 7) = std::numeric_limits<double>::quiet_NaN();
+  expect_invalid(body, "/gcms/K_hat[3][7] is nan, expected a finite number");
+  body = make_body();
+  body.gcms.condition_mass_after = std::numeric_limits<double>::infinity();
+  expect_invalid(body, "/gcms/condition_G_after is inf, expected a finite number");
+  body = make_body();
+  body.gcms.condition_mass_before = 0.5;
+  expect_invalid(body, "/gcms/condition_G_before is 0.5, expected a condition number >= 1 (or inf)");
+  body = make_body();
+  body.gcms.fields.conservativeResize(5, 7);
+  expect_invalid(body, "/gcms/fields has shape 5 x 7, expected 5 x n_f with n_f <= 3 n_m = 6");
+  body = make_body();
+  body.gcms.mass_matrix(1, 2) += 1e-3;  // G[1][2] without G[2][1]
+  expect_invalid(body, "/gcms/G is not symmetric: /gcms/G[1][2]");
+}
+
 }  // namespace
 }  // namespace flexbody::format::test

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <fstream>
+#include <limits>
 #include <iterator>
 
 namespace flexbody::format::test {
@@ -78,9 +79,11 @@ BodyData make_body() {
 
   body.mass.mass = 1.0 / 3.0;
   body.mass.center_of_mass_input = Eigen::Vector3d(0.1 / 3.0, -0.2 / 7.0, 0.3 / 11.0);
+  // A physical inertia tensor (each principal value below the sum of the other two), so that the
+  // second moments J = tr(I)/2 1 - I in /gcms/G are positive definite.
   body.mass.inertia_about_com << 1.0 / 3.0, 0.01 / 7.0, 0.02 / 9.0,  //
-      0.01 / 7.0, 2.0 / 3.0, 0.03 / 11.0,                            //
-      0.02 / 9.0, 0.03 / 11.0, 1.0 / 13.0;
+      0.01 / 7.0, 2.0 / 5.0, 0.03 / 11.0,                            //
+      0.02 / 9.0, 0.03 / 11.0, 1.0 / 7.0;
 
   body.mesh.nodes.resize(5, 3);
   body.mesh.nodes << 0.0, 0.0, 0.0, 0.1 / 3.0, 0.0, 0.0, 0.0, 0.1 / 7.0, 0.0, 0.0, 0.0, 0.1 / 9.0,  //
@@ -101,6 +104,34 @@ BodyData make_body() {
   for (Eigen::Index i = 0; i < 5; ++i) {
     for (Eigen::Index j = 0; j < 6; ++j) body.modes.upsilon(i, j) = static_cast<double>(10 * i + j) / 3.0 - 7.0;
   }
+
+  // 5 of the 6 fields kept (one dropped), G consistent with /mass and positive definite.
+  Gcms& gcms = body.gcms;
+  constexpr int kFields = 5;
+  gcms.fields.resize(5, kFields);
+  for (Eigen::Index i = 0; i < 5; ++i)
+    for (Eigen::Index f = 0; f < kFields; ++f) gcms.fields(i, f) = static_cast<double>(7 * i - f) / 11.0;
+  gcms.field_mode.resize(kFields);
+  gcms.field_mode << 0, 0, 0, 1, 1;
+  gcms.mode_coefficients.resize(kFields, 6);
+  for (Eigen::Index f = 0; f < kFields; ++f)
+    for (Eigen::Index j = 0; j < 6; ++j) gcms.mode_coefficients(f, j) = static_cast<double>(f + 2 * j) / 13.0;
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(4 + kFields, 4 + kFields);
+  g(0, 0) = body.mass.mass;
+  const Eigen::Matrix3d& inertia = body.mass.inertia_about_com;
+  g.block<3, 3>(1, 1) = 0.5 * inertia.trace() * Eigen::Matrix3d::Identity() - inertia;
+  for (int r = 0; r < 3; ++r)
+    for (int f = 0; f < kFields; ++f) g(1 + r, 4 + f) = g(4 + f, 1 + r) = static_cast<double>(r - f) / 997.0;
+  g.bottomRightCorner(kFields, kFields).setIdentity();
+  gcms.mass_matrix = g;
+  gcms.stiffness.resize(3 * kFields, 3 * kFields);
+  for (Eigen::Index r = 0; r < 3 * kFields; ++r)
+    for (Eigen::Index c = 0; c < 3 * kFields; ++c)
+      gcms.stiffness(r, c) = static_cast<double>((r + 1) * (c + 1)) / 3.0 + (r == c ? 1e6 / 7.0 : 0.0);
+  gcms.drop_tolerance = 1e-8;
+  gcms.condition_mode_gram_before = std::numeric_limits<double>::infinity();  // singular: allowed
+  gcms.condition_mass_before = 1e9 / 3.0;
+  gcms.condition_mass_after = 1e3 / 7.0;
   return body;
 }
 

@@ -95,6 +95,13 @@ TEST(FbprepCli, BracketEndToEnd) {
   EXPECT_GT(body.mass.center_of_mass_input.norm(), 0.02);  // so the check above can fail
   EXPECT_EQ(body.provenance.source_file, "bracket.step");
   EXPECT_EQ(body.provenance.source_sha256.size(), 64u);
+
+  // The GCMS constants: every field kept (the bracket has no degenerate pairs), G carries the mass.
+  EXPECT_EQ(json["gcms_fields"].get<long>() + json["dropped_fields"].get<long>(), 3 * 6);
+  EXPECT_EQ(body.gcms.field_count(), json["gcms_fields"].get<long>());
+  EXPECT_NEAR(body.gcms.mass_matrix(0, 0), json["mass_kg"].get<double>(), 1e-12 * json["mass_kg"].get<double>());
+  EXPECT_EQ(body.gcms.stiffness.rows(), 3 * body.gcms.field_count());
+  EXPECT_GE(json["condition_G_before"].get<double>(), json["condition_G_after"].get<double>());
 }
 
 TEST(FbprepCli, GeoInMillimetresGivesTheSameBodyAsTheStep) {

@@ -4,11 +4,7 @@
 #include "flexbody/preprocess/free_free_modes.hpp"
 #include "flexbody/preprocess/mesh_topology.hpp"
 #include "flexbody/preprocess/rigid_body_modes.hpp"
-#include "flexbody/preprocess/gmsh_import.hpp"
 #include "test_meshes.hpp"
-
-#include <fstream>
-#include <unistd.h>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -44,20 +40,11 @@ struct Model {
   }
 };
 
-// A square-section beam 1 x 0.05 x 0.05 m meshed by gmsh (unstructured, ~700 nodes): its bending
-// modes come in nearly degenerate pairs, the hard case for shift-invert Lanczos (a member of a
-// pair is easily missed). A structured Kuhn-split box is no good here: its cells are anisotropic
-// along the cube diagonal and split the pairs by 20 %.
 const Model& square_beam() {
   static const Model model = [] {
-    // One file per process: ctest -j runs the tests of this suite in parallel processes.
-    const auto path = std::filesystem::temp_directory_path() /
-                      ("flexbody-test-square-beam-" + std::to_string(::getpid()) + ".geo");
-    std::ofstream(path) << "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 0.05, 0.05};\n";
-    fp::GmshImportOptions options;
-    options.unit = fp::LengthUnit::metre;
-    options.mesh_size = 0.02;
-    return Model(fp::import_tet_mesh(path, options).mesh);
+    const auto& beam = flexbody::test::square_beam();
+    Model m(beam.mesh);
+    return m;
   }();
   return model;
 }

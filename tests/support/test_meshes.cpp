@@ -1,12 +1,15 @@
 #include "test_meshes.hpp"
 
 #include "flexbody/preprocess/assembly.hpp"
+#include "flexbody/preprocess/gmsh_import.hpp"
+#include "flexbody/preprocess/mass_properties.hpp"
 
 #include <gtest/gtest.h>
 
 #include <array>
 #include <fstream>
 #include <sstream>
+#include <unistd.h>
 #include <stdexcept>
 #include <vector>
 
@@ -122,6 +125,27 @@ preprocess::SparseMatrix read_abaqus_matrix(const std::filesystem::path& path, E
   preprocess::SparseMatrix matrix(size, size);
   matrix.setFromTriplets(triplets.begin(), triplets.end());
   return matrix;
+}
+
+const AssembledMesh& square_beam() {
+  static const AssembledMesh beam = [] {
+    // One file per process: ctest -j runs the tests of a suite in parallel processes.
+    const auto path = std::filesystem::temp_directory_path() /
+                      ("flexbody-test-square-beam-" + std::to_string(::getpid()) + ".geo");
+    std::ofstream(path) << "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 0.05, 0.05};\n";
+    preprocess::GmshImportOptions options;
+    options.unit = preprocess::LengthUnit::metre;
+    options.mesh_size = 0.02;
+    preprocess::TetMesh mesh = preprocess::import_tet_mesh(path, options).mesh;
+    std::filesystem::remove(path);
+    const preprocess::Material steel{"steel", 210e9, 0.3, 7850.0};
+    AssembledMesh assembled = assemble(mesh, steel);
+    const Eigen::RowVector3d com =
+        preprocess::mass_properties(assembled.scalar_mass, assembled.mesh.nodes).center_of_mass_input.transpose();
+    assembled.mesh.nodes.rowwise() -= com;  // K̄ and M_s do not change under a translation
+    return assembled;
+  }();
+  return beam;
 }
 
 }  // namespace flexbody::test

@@ -2,6 +2,7 @@
 
 #include "flexbody/format/body_file.hpp"
 #include "flexbody/preprocess/assembly.hpp"
+#include "flexbody/preprocess/gcms_constants.hpp"
 #include "flexbody/preprocess/mass_properties.hpp"
 
 #include <fmt/chrono.h>
@@ -130,7 +131,19 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.factor = modes.stats;
   modes_timer.stop();
 
-  // 4. The body file.
+  // 4. The constant blocks of the improved GCMS: fields, G, K̂ (FORMULATION.md sections 2 and 7).
+  StageTimer reduce_timer(summary, "gcms");
+  if (options.progress) options.progress("GCMS constants (G, K_hat)");
+  body.modes.upsilon = upsilon_from_modes(modes.vectors);
+  body.gcms = in_stage("gcms", [&] { return gcms_constants(stiffness, scalar_mass, body.mesh.nodes, body.modes.upsilon); });
+  summary.gcms_fields = body.gcms.field_count();
+  summary.dropped_fields = body.modes.upsilon.cols() - summary.gcms_fields;
+  summary.condition_mode_gram_before = body.gcms.condition_mode_gram_before;
+  summary.condition_mass_before = body.gcms.condition_mass_before;
+  summary.condition_mass_after = body.gcms.condition_mass_after;
+  reduce_timer.stop();
+
+  // 5. The body file.
   StageTimer write_timer(summary, "write");
   if (options.progress) options.progress("writing " + options.output.string());
   body.provenance.created_by = fmt::format("fbprep {}", kFbprepVersion);
@@ -145,7 +158,6 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   body.modes.kind = "free-free";
   body.modes.frequencies_hz = modes.frequencies_hz;
   body.modes.relative_residuals = modes.relative_residuals;
-  body.modes.upsilon = upsilon_from_modes(modes.vectors);
   body.modes.eigensolver = summary.eigensolver;
   body.modes.shift = modes.shift;
   format::write_body_file(body, options.output);

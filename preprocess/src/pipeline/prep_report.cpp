@@ -65,6 +65,12 @@ std::string PrepSummary::full_report() const {
                                     factor.factorize_seconds));
   line("solves", fmt::format("{} in {:.2f} s ({} Lanczos restarts, {} solver run{})", factor.solves,
                              factor.solve_seconds, restarts, solver_runs, solver_runs == 1 ? "" : "s"));
+  r += "\nGCMS constants (Y = [1, X, fields]; G = Y^T M_s Y, K_hat = (fields x I3)^T K (fields x I3))\n";
+  line("fields", fmt::format("{} kept of {} (3 per mode), {} dropped as dependent", gcms_fields,
+                             gcms_fields + dropped_fields, dropped_fields));
+  line("cond(Ups^T M_s Ups)", fmt::format("{:.3g} before", condition_mode_gram_before));
+  line("cond(G), scaled", fmt::format("{:.3g} before, {:.3g} after (D^-1/2 G D^-1/2, D = diag G)",
+                                      condition_mass_before, condition_mass_after));
   r += fmt::format("\n  {:<22}{:>10}  {:>18}\n", "stage", "time [s]", "peak memory [MB]");
   for (const auto& stage : stages) r += fmt::format("  {:<22}{:>10.3f}  {:>18.1f}\n", stage.name, stage.seconds, stage.peak_memory_mb);
   r += fmt::format("  {:<22}{:>10.3f}  {:>18.1f}\n", "total", total_seconds, peak_memory_mb);
@@ -111,6 +117,13 @@ std::string PrepSummary::json() const {
   j["rigid_body_coupling"] = rigid_body_coupling;
   j["factor_nonzeros"] = factor.factor_nonzeros;
   j["solves"] = factor.solves;
+  // JSON has no infinity: a singular matrix's condition number is written as null.
+  auto condition = [](double c) { return std::isfinite(c) ? nlohmann::ordered_json(c) : nlohmann::ordered_json(nullptr); };
+  j["gcms_fields"] = gcms_fields;
+  j["dropped_fields"] = dropped_fields;
+  j["condition_mode_gram_before"] = condition(condition_mode_gram_before);
+  j["condition_G_before"] = condition(condition_mass_before);
+  j["condition_G_after"] = condition(condition_mass_after);
   nlohmann::ordered_json timings, memory;
   for (const auto& stage : stages) {
     timings[stage.name] = stage.seconds;

@@ -20,7 +20,7 @@ using RowMatrixX4i = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 4, Eigen::RowMa
 using RowMatrixX3i = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 /// The schema version this library writes, and the only one it reads.
-inline constexpr int kFormatVersion = 1;
+inline constexpr int kFormatVersion = 2;
 /// Value of the root attribute `format`.
 inline constexpr const char* kFormatName = "flexbody";
 
@@ -76,6 +76,33 @@ struct Modes {
   [[nodiscard]] Eigen::Index count() const { return frequencies_hz.size(); }
 };
 
+/// The constant blocks of the improved GCMS equations of motion (Zwölfer & Gerstmayr 2023; FORMULATION.md
+/// sections 2 and 7). The modes' 3 n_m scalar fields (the columns of Ῡ) are replaced by an M_s-orthonormal
+/// basis of their span, built in mode order, without the fields that add nothing new (n_f <= 3 n_m).
+/// With Y = [1, X̄, Ῡ'] the positions are r = (Y ⊗ I3) q, q = [τ; a; ξ], ξ of length 3 n_f.
+struct Gcms {
+  /// Ῡ' (n_n x n_f) [kg^-1/2]: Ῡ'ᵀ M_s Ῡ' = I.
+  Eigen::MatrixXd fields;
+  /// For each field the mode it came from, non-decreasing in [0, n_m): the first k modes are exactly
+  /// spanned by the fields with field_mode < k, a prefix of the columns.
+  Eigen::VectorXi field_mode;
+  /// C = Ῡ'ᵀ M_s Ῡ (n_f x 3 n_m) [1]: column 3m + k is field k of mode m in the new fields.
+  Eigen::MatrixXd mode_coefficients;
+  /// G = Yᵀ M_s Y ((4 + n_f) square, symmetric positive definite): the mass matrix is G ⊗ I3 (Eq. 66).
+  Eigen::MatrixXd mass_matrix;
+  /// K̂ = (Ῡ' ⊗ I3)ᵀ K̄ (Ῡ' ⊗ I3) (3 n_f square, symmetric) [N/m per kg], Eq. 96; index 3f + k.
+  Eigen::MatrixXd stiffness;
+  /// A field is dropped if its Gram-Schmidt remainder is below this fraction of its mode's M-norm.
+  double drop_tolerance = 0.0;
+  /// λmax / λmin of Ῡᵀ M_s Ῡ, and of the Jacobi-scaled G (D^-1/2 G D^-1/2, D = diag G: free of the
+  /// units of G's blocks) with the original fields and with the kept ones; +inf: singular.
+  double condition_mode_gram_before = 0.0;
+  double condition_mass_before = 0.0;
+  double condition_mass_after = 0.0;
+
+  [[nodiscard]] Eigen::Index field_count() const { return fields.cols(); }
+};
+
 /// Everything a flexible body file holds.
 struct BodyData {
   Provenance provenance;
@@ -83,6 +110,7 @@ struct BodyData {
   MassProperties mass;
   BodyMesh mesh;
   Modes modes;
+  Gcms gcms;
 };
 
 }  // namespace flexbody::format

@@ -64,6 +64,10 @@ struct PrepSummary {
   double rigid_body_residual = 0.0, rigid_body_coupling = 0.0;
   int solver_runs = 0, restarts = 0, operator_applies = 0;
   ShiftSolveStats factor;
+  /// GCMS fields kept and dropped (FORMULATION.md section 7), and the condition numbers of
+  /// Ῡᵀ M_s Ῡ and of G before and of G after (+inf: singular to working precision).
+  Eigen::Index gcms_fields = 0, dropped_fields = 0;
+  double condition_mode_gram_before = 0.0, condition_mass_before = 0.0, condition_mass_after = 0.0;
   std::vector<StageRecord> stages;
   double total_seconds = 0.0;
   double peak_memory_mb = 0.0;

@@ -1,0 +1,103 @@
+// gcms_checks.cpp: the checks of /gcms (SCHEMA.md, "GCMS constants"), part of check_structure,
+// check_finite and check_ranges.
+#include "body_checks.hpp"
+#include "check_helpers.hpp"
+
+#include <Eigen/Cholesky>
+
+namespace flexbody::format::detail {
+namespace {
+
+std::string shape(Eigen::Index rows, Eigen::Index cols) { return std::to_string(rows) + " x " + std::to_string(cols); }
+
+void expect_shape(const Eigen::MatrixXd& m, Eigen::Index rows, Eigen::Index cols, const std::string& path,
+                  const std::string& meaning, const std::string& context) {
+  if (m.rows() != rows || m.cols() != cols)
+    fail(context, path + " has shape " + shape(m.rows(), m.cols()) + ", expected " + shape(rows, cols) + " (" +
+                      meaning + ")");
+}
+
+// Written symmetric to the last bit (averaged with its transpose); 1e-12 of the largest entry leaves
+// room for writers that are merely careful.
+void check_symmetric(const Eigen::MatrixXd& m, const std::string& path, const std::string& context) {
+  if (m.size() == 0) return;
+  const double scale = m.cwiseAbs().maxCoeff();
+  for (Eigen::Index c = 0; c < m.cols(); ++c)
+    for (Eigen::Index r = 0; r < c; ++r)
+      if (std::abs(m(r, c) - m(c, r)) > 1e-12 * scale)
+        fail(context, path + " is not symmetric: " + path + index(r) + index(c) + " = " + number(m(r, c)) + " but " +
+                          path + index(c) + index(r) + " = " + number(m(c, r)));
+}
+
+void check_condition(double value, const std::string& path, const std::string& context) {
+  if (std::isnan(value) || !(value >= 1.0))
+    fail(context, path + " is " + number(value) + ", expected a condition number >= 1 (or inf)");
+}
+
+}  // namespace
+
+void check_gcms_structure(const BodyData& body, const std::string& context) {
+  const Gcms& gcms = body.gcms;
+  const Eigen::Index n_n = body.mesh.nodes.rows(), n_m = body.modes.count(), n_f = gcms.field_count();
+  if (gcms.fields.rows() != n_n || n_f > 3 * n_m)
+    fail(context, "/gcms/fields has shape " + shape(gcms.fields.rows(), n_f) + ", expected " + std::to_string(n_n) +
+                      " x n_f with n_f <= 3 n_m = " + std::to_string(3 * n_m));
+  if (gcms.field_mode.size() != n_f)
+    fail(context, "/gcms/field_mode has " + std::to_string(gcms.field_mode.size()) + " entries, expected n_f = " +
+                      std::to_string(n_f) + " (the columns of /gcms/fields)");
+  expect_shape(gcms.mode_coefficients, n_f, 3 * n_m, "/gcms/mode_coefficients", "n_f x 3 n_m", context);
+  expect_shape(gcms.mass_matrix, 4 + n_f, 4 + n_f, "/gcms/G", "(4 + n_f) square", context);
+  expect_shape(gcms.stiffness, 3 * n_f, 3 * n_f, "/gcms/K_hat", "3 n_f square", context);
+  for (Eigen::Index f = 0; f < n_f; ++f) {
+    const int m = gcms.field_mode(f);
+    if (m < 0 || m >= n_m || (f > 0 && m < gcms.field_mode(f - 1)))
+      fail(context, "/gcms/field_mode" + index(f) + " is " + std::to_string(m) +
+                        ", expected a mode index in [0, n_m) not below the previous entry");
+  }
+}
+
+void check_gcms_finite(const BodyData& body, const std::string& context) {
+  const Gcms& gcms = body.gcms;
+  check_values(gcms.fields, "/gcms/fields", context);
+  check_values(gcms.mode_coefficients, "/gcms/mode_coefficients", context);
+  check_values(gcms.mass_matrix, "/gcms/G", context);
+  check_values(gcms.stiffness, "/gcms/K_hat", context);
+  check_value(gcms.drop_tolerance, "/gcms/drop_tolerance", context);
+  check_value(gcms.condition_mass_after, "/gcms/condition_G_after", context);
+}
+
+void check_gcms_ranges(const BodyData& body, const std::string& context) {
+  const Gcms& gcms = body.gcms;
+  if (!(gcms.drop_tolerance >= 0.0 && gcms.drop_tolerance < 1.0))
+    fail(context, "/gcms/drop_tolerance is " + number(gcms.drop_tolerance) + ", expected 0 <= tolerance < 1");
+  check_condition(gcms.condition_mode_gram_before, "/gcms/condition_mode_gram_before", context);
+  check_condition(gcms.condition_mass_before, "/gcms/condition_G_before", context);
+  check_condition(gcms.condition_mass_after, "/gcms/condition_G_after", context);
+  check_symmetric(gcms.mass_matrix, "/gcms/G", context);
+  check_symmetric(gcms.stiffness, "/gcms/K_hat", context);
+  // G must agree with /mass: G[0][0] is the mass and G[1:4, 1:4] = X̄ᵀ M_s X̄ the second moments J, with
+  // inertia tr(J) I - J. Both come from the same M_s; 1e-9 allows for the summation order.
+  const Eigen::MatrixXd& g = gcms.mass_matrix;
+  const double mass = body.mass.mass;
+  if (std::abs(g(0, 0) - mass) > 1e-9 * mass)
+    fail(context, "/gcms/G[0][0] = " + number(g(0, 0)) + " kg differs from /mass/total = " + number(mass) + " kg");
+  const Eigen::Matrix3d second_moments = g.block<3, 3>(1, 1);
+  const Eigen::Matrix3d inertia = second_moments.trace() * Eigen::Matrix3d::Identity() - second_moments;
+  const double inertia_scale = body.mass.inertia_about_com.cwiseAbs().maxCoeff();
+  if ((inertia - body.mass.inertia_about_com).cwiseAbs().maxCoeff() > 1e-9 * inertia_scale)
+    fail(context, "/gcms/G[1:4][1:4] (second moments J) gives the inertia tr(J) I - J, which differs from "
+                  "/mass/inertia_about_com by more than 1e-9 relative");
+  // Positive definite, tested on the Jacobi-scaled matrix: the blocks of G carry different units
+  // (kg, kg m, kg m^2, 1), and scaling makes the test independent of them.
+  const Eigen::VectorXd diagonal = g.diagonal();
+  for (Eigen::Index i = 0; i < diagonal.size(); ++i)
+    if (!(diagonal(i) > 0.0))
+      fail(context, "/gcms/G" + index(i) + index(i) + " is " + number(diagonal(i)) +
+                        ", expected > 0 (G is a mass matrix: positive definite)");
+  const Eigen::VectorXd scale = diagonal.cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd scaled = scale.asDiagonal() * g * scale.asDiagonal();
+  if (Eigen::LLT<Eigen::MatrixXd>(scaled).info() != Eigen::Success)
+    fail(context, "/gcms/G is not positive definite (its Cholesky factorization fails)");
+}
+
+}  // namespace flexbody::format::detail

@@ -1,0 +1,27 @@
+#include "flexbody/preprocess/gcms_constants.hpp"
+
+#include "flexbody/preprocess/gcms_matrices.hpp"
+
+namespace flexbody::preprocess {
+
+format::Gcms gcms_constants(const SparseMatrix& stiffness_upper, const SparseMatrix& scalar_mass_upper,
+                            const RowMatrixX3d& nodes, const Eigen::MatrixXd& upsilon,
+                            const GeneralizedFieldOptions& options) {
+  format::Gcms gcms;
+  // Before: the modes' own fields (FORMULATION.md section 7 measured 7e7 ... 7e8 on a square beam).
+  const Eigen::MatrixXd mass_upsilon = scalar_mass_upper.selfadjointView<Eigen::Upper>() * upsilon;
+  gcms.condition_mode_gram_before = spectral_condition(upsilon.transpose() * mass_upsilon);
+  gcms.condition_mass_before = scaled_condition(gcms_mass_matrix(scalar_mass_upper, nodes, upsilon));
+
+  GeneralizedFields fields = orthonormal_fields(scalar_mass_upper, upsilon, options);
+  gcms.mass_matrix = gcms_mass_matrix(scalar_mass_upper, nodes, fields.upsilon);
+  gcms.condition_mass_after = scaled_condition(gcms.mass_matrix);
+  gcms.stiffness = reduced_stiffness(stiffness_upper, fields.upsilon);
+  gcms.fields = std::move(fields.upsilon);
+  gcms.field_mode = std::move(fields.source_mode);
+  gcms.mode_coefficients = std::move(fields.mode_coefficients);
+  gcms.drop_tolerance = options.drop_tolerance;
+  return gcms;
+}
+
+}  // namespace flexbody::preprocess

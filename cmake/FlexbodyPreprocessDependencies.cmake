@@ -6,6 +6,7 @@ find_package(CLI11 REQUIRED CONFIG)
 find_package(fmt REQUIRED CONFIG)
 find_package(nlohmann_json 3 REQUIRED CONFIG)
 find_package(OpenSSL REQUIRED COMPONENTS Crypto)
+find_package(yaml-cpp REQUIRED CONFIG)  # Debian 12: 0.7, target yaml-cpp (no namespace)
 
 # Spectra 1.0 (header only; Debian installs no config file for it).
 find_path(SPECTRA_INCLUDE_DIR Spectra/SymGEigsShiftSolver.h REQUIRED)

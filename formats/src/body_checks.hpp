@@ -25,4 +25,9 @@ void check_gcms_structure(const BodyData& body, const std::string& context);
 void check_gcms_finite(const BodyData& body, const std::string& context);
 void check_gcms_ranges(const BodyData& body, const std::string& context);
 
+/// The /interfaces part of each check above (interface_checks.cpp).
+void check_interfaces_structure(const BodyData& body, const std::string& context);
+void check_interfaces_finite(const BodyData& body, const std::string& context);
+void check_interfaces_ranges(const BodyData& body, const std::string& context);
+
 }  // namespace flexbody::format::detail

@@ -49,6 +49,8 @@ constexpr Required kRequired[] = {
     {Item::dataset, "/gcms/K_hat"},             {Item::attribute, "/gcms/drop_tolerance"},
     {Item::attribute, "/gcms/dropped_fields"},  {Item::attribute, "/gcms/condition_mode_gram_before"},
     {Item::attribute, "/gcms/condition_G_before"}, {Item::attribute, "/gcms/condition_G_after"},
+    {Item::attribute, "/gcms/condition_G_scaled_after"},
+    {Item::group, "/interfaces"},               {Item::attribute, "/interfaces/order"},
 };
 
 void check_readable(const std::filesystem::path& path, const std::string& label) {
@@ -209,11 +211,42 @@ Gcms read_gcms(const Location& root) {
   gcms.condition_mode_gram_before = detail::read_double_attribute(group, "condition_mode_gram_before");
   gcms.condition_mass_before = detail::read_double_attribute(group, "condition_G_before");
   gcms.condition_mass_after = detail::read_double_attribute(group, "condition_G_after");
+  gcms.condition_mass_scaled_after = detail::read_double_attribute(group, "condition_G_scaled_after");
   const int dropped = detail::read_int_attribute(group, "dropped_fields");
   if (dropped != gcms.mode_coefficients.cols() - gcms.fields.cols())
     group.fail("/gcms/dropped_fields is " + std::to_string(dropped) + ", expected 3 n_m - n_f = " +
                std::to_string(gcms.mode_coefficients.cols() - gcms.fields.cols()));
   return gcms;
+}
+
+std::vector<Interface> read_interfaces(const Location& root) {
+  const Location group = detail::open_group(root, "interfaces");
+  const std::string order = detail::read_string_attribute(group, "order");
+  std::vector<Interface> interfaces;
+  for (std::size_t begin = 0; begin < order.size();) {
+    const std::size_t end = std::min(order.find(',', begin), order.size());
+    Interface i;
+    i.name = order.substr(begin, end - begin);
+    begin = end + 1;
+    if (i.name.empty() || i.name.find('/') != std::string::npos)
+      group.fail("/interfaces/order names an interface \"" + i.name + "\"; names are non-empty and have no '/'");
+    const std::string path = "/interfaces/" + i.name;
+    if (detail::object_kind(root, path) != detail::ObjectKind::group)
+      group.fail("/interfaces/order names \"" + i.name + "\" but there is no group " + path);
+    const Location g = detail::open_group(group, i.name);
+    for (const char* attribute : {"coupling", "reference_point"})
+      if (!detail::has_attribute(root, path, attribute)) group.fail("missing attribute " + path + "/" + attribute);
+    i.coupling = detail::read_string_attribute(g, "coupling");
+    const std::vector<double> point = detail::read_double_vector_attribute(g, "reference_point", 3);
+    i.reference_point = Eigen::Vector3d(point[0], point[1], point[2]);
+    const std::vector<std::int32_t> nodes = detail::read_int_vector(g, "nodes");
+    i.nodes = Eigen::Map<const Eigen::VectorXi>(nodes.data(), static_cast<Eigen::Index>(nodes.size()));
+    i.weights = to_vector(detail::read_double_vector(g, "weights"));
+    i.y_row = to_vector(detail::read_double_vector(g, "y_row"));
+    i.rotation = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(g, "rotation"));
+    interfaces.push_back(std::move(i));
+  }
+  return interfaces;
 }
 
 }  // namespace
@@ -234,6 +267,7 @@ BodyData read_body_file(const std::filesystem::path& path) {
     body.mesh = read_mesh(root);
     body.modes = read_modes(root);
     body.gcms = read_gcms(root);
+    body.interfaces = read_interfaces(root);
   }
   detail::check_structure(body, label);
   detail::check_finite(body, label);

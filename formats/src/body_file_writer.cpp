@@ -105,6 +105,25 @@ void write_gcms(const Location& root, const Gcms& gcms) {
   detail::write_double_attribute(group, "condition_mode_gram_before", gcms.condition_mode_gram_before);
   detail::write_double_attribute(group, "condition_G_before", gcms.condition_mass_before);
   detail::write_double_attribute(group, "condition_G_after", gcms.condition_mass_after);
+  detail::write_double_attribute(group, "condition_G_scaled_after", gcms.condition_mass_scaled_after);
+}
+
+void write_interfaces(const Location& root, const std::vector<Interface>& interfaces) {
+  const Location group = detail::create_group(root, "interfaces");
+  std::string order;
+  for (const Interface& i : interfaces) order += (order.empty() ? "" : ",") + i.name;
+  detail::write_string_attribute(group, "order", order);
+  for (const Interface& i : interfaces) {
+    const Location g = detail::create_group(group, i.name);
+    detail::write_string_attribute(g, "coupling", i.coupling);
+    detail::write_double_vector_attribute(g, "reference_point", {i.reference_point.data(), 3});
+    const std::vector<std::int32_t> nodes(i.nodes.data(), i.nodes.data() + i.nodes.size());
+    detail::write_int_vector(g, "nodes", nodes, "");
+    detail::write_vector(g, "weights", values_of(i.weights), "1");
+    detail::write_vector(g, "y_row", values_of(i.y_row), "mixed: see SCHEMA.md");
+    const RowMatrixXd rotation = i.rotation;
+    detail::write_matrix(g, "rotation", rows_of(rotation), cols_of(rotation), rotation.data(), "kg^-1/2 m^-1");
+  }
 }
 
 /// Writes the whole layout into a new file at `path`; every handle is closed on return.
@@ -117,6 +136,7 @@ void write_layout(const BodyData& body, const std::filesystem::path& path, const
   write_mesh(file, body.mesh);
   write_modes(file, body.modes);
   write_gcms(file, body.gcms);
+  write_interfaces(file, body.interfaces);
   detail::flush_and_close(file);
 }
 

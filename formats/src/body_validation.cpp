@@ -53,6 +53,7 @@ void check_structure(const BodyData& body, const std::string& context) {
   }
   check_options(body.provenance, context);
   check_gcms_structure(body, context);
+  check_interfaces_structure(body, context);
 }
 
 void check_finite(const BodyData& body, const std::string& context) {
@@ -68,6 +69,7 @@ void check_finite(const BodyData& body, const std::string& context) {
   check_values(body.modes.relative_residuals, "/modes/relative_residuals", context);
   check_values(body.modes.upsilon, "/modes/upsilon", context);
   check_gcms_finite(body, context);
+  check_interfaces_finite(body, context);
 }
 
 void check_ranges(const BodyData& body, const std::string& context) {
@@ -94,6 +96,7 @@ void check_ranges(const BodyData& body, const std::string& context) {
     if (r[m] < 0.0) fail(context, "/modes/relative_residuals" + index(m) + " is " + number(r[m]) + ", expected >= 0");
   }
   check_gcms_ranges(body, context);
+  check_interfaces_ranges(body, context);
 }
 
 }  // namespace detail

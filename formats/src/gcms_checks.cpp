@@ -53,6 +53,9 @@ void check_gcms_structure(const BodyData& body, const std::string& context) {
     if (m < 0 || m >= n_m || (f > 0 && m < gcms.field_mode(f - 1)))
       fail(context, "/gcms/field_mode" + index(f) + " is " + std::to_string(m) +
                         ", expected a mode index in [0, n_m) not below the previous entry");
+    if (f >= 3 && gcms.field_mode(f - 3) == m)
+      fail(context, "/gcms/field_mode" + index(f) + ": mode " + std::to_string(m) +
+                        " has more than 3 fields (a mode has 3 scalar fields)");
   }
 }
 
@@ -64,6 +67,7 @@ void check_gcms_finite(const BodyData& body, const std::string& context) {
   check_values(gcms.stiffness, "/gcms/K_hat", context);
   check_value(gcms.drop_tolerance, "/gcms/drop_tolerance", context);
   check_value(gcms.condition_mass_after, "/gcms/condition_G_after", context);
+  check_value(gcms.condition_mass_scaled_after, "/gcms/condition_G_scaled_after", context);
 }
 
 void check_gcms_ranges(const BodyData& body, const std::string& context) {
@@ -73,6 +77,7 @@ void check_gcms_ranges(const BodyData& body, const std::string& context) {
   check_condition(gcms.condition_mode_gram_before, "/gcms/condition_mode_gram_before", context);
   check_condition(gcms.condition_mass_before, "/gcms/condition_G_before", context);
   check_condition(gcms.condition_mass_after, "/gcms/condition_G_after", context);
+  check_condition(gcms.condition_mass_scaled_after, "/gcms/condition_G_scaled_after", context);
   check_symmetric(gcms.mass_matrix, "/gcms/G", context);
   check_symmetric(gcms.stiffness, "/gcms/K_hat", context);
   // G must agree with /mass: G[0][0] is the mass and G[1:4, 1:4] = X̄ᵀ M_s X̄ the second moments J, with
@@ -87,6 +92,25 @@ void check_gcms_ranges(const BodyData& body, const std::string& context) {
   if ((inertia - body.mass.inertia_about_com).cwiseAbs().maxCoeff() > 1e-9 * inertia_scale)
     fail(context, "/gcms/G[1:4][1:4] (second moments J) gives the inertia tr(J) I - J, which differs from "
                   "/mass/inertia_about_com by more than 1e-9 relative");
+  // What the runtime relies on without checking (SCHEMA.md, "What G holds"): the frame at the centre of
+  // mass (G[0][1:4] = 0, 1e-9 of m times the part's size), the fields M-orthogonal to translations so that
+  // Eq. 77 holds identically (G[0][4:] = 0, 1e-8 of sqrt(m): the unit field's M-norm is 1), and the fields
+  // M_s-orthonormal (G[4:][4:] = I to 1e-10).
+  const Eigen::Index n_f = gcms.field_count();
+  const double size = std::max(body.mesh.nodes.cwiseAbs().maxCoeff(), 1e-300);
+  for (int j = 1; j < 4; ++j)
+    if (std::abs(g(0, j)) > 1e-9 * mass * size)
+      fail(context, "/gcms/G[0]" + index(j) + " = " + number(g(0, j)) +
+                        " kg m: the first moment about the origin must vanish (body frame at the centre of mass)");
+  for (Eigen::Index f = 0; f < n_f; ++f)
+    if (std::abs(g(0, 4 + f)) > 1e-8 * std::sqrt(mass))
+      fail(context, "/gcms/G[0]" + index(4 + f) + " = " + number(g(0, 4 + f)) +
+                        ": field " + std::to_string(f) + " is not M-orthogonal to the translations (Eq. 77)");
+  for (Eigen::Index r = 0; r < n_f; ++r)
+    for (Eigen::Index c = 0; c < n_f; ++c)
+      if (std::abs(g(4 + r, 4 + c) - (r == c ? 1.0 : 0.0)) > 1e-10)
+        fail(context, "/gcms/G" + index(4 + r) + index(4 + c) + " = " + number(g(4 + r, 4 + c)) +
+                          ": the fields are not M_s-orthonormal (G[4:][4:] must be I)");
   // Positive definite, tested on the Jacobi-scaled matrix: the blocks of G carry different units
   // (kg, kg m, kg m^2, 1), and scaling makes the test independent of them.
   const Eigen::VectorXd diagonal = g.diagonal();

@@ -195,7 +195,7 @@ TEST_F(ReadErrors, MassMatrixThatIsNotPositiveDefinite) {
   const auto path = good_file("g_indef.fbh5");
   BodyData body = make_body();
   Eigen::MatrixXd g = body.gcms.mass_matrix;
-  g(4, 5) = g(5, 4) = 1.5;  // two unit fields with an M_s inner product above 1: impossible
+  g(1, 4) = g(4, 1) = 1.0;  // a field coupled to the x-rotation more strongly than J allows: J - T Tᵀ < 0
   std::vector<double> values(g.data(), g.data() + g.size());  // symmetric: column- = row-major
   replace_double_dataset(path, "/gcms/G", 9, 9, values);
   expect_read_error(path, {"g_indef.fbh5: /gcms/G is not positive definite"});
@@ -215,6 +215,18 @@ TEST_F(ReadErrors, FieldModeStoredAsAMatrix) {
   const auto path = good_file("field_mode.fbh5");
   replace_int_dataset(path, "/gcms/field_mode", 5, 1, {0, 1, 0, 1, 1});
   expect_read_error(path, {"field_mode.fbh5: /gcms/field_mode has shape 5 x 1, expected a 1-D dataset"});
+}
+
+TEST_F(ReadErrors, InterfaceListedButMissing) {
+  const auto path = good_file("no_interface.fbh5");
+  set_string_attribute(path, "/interfaces", "order", "bore A,bore B");
+  expect_read_error(path, {"no_interface.fbh5: /interfaces/order names \"bore B\" but there is no group /interfaces/bore B"});
+}
+
+TEST_F(ReadErrors, InterfaceWithoutWeights) {
+  const auto path = good_file("no_weights.fbh5");
+  delete_link(path, "/interfaces/bore A/weights");
+  expect_read_error(path, {"no_weights.fbh5: missing dataset /interfaces/bore A/weights"});
 }
 
 TEST_F(ReadErrors, TruncatedFile) {

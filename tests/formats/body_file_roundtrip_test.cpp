@@ -57,6 +57,19 @@ void expect_same(const BodyData& a, const BodyData& b) {
   EXPECT_EQ(ga.condition_mode_gram_before, gb.condition_mode_gram_before);
   EXPECT_EQ(ga.condition_mass_before, gb.condition_mass_before);
   EXPECT_EQ(ga.condition_mass_after, gb.condition_mass_after);
+  EXPECT_EQ(ga.condition_mass_scaled_after, gb.condition_mass_scaled_after);
+
+  ASSERT_EQ(a.interfaces.size(), b.interfaces.size());
+  for (std::size_t k = 0; k < a.interfaces.size(); ++k) {
+    const Interface &ia = a.interfaces[k], &ib = b.interfaces[k];
+    EXPECT_EQ(ia.name, ib.name);
+    EXPECT_EQ(ia.coupling, ib.coupling);
+    EXPECT_EQ(ia.nodes, ib.nodes);
+    EXPECT_EQ(ia.weights, ib.weights);
+    EXPECT_EQ(ia.reference_point, ib.reference_point);
+    EXPECT_EQ(ia.y_row, ib.y_row);
+    EXPECT_EQ(ia.rotation, ib.rotation);
+  }
 }
 
 using RoundTrip = TempDirTest;
@@ -80,6 +93,7 @@ TEST_F(RoundTrip, KeepsEmptyOptionsTrianglesAndModes) {
   body.gcms.mode_coefficients.resize(0, 0);
   body.gcms.mass_matrix = Eigen::MatrixXd(body.gcms.mass_matrix.topLeftCorner(4, 4));  // rigid: [1, X̄] only
   body.gcms.stiffness.resize(0, 0);
+  body.interfaces.clear();
   const auto path = dir() / "bare.fbh5";
   write_body_file(body, path);
   expect_same(body, read_body_file(path));

@@ -133,8 +133,44 @@ TEST(Validate, GcmsConstants) {
   body.gcms.fields.conservativeResize(5, 7);
   expect_invalid(body, "/gcms/fields has shape 5 x 7, expected 5 x n_f with n_f <= 3 n_m = 6");
   body = make_body();
+  body.gcms.field_mode << 0, 0, 0, 0, 1;
+  expect_invalid(body, "/gcms/field_mode[3]: mode 0 has more than 3 fields");
+  body = make_body();
+  body.gcms.mass_matrix(0, 5) = body.gcms.mass_matrix(5, 0) = 1e-3;
+  expect_invalid(body, "/gcms/G[0][5] = 0.001: field 1 is not M-orthogonal to the translations (Eq. 77)");
+  body = make_body();
+  body.gcms.mass_matrix(6, 6) = 1.0 + 1e-6;
+  expect_invalid(body, "/gcms/G[6][6] = 1.000001: the fields are not M_s-orthonormal");
+  body = make_body();
   body.gcms.mass_matrix(1, 2) += 1e-3;  // G[1][2] without G[2][1]
   expect_invalid(body, "/gcms/G is not symmetric: /gcms/G[1][2]");
+}
+
+TEST(Validate, Interfaces) {
+  BodyData body = make_body();
+  body.interfaces[0].nodes(1) = 9;
+  expect_invalid(body, "/interfaces/bore A/nodes[1] is 9 but the mesh has 5 nodes");
+  body = make_body();
+  body.interfaces[0].nodes << 1, 4, 2;
+  expect_invalid(body, "/interfaces/bore A/nodes[2] is not above the previous entry (ascending, unique)");
+  body = make_body();
+  body.interfaces[0].weights(0) += 0.01;
+  expect_invalid(body, "/interfaces/bore A/weights sum to");
+  body = make_body();
+  body.interfaces[0].coupling = "glue";
+  expect_invalid(body, "/interfaces/bore A/coupling is \"glue\", expected \"rbe2\" or \"rbe3\"");
+  body = make_body();
+  body.interfaces[0].rotation.conservativeResize(3, 3);
+  expect_invalid(body, "/interfaces/bore A/rotation has shape 3 x 3, expected 3 x 15 (3 x 3 n_f)");
+  body = make_body();
+  body.interfaces[0].reference_point.x() += 1e-3;
+  expect_invalid(body, "/interfaces/bore A/reference_point is not the weighted average of its nodes");
+  body = make_body();
+  body.interfaces.push_back(body.interfaces[0]);
+  expect_invalid(body, "two interfaces are named \"bore A\"");
+  body = make_body();
+  body.interfaces[0].name = "a/b";
+  expect_invalid(body, "interface name \"a/b\" is not allowed");
 }
 
 }  // namespace

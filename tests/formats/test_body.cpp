@@ -132,6 +132,22 @@ BodyData make_body() {
   gcms.condition_mode_gram_before = std::numeric_limits<double>::infinity();  // singular: allowed
   gcms.condition_mass_before = 1e9 / 3.0;
   gcms.condition_mass_after = 1e3 / 7.0;
+  gcms.condition_mass_scaled_after = 1e2 / 7.0;
+
+  // One interface on the face of nodes 1, 2, 4, with weights that are not round numbers.
+  Interface face;
+  face.name = "bore A";
+  face.coupling = "rbe3";
+  face.nodes.resize(3);
+  face.nodes << 1, 2, 4;
+  face.weights = Eigen::Vector3d(1.0 / 3.0, 1.0 / 6.0, 0.5);
+  for (Eigen::Index j = 0; j < 3; ++j) face.reference_point += face.weights(j) * body.mesh.nodes.row(face.nodes(j)).transpose();
+  face.y_row.resize(4 + kFields);
+  face.y_row << 1.0, face.reference_point, Eigen::VectorXd::LinSpaced(kFields, 0.1 / 3.0, 0.5 / 3.0);
+  face.rotation.resize(3, 3 * kFields);
+  for (Eigen::Index r = 0; r < 3; ++r)
+    for (Eigen::Index c = 0; c < 3 * kFields; ++c) face.rotation(r, c) = static_cast<double>(r - c) / 17.0;
+  body.interfaces.push_back(face);
   return body;
 }
 

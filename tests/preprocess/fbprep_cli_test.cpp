@@ -1,37 +1,23 @@
 // fbprep as a user runs it: the bundled bracket end to end, units, and every refused input (one line
 // on stderr naming the problem, a non-zero exit, and no file under the output name).
 #include "flexbody/format/body_file.hpp"
+#include "cli_run.hpp"
 #include "test_meshes.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <cstdlib>
 #include <fstream>
 #include <numbers>
-#include <sstream>
-#include <sys/wait.h>
 
 namespace {
 
-struct CliRun {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const std::filesystem::path& path) {
-  std::ifstream file(path);
-  std::stringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
+using flexbody::test::CliRun;
+using flexbody::test::slurp;
 
 CliRun fbprep(const std::filesystem::path& dir, const std::string& arguments) {
-  const std::string command = fmt::format("cd '{}' && '{}' {} > stdout.txt 2> stderr.txt", dir.string(),
-                                          FLEXBODY_FBPREP, arguments);
-  const int status = std::system(command.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir / "stdout.txt"), slurp(dir / "stderr.txt")};
+  return flexbody::test::run_fbprep(dir, arguments);
 }
 
 std::filesystem::path bracket_step() { return std::filesystem::path(FLEXBODY_SOURCE_DIR) / "meshes" / "bracket.step"; }
@@ -56,7 +42,7 @@ void expect_refusal(const std::filesystem::path& dir, const std::string& argumen
   expect_no_output(dir);
 }
 
-void write(const std::filesystem::path& path, const std::string& text) { std::ofstream(path) << text; }
+void write(const std::filesystem::path& path, const std::string& text) { flexbody::test::write_text(path, text); }
 
 constexpr const char* kOcc = "SetFactory(\"OpenCASCADE\");\n";
 
@@ -101,7 +87,44 @@ TEST(FbprepCli, BracketEndToEnd) {
   EXPECT_EQ(body.gcms.field_count(), json["gcms_fields"].get<long>());
   EXPECT_NEAR(body.gcms.mass_matrix(0, 0), json["mass_kg"].get<double>(), 1e-12 * json["mass_kg"].get<double>());
   EXPECT_EQ(body.gcms.stiffness.rows(), 3 * body.gcms.field_count());
-  EXPECT_GE(json["condition_G_before"].get<double>(), json["condition_G_after"].get<double>());
+  EXPECT_EQ(json["dropped_fields"].get<long>(), 0);
+  ASSERT_TRUE(json["condition_G_after"].is_number());  // null would mean singular
+  EXPECT_GE(json["condition_G_after"].get<double>(), 1.0);
+}
+
+TEST(FbprepCli, InspectReadsBackWhatWasWritten) {
+  const auto dir = flexbody::test::scratch_dir();
+  const CliRun prep = fbprep(dir, fmt::format("'{}' -o b.fbh5 --modes 3 --mesh-size 6 --json", bracket_step().string()));
+  ASSERT_EQ(prep.exit_code, 0) << prep.err;
+  const auto written = nlohmann::json::parse(prep.out);
+
+  const CliRun json_run = fbprep(dir, "inspect b.fbh5 --json");
+  ASSERT_EQ(json_run.exit_code, 0) << json_run.err;
+  const auto read = nlohmann::json::parse(json_run.out);
+  EXPECT_EQ(read["format_version"], 2);
+  EXPECT_EQ(read["frequencies_hz"], written["frequencies_hz"]);  // the same doubles, through HDF5
+  EXPECT_EQ(read["nodes"], written["nodes"]);
+  EXPECT_EQ(read["gcms_fields"], written["gcms_fields"]);
+  EXPECT_EQ(read["source_file"], "bracket.step");
+  EXPECT_EQ(read["options"]["modes"], "3");
+  // K̂'s spectrum holds the 3 modes (exactly, they are in the span of the fields) and more: its lowest
+  // value is the first mode at most, its highest above the third.
+  const auto range = read["k_hat_frequency_range_hz"];
+  EXPECT_LE(range[0].get<double>(), written["frequencies_hz"][0].get<double>() * (1 + 1e-8));
+  EXPECT_GT(range[1].get<double>(), written["frequencies_hz"][2].get<double>());
+
+  const CliRun report = fbprep(dir, "inspect b.fbh5");
+  ASSERT_EQ(report.exit_code, 0) << report.err;
+  EXPECT_NE(report.out.find("flexbody body file, format version 2"), std::string::npos) << report.out;
+  EXPECT_NE(report.out.find("GCMS constants"), std::string::npos) << report.out;
+
+  write(dir / "input-broken.fbh5", "not an HDF5 file at all");
+  const CliRun broken = fbprep(dir, "inspect input-broken.fbh5");
+  EXPECT_EQ(broken.exit_code, 1);
+  EXPECT_EQ(broken.err, "fbprep: error: input-broken.fbh5: not an HDF5 file\n");
+  const CliRun usage = fbprep(dir, "inspect b.fbh5 --frobnicate");
+  EXPECT_EQ(usage.exit_code, 2);
+  EXPECT_EQ(std::count(usage.err.begin(), usage.err.end(), '\n'), 1) << usage.err;
 }
 
 TEST(FbprepCli, GeoInMillimetresGivesTheSameBodyAsTheStep) {

@@ -55,6 +55,12 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   const auto start = Clock::now();
   check_material(options.material);
   check_output_location(options.input, options.output);
+  for (const InterfaceRequest& i : options.interfaces)
+    if (i.coupling == "rbe2")  // refused before any work: a free-free basis cannot honour the tie
+      throw std::invalid_argument(fmt::format(
+          "interface '{}': coupling rbe2 ties its nodes rigidly, which changes the modes; free-free modes "
+          "support rbe3 interfaces only (Craig-Bampton reduction, which rbe2 needs, is not implemented yet)",
+          i.name));
   PrepSummary summary;
   summary.input = options.input;
   summary.output = options.output;
@@ -141,6 +147,15 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.condition_mode_gram_before = body.gcms.condition_mode_gram_before;
   summary.condition_mass_before = body.gcms.condition_mass_before;
   summary.condition_mass_after = body.gcms.condition_mass_after;
+  summary.condition_mass_scaled_after = body.gcms.condition_mass_scaled_after;
+  body.interfaces = in_stage("interfaces", [&] {
+    std::vector<InterfaceRequest> in_metres = options.interfaces;
+    for (InterfaceRequest& request : in_metres) request.select = scaled(request.select, metres_per(imported.unit));
+    return build_interfaces(in_metres, body.mesh.nodes, summary.mass.center_of_mass_input,
+                            body.mesh.surface_triangles, body.gcms.fields);
+  });
+  for (const format::Interface& i : body.interfaces)
+    summary.interfaces.push_back({i.name, i.coupling, i.nodes.size(), i.reference_point + summary.mass.center_of_mass_input});
   reduce_timer.stop();
 
   // 5. The body file.

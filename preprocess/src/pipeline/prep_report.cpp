@@ -69,8 +69,14 @@ std::string PrepSummary::full_report() const {
   line("fields", fmt::format("{} kept of {} (3 per mode), {} dropped as dependent", gcms_fields,
                              gcms_fields + dropped_fields, dropped_fields));
   line("cond(Ups^T M_s Ups)", fmt::format("{:.3g} before", condition_mode_gram_before));
-  line("cond(G), scaled", fmt::format("{:.3g} before, {:.3g} after (D^-1/2 G D^-1/2, D = diag G)",
-                                      condition_mass_before, condition_mass_after));
+  line("cond(G)", fmt::format("{:.3g} before, {:.3g} after; {:.3g} Jacobi-scaled (D^-1/2 G D^-1/2, D = diag G)",
+                              condition_mass_before, condition_mass_after, condition_mass_scaled_after));
+  if (!interfaces.empty()) {
+    r += "\nInterfaces (markers: weighted node average and least-squares rotation of the node set)\n";
+    for (const auto& i : interfaces)
+      line(i.name, fmt::format("{}, {} nodes, reference point {} m (input frame)", i.coupling, i.nodes,
+                               vector3(i.reference_point_input)));
+  }
   r += fmt::format("\n  {:<22}{:>10}  {:>18}\n", "stage", "time [s]", "peak memory [MB]");
   for (const auto& stage : stages) r += fmt::format("  {:<22}{:>10.3f}  {:>18.1f}\n", stage.name, stage.seconds, stage.peak_memory_mb);
   r += fmt::format("  {:<22}{:>10.3f}  {:>18.1f}\n", "total", total_seconds, peak_memory_mb);
@@ -124,6 +130,15 @@ std::string PrepSummary::json() const {
   j["condition_mode_gram_before"] = condition(condition_mode_gram_before);
   j["condition_G_before"] = condition(condition_mass_before);
   j["condition_G_after"] = condition(condition_mass_after);
+  j["condition_G_scaled_after"] = condition(condition_mass_scaled_after);
+  nlohmann::ordered_json interface_list = nlohmann::ordered_json::array();
+  for (const auto& i : interfaces)
+    interface_list.push_back({{"name", i.name},
+                              {"coupling", i.coupling},
+                              {"nodes", i.nodes},
+                              {"reference_point_m", {i.reference_point_input(0), i.reference_point_input(1),
+                                                     i.reference_point_input(2)}}});
+  j["interfaces"] = interface_list;
   nlohmann::ordered_json timings, memory;
   for (const auto& stage : stages) {
     timings[stage.name] = stage.seconds;

@@ -2,6 +2,11 @@
 
 #include "flexbody/preprocess/gcms_matrices.hpp"
 
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+
 namespace flexbody::preprocess {
 
 format::Gcms gcms_constants(const SparseMatrix& stiffness_upper, const SparseMatrix& scalar_mass_upper,
@@ -11,11 +16,18 @@ format::Gcms gcms_constants(const SparseMatrix& stiffness_upper, const SparseMat
   // Before: the modes' own fields (FORMULATION.md section 7 measured 7e7 ... 7e8 on a square beam).
   const Eigen::MatrixXd mass_upsilon = scalar_mass_upper.selfadjointView<Eigen::Upper>() * upsilon;
   gcms.condition_mode_gram_before = spectral_condition(upsilon.transpose() * mass_upsilon);
-  gcms.condition_mass_before = scaled_condition(gcms_mass_matrix(scalar_mass_upper, nodes, upsilon));
+  gcms.condition_mass_before = spectral_condition(gcms_mass_matrix(scalar_mass_upper, nodes, upsilon, mass_upsilon));
 
   GeneralizedFields fields = orthonormal_fields(scalar_mass_upper, upsilon, options);
-  gcms.mass_matrix = gcms_mass_matrix(scalar_mass_upper, nodes, fields.upsilon);
-  gcms.condition_mass_after = scaled_condition(gcms.mass_matrix);
+  gcms.mass_matrix = gcms_mass_matrix(scalar_mass_upper, nodes, fields.upsilon, fields.mass_upsilon);
+  gcms.condition_mass_after = spectral_condition(gcms.mass_matrix);
+  gcms.condition_mass_scaled_after = scaled_condition(gcms.mass_matrix);
+  // G is singular only if a combination of the kept fields is an affine field (in the span of [1, X̄]):
+  // a part whose modes reproduce a rigid motion. Say so here rather than fail in the writer's check.
+  if (!std::isfinite(gcms.condition_mass_scaled_after) || gcms.condition_mass_scaled_after > 1e14)
+    throw std::runtime_error(fmt::format(
+        "GCMS constants: G is singular to working precision (scaled condition {:.3g}): a combination of the mode "
+        "fields is a rigid or affine field, which the modes must not contain", gcms.condition_mass_scaled_after));
   gcms.stiffness = reduced_stiffness(stiffness_upper, fields.upsilon);
   gcms.fields = std::move(fields.upsilon);
   gcms.field_mode = std::move(fields.source_mode);

@@ -48,11 +48,22 @@ Eigen::MatrixXd generalized_field_matrix(const RowMatrixX3d& nodes, const Eigen:
 
 Eigen::MatrixXd gcms_mass_matrix(const SparseMatrix& scalar_mass_upper, const RowMatrixX3d& nodes,
                                  const Eigen::MatrixXd& fields) {
-  if (nodes.rows() != scalar_mass_upper.rows() || fields.rows() != nodes.rows())
+  return gcms_mass_matrix(scalar_mass_upper, nodes, fields, scalar_mass_upper.selfadjointView<Eigen::Upper>() * fields);
+}
+
+Eigen::MatrixXd gcms_mass_matrix(const SparseMatrix& scalar_mass_upper, const RowMatrixX3d& nodes,
+                                 const Eigen::MatrixXd& fields, const Eigen::MatrixXd& mass_fields) {
+  const Eigen::Index n_f = fields.cols();
+  if (nodes.rows() != scalar_mass_upper.rows() || fields.rows() != nodes.rows() || mass_fields.rows() != nodes.rows() ||
+      mass_fields.cols() != n_f)
     throw std::logic_error("gcms_mass_matrix: nodes, fields and M_s disagree on n_n");
-  const Eigen::MatrixXd y = generalized_field_matrix(nodes, fields);
-  const Eigen::MatrixXd my = scalar_mass_upper.selfadjointView<Eigen::Upper>() * y;
-  Eigen::MatrixXd g = y.transpose() * my;
+  const Eigen::MatrixXd rigid = generalized_field_matrix(nodes, Eigen::MatrixXd(nodes.rows(), 0));  // [1, X̄]
+  const Eigen::MatrixXd mass_rigid = scalar_mass_upper.selfadjointView<Eigen::Upper>() * rigid;
+  Eigen::MatrixXd g(4 + n_f, 4 + n_f);
+  g.topLeftCorner<4, 4>() = rigid.transpose() * mass_rigid;
+  g.topRightCorner(4, n_f) = rigid.transpose() * mass_fields;
+  g.bottomLeftCorner(n_f, 4) = g.topRightCorner(4, n_f).transpose();
+  g.bottomRightCorner(n_f, n_f) = fields.transpose() * mass_fields;
   return 0.5 * (g + g.transpose());  // symmetric to the last bit
 }
 

@@ -28,43 +28,46 @@ GeneralizedFields orthonormal_fields(const SparseMatrix& scalar_mass_upper, cons
   GeneralizedFields result;
   result.relative_remainders.resize(3 * n_m);
   std::vector<int> source;
+  // Projects x off the columns [first, kept) of Q. M_s x is recomputed after every pass rather than
+  // updated (M_s x - M_s Q c would carry the round-off of the removed part, eps ||x_0||, into the
+  // remainder of a nearly dependent field). A second pass follows when the first removed more than half
+  // of a column's norm ("twice is enough"); otherwise one pass is orthogonal to working precision.
+  auto project = [&](Eigen::MatrixXd& x, Eigen::MatrixXd& mx, Eigen::Index first) {
+    for (int pass = 0; pass < 2 && kept > first; ++pass) {
+      const Eigen::RowVectorXd before = (x.array() * mx.array()).colwise().sum();
+      const Eigen::MatrixXd c = q.middleCols(first, kept - first).transpose() * mx;
+      x.noalias() -= q.middleCols(first, kept - first) * c;
+      mx = mass_times(scalar_mass_upper, x);
+      const Eigen::RowVectorXd after = (x.array() * mx.array()).colwise().sum();
+      if ((after.array() >= 0.25 * before.array()).all()) break;  // squared norms: 0.25 = half the norm
+    }
+  };
   for (Eigen::Index m = 0; m < n_m; ++m) {
     Eigen::MatrixXd v = upsilon.middleCols(3 * m, 3);
     Eigen::MatrixXd mv = mass_times(scalar_mass_upper, v);
     const double mode_norm = std::sqrt((v.array() * mv.array()).sum());  // ||psi_m||_M = 1 for normalised modes
-    // Project the mode's three fields off the fields kept so far: twice (CGS2), which makes them
-    // orthogonal to working precision even when they were nearly dependent.
-    for (int pass = 0; pass < 2 && kept > 0; ++pass) {
-      const Eigen::MatrixXd c = q.leftCols(kept).transpose() * mv;
-      v.noalias() -= q.leftCols(kept) * c;
-      mv.noalias() -= mq.leftCols(kept) * c;
-    }
-    // Then one by one within the mode.
+    project(v, mv, 0);  // the mode's three fields off every field kept so far, as one block
     const Eigen::Index first_of_mode = kept;
-    for (int k = 0; k < 3; ++k) {
-      Eigen::VectorXd x = v.col(k), mx = mv.col(k);
-      for (int pass = 0; pass < 2 && kept > first_of_mode; ++pass) {
-        const Eigen::Index block = kept - first_of_mode;
-        const Eigen::VectorXd c = q.middleCols(first_of_mode, block).transpose() * mx;
-        x.noalias() -= q.middleCols(first_of_mode, block) * c;
-        mx.noalias() -= mq.middleCols(first_of_mode, block) * c;
-      }
-      const double remainder = std::sqrt(std::max(x.dot(mx), 0.0));
+    for (int k = 0; k < 3; ++k) {  // then one by one within the mode
+      Eigen::MatrixXd x = v.col(k), mx = mv.col(k);
+      project(x, mx, first_of_mode);
+      const double remainder = std::sqrt(std::max(x.col(0).dot(mx.col(0)), 0.0));
       const double relative = mode_norm > 0.0 ? remainder / mode_norm : 0.0;
       result.relative_remainders(3 * m + k) = relative;
       if (!(relative >= options.drop_tolerance)) {
         ++result.dropped;
         continue;
       }
-      q.col(kept) = x / remainder;
-      mq.col(kept) = mx / remainder;
+      q.col(kept) = x.col(0) / remainder;
+      mq.col(kept) = mx.col(0) / remainder;
       source.push_back(static_cast<int>(m));
       ++kept;
     }
   }
   result.upsilon = q.leftCols(kept);
+  result.mass_upsilon = mq.leftCols(kept);
   result.source_mode = Eigen::Map<const Eigen::VectorXi>(source.data(), static_cast<Eigen::Index>(source.size()));
-  result.mode_coefficients = mq.leftCols(kept).transpose() * upsilon;
+  result.mode_coefficients = result.mass_upsilon.transpose() * upsilon;
   return result;
 }
 

@@ -83,8 +83,8 @@ struct Modes {
 struct Gcms {
   /// Ῡ' (n_n x n_f) [kg^-1/2]: Ῡ'ᵀ M_s Ῡ' = I.
   Eigen::MatrixXd fields;
-  /// For each field the mode it came from, non-decreasing in [0, n_m): the first k modes are exactly
-  /// spanned by the fields with field_mode < k, a prefix of the columns.
+  /// For each field the mode it came from, non-decreasing in [0, n_m), at most 3 per mode: the first k
+  /// modes are spanned (up to the dropped remainders) by the fields with field_mode < k, a prefix.
   Eigen::VectorXi field_mode;
   /// C = Ῡ'ᵀ M_s Ῡ (n_f x 3 n_m) [1]: column 3m + k is field k of mode m in the new fields.
   Eigen::MatrixXd mode_coefficients;
@@ -94,13 +94,31 @@ struct Gcms {
   Eigen::MatrixXd stiffness;
   /// A field is dropped if its Gram-Schmidt remainder is below this fraction of its mode's M-norm.
   double drop_tolerance = 0.0;
-  /// λmax / λmin of Ῡᵀ M_s Ῡ, and of the Jacobi-scaled G (D^-1/2 G D^-1/2, D = diag G: free of the
-  /// units of G's blocks) with the original fields and with the kept ones; +inf: singular.
+  /// λmax / λmin of Ῡᵀ M_s Ῡ, of G with the original fields (+inf: singular) and of the stored G; and of
+  /// the stored G Jacobi-scaled (D^-1/2 G D^-1/2, D = diag G: free of the units of G's blocks).
   double condition_mode_gram_before = 0.0;
   double condition_mass_before = 0.0;
   double condition_mass_after = 0.0;
+  double condition_mass_scaled_after = 0.0;
 
   [[nodiscard]] Eigen::Index field_count() const { return fields.cols(); }
+};
+
+/// A named set of surface nodes where a joint or a force acts, as a marker of the GCMS body
+/// (FORMULATION.md section 4): its position and its small rotation are linear in q.
+struct Interface {
+  std::string name;
+  /// "rbe3": the marker follows the area-weighted average motion of the nodes; "rbe2": the nodes
+  /// move rigidly with the marker (a constraint of the reduction, see SCHEMA.md).
+  std::string coupling = "rbe3";
+  Eigen::VectorXi nodes;     ///< k node indices, ascending, unique
+  Eigen::VectorXd weights;   ///< k weights (the nodes' shares of the selected surface area), sum 1
+  Eigen::Vector3d reference_point = Eigen::Vector3d::Zero();  ///< Σ w_i X̄_i [m], body frame
+  /// wᵀ Y (4 + n_f): the marker position is (y_rowᵀ ⊗ I3) q = τ + A X̄_c + Σ_f y_row[4+f] ξ_f.
+  Eigen::VectorXd y_row;
+  /// R (3 x 3 n_f) [kg^-1/2 m^-1]: the node set's small rotation in the body frame,
+  /// θ̄ = R ξ̄, the weighted least-squares rigid fit of the nodes' displacements (Σ_f υ'_f(i) ξ̄_f).
+  Eigen::MatrixXd rotation;
 };
 
 /// Everything a flexible body file holds.
@@ -111,6 +129,7 @@ struct BodyData {
   BodyMesh mesh;
   Modes modes;
   Gcms gcms;
+  std::vector<Interface> interfaces;  ///< in the order the body spec names them; names unique
 };
 
 }  // namespace flexbody::format

@@ -12,6 +12,7 @@
 
 #include "flexbody/preprocess/free_free_modes.hpp"
 #include "flexbody/preprocess/gmsh_import.hpp"
+#include "flexbody/preprocess/interfaces.hpp"
 #include "flexbody/preprocess/material.hpp"
 #include "flexbody/preprocess/mesh_topology.hpp"
 
@@ -24,7 +25,7 @@
 namespace flexbody::preprocess {
 
 /// The fbprep version written into every body file (created_by).
-inline constexpr const char* kFbprepVersion = "0.1.0";
+inline constexpr const char* kFbprepVersion = "0.2.0";
 
 struct PrepOptions {
   std::filesystem::path input;
@@ -32,6 +33,10 @@ struct PrepOptions {
   GmshImportOptions mesh;  ///< unit, mesh size, order
   Material material = parse_material("steel");
   FreeFreeOptions modes;   ///< number of modes, fmax, eigensolver backend
+  /// Interfaces to build as markers (input frame, lengths in the input's unit, like mesh.mesh_size).
+  /// With free-free modes only rbe3 couplings: an rbe2 tie changes the modes and needs a Craig-Bampton
+  /// reduction.
+  std::vector<InterfaceRequest> interfaces;
   /// The options as the user gave them, recorded in the body file's provenance.
   std::vector<std::pair<std::string, std::string>> recorded_options;
   /// Called with a short message at the start of each long step.
@@ -68,6 +73,14 @@ struct PrepSummary {
   /// Ῡᵀ M_s Ῡ and of G before and of G after (+inf: singular to working precision).
   Eigen::Index gcms_fields = 0, dropped_fields = 0;
   double condition_mode_gram_before = 0.0, condition_mass_before = 0.0, condition_mass_after = 0.0;
+  double condition_mass_scaled_after = 0.0;  ///< of D^-1/2 G D^-1/2, D = diag G (unit-free)
+  /// The interfaces built: name, coupling, node count, reference point in the input frame.
+  struct InterfaceLine {
+    std::string name, coupling;
+    Eigen::Index nodes = 0;
+    Eigen::Vector3d reference_point_input = Eigen::Vector3d::Zero();
+  };
+  std::vector<InterfaceLine> interfaces;
   std::vector<StageRecord> stages;
   double total_seconds = 0.0;
   double peak_memory_mb = 0.0;

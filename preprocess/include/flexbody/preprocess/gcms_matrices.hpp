@@ -17,6 +17,9 @@ namespace flexbody::preprocess {
 /// G = Yᵀ M_s Y ((4 + n_f) square, symmetric): the mass matrix of Eq. 66 is G ⊗ I3.
 [[nodiscard]] Eigen::MatrixXd gcms_mass_matrix(const SparseMatrix& scalar_mass_upper, const RowMatrixX3d& nodes,
                                                const Eigen::MatrixXd& fields);
+/// The same with M_s fields already at hand (`mass_fields` = M_s Ῡ).
+[[nodiscard]] Eigen::MatrixXd gcms_mass_matrix(const SparseMatrix& scalar_mass_upper, const RowMatrixX3d& nodes,
+                                               const Eigen::MatrixXd& fields, const Eigen::MatrixXd& mass_fields);
 
 /// K̂ = (Ῡ ⊗ I3)ᵀ K̄ (Ῡ ⊗ I3), Eq. 96 (3 n_f square, symmetric; row and column 3f + k is component
 /// k of field f, the order of ξ in Eq. 59). K̄ is applied to a few fields at a time through its

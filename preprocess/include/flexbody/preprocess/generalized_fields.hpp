@@ -29,6 +29,8 @@ struct GeneralizedFieldOptions {
 struct GeneralizedFields {
   /// Ῡ' (n_n x n_f): the kept fields, Ῡ'ᵀ M_s Ῡ' = I (unit kg^-1/2, like the modes).
   Eigen::MatrixXd upsilon;
+  /// M_s Ῡ' (n_n x n_f), freshly multiplied, for the products that follow (G).
+  Eigen::MatrixXd mass_upsilon;
   /// For each kept field, the mode it came from (non-decreasing): the first k modes are spanned by
   /// the fields with source_mode < k, which are a prefix of the columns.
   Eigen::VectorXi source_mode;
@@ -41,8 +43,9 @@ struct GeneralizedFields {
   int dropped = 0;  ///< fields dropped (3 n_m - n_f)
 };
 
-/// Gram-Schmidt (twice, classical, one mode's 3 fields at a time) of the columns of `upsilon`
-/// (n_n x 3 n_m, Eq. 49 layout) in the M_s inner product.
+/// Classical Gram-Schmidt with reorthogonalization where needed, in the M_s inner product, of the
+/// columns of `upsilon` (n_n x 3 n_m, Eq. 49 layout): each mode's 3 fields as a block against the
+/// fields kept before, then one by one.
 [[nodiscard]] GeneralizedFields orthonormal_fields(const SparseMatrix& scalar_mass_upper,
                                                    const Eigen::MatrixXd& upsilon,
                                                    const GeneralizedFieldOptions& options = {});

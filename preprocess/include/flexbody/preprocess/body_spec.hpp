@@ -1,0 +1,32 @@
+#pragma once
+// flexbody/preprocess/body_spec.hpp: the body spec, a YAML file that says what a scene needs from one
+// part, kept beside the CAD and rerun with `fbprep body.yaml -o body.fbh5`:
+//
+//   input: beam.step                # relative paths are relative to the spec
+//   unit: m                         # the input's length unit (and of every length below)
+//   material: {E: 210e9, nu: 0.3, rho: 7850}      # or: steel | aluminium | titanium
+//   mesh: {size: 0.0125, order: 1}
+//   reduction: {kind: free-free, modes: 8, fmax: 2000, eigensolver: arpack}
+//   interfaces:
+//     root: {select: {plane: {point: [0, 0, 0], normal: [1, 0, 0], tolerance: 1e-6}}, coupling: rbe3}
+//     bore: {select: {cylinder: {point: [0.045, 0.02, 0], direction: [0, 0, 1], radius: 0.005}}}
+//     tip:  {select: {box: {min: [0.99, -1, -1], max: [1.01, 1, 1]}}}
+
+#include "flexbody/preprocess/fbprep_pipeline.hpp"
+
+#include <filesystem>
+
+namespace flexbody::preprocess {
+
+/// True for a .yaml or .yml file name.
+[[nodiscard]] bool is_body_spec(const std::filesystem::path& path);
+
+/// Reads a body spec into fbprep options (input, unit, material, mesh, modes, interfaces; output and
+/// progress are left to the caller) and records every value in `recorded_options`. Throws
+/// std::invalid_argument "<spec>:<line>: <problem>" for a missing or unreadable file, YAML syntax errors,
+/// unknown or repeated keys, wrong types, non-finite numbers and values out of range, and for the parts
+/// of the spec that are not implemented yet (Craig-Bampton reduction, load points, output regions, CAD
+/// surface and physical-group selectors), each naming its line.
+[[nodiscard]] PrepOptions read_body_spec(const std::filesystem::path& spec);
+
+}  // namespace flexbody::preprocess

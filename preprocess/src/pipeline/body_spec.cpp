@@ -1,0 +1,236 @@
+#include "flexbody/preprocess/body_spec.hpp"
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <stdexcept>
+
+namespace flexbody::preprocess {
+namespace {
+
+// Every problem is reported as "<spec>:<line>: <message>" (lines from 1).
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const YAML::Node& at, const std::string& message) const {
+    const int line = at.IsDefined() ? at.Mark().line + 1 : 0;
+    throw std::invalid_argument(line > 0 ? fmt::format("{}:{}: {}", file_, line, message)
+                                         : fmt::format("{}: {}", file_, message));
+  }
+
+  // A map whose keys are all in `allowed`, each at most once.
+  void expect_map(const YAML::Node& node, const std::string& what, std::initializer_list<const char*> allowed) const {
+    if (!node.IsMap()) fail(node, fmt::format("{} must be a map of keys to values", what));
+    std::set<std::string> seen;
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      const std::string key = it->first.Scalar();
+      bool known = false;
+      for (const char* k : allowed) known = known || key == k;
+      if (!known) fail(it->first, fmt::format("unknown key '{}' in {}; expected {}", key, what, fmt::join(allowed, ", ")));
+      if (!seen.insert(key).second) fail(it->first, fmt::format("key '{}' is repeated in {}", key, what));
+    }
+  }
+
+  std::string text(const YAML::Node& node, const std::string& what) const {
+    if (!node.IsScalar()) fail(node, fmt::format("{} must be a single value", what));
+    return node.Scalar();
+  }
+
+  double number(const YAML::Node& node, const std::string& what) const {
+    const std::string value = text(node, what);
+    for (const char* special : {".nan", ".NaN", ".NAN", ".inf", ".Inf", ".INF", "-.inf", "-.Inf", "-.INF", "+.inf"})
+      if (value == special) fail(node, fmt::format("{} must be finite, got '{}'", what, value));  // YAML 1.2 floats
+    char* end = nullptr;
+    errno = 0;
+    const double x = std::strtod(value.c_str(), &end);
+    if (value.empty() || end != value.c_str() + value.size() || errno == ERANGE)
+      fail(node, fmt::format("{} must be a number, got '{}'", what, value));
+    if (!std::isfinite(x)) fail(node, fmt::format("{} must be finite, got '{}'", what, value));
+    return x;
+  }
+
+  double positive(const YAML::Node& node, const std::string& what) const {
+    const double x = number(node, what);
+    if (!(x > 0.0)) fail(node, fmt::format("{} must be positive, got {}", what, x));
+    return x;
+  }
+
+  int count(const YAML::Node& node, const std::string& what) const {
+    const double x = number(node, what);
+    if (x < 0 || x != std::floor(x) || x > 1e6) fail(node, fmt::format("{} must be a whole number >= 0, got {}", what, x));
+    return static_cast<int>(x);
+  }
+
+  Eigen::Vector3d vector3(const YAML::Node& node, const std::string& what) const {
+    if (!node.IsSequence() || node.size() != 3) fail(node, fmt::format("{} must be a list of 3 numbers", what));
+    return {number(node[0], what), number(node[1], what), number(node[2], what)};
+  }
+
+  YAML::Node required(const YAML::Node& map, const char* key, const std::string& what) const {
+    const YAML::Node value = map[key];
+    if (!value.IsDefined()) fail(map, fmt::format("{} needs '{}'", what, key));
+    return value;
+  }
+
+  [[noreturn]] void not_implemented(const YAML::Node& at, const std::string& what) const {
+    fail(at, fmt::format("{} is not implemented yet", what));
+  }
+
+ private:
+  std::string file_;
+};
+
+Selector read_selector(const Reader& r, const YAML::Node& select, const std::string& where) {
+  r.expect_map(select, where + " select", {"plane", "cylinder", "box", "surfaces", "group"});
+  if (select.size() != 1) r.fail(select, fmt::format("{} select needs exactly one of plane, cylinder, box", where));
+  const auto entry = select.begin();
+  const std::string kind = entry->first.Scalar();
+  const YAML::Node s = entry->second;  // nodes are handles: copies are cheap and never dangle
+  const std::string what = fmt::format("{} {}", where, kind);
+  if (kind == "plane") {
+    r.expect_map(s, what, {"point", "normal", "tolerance"});
+    PlaneSelector plane{r.vector3(r.required(s, "point", what), what + " point"),
+                        r.vector3(r.required(s, "normal", what), what + " normal"), 0.0};
+    if (s["tolerance"]) plane.tolerance = r.positive(s["tolerance"], what + " tolerance");
+    return plane;
+  }
+  if (kind == "cylinder") {
+    r.expect_map(s, what, {"point", "direction", "radius", "tolerance"});
+    CylinderSelector cylinder{r.vector3(r.required(s, "point", what), what + " point"),
+                              r.vector3(r.required(s, "direction", what), what + " direction"),
+                              r.positive(r.required(s, "radius", what), what + " radius"), 0.0};
+    if (s["tolerance"]) cylinder.tolerance = r.positive(s["tolerance"], what + " tolerance");
+    return cylinder;
+  }
+  if (kind == "box") {
+    r.expect_map(s, what, {"min", "max"});
+    return BoxSelector{r.vector3(r.required(s, "min", what), what + " min"),
+                       r.vector3(r.required(s, "max", what), what + " max")};
+  }
+  r.not_implemented(entry->first, fmt::format("{}: selecting by CAD surface tags or gmsh physical groups", where));
+}
+
+}  // namespace
+
+bool is_body_spec(const std::filesystem::path& path) {
+  const std::string ext = path.extension().string();
+  return ext == ".yaml" || ext == ".yml";
+}
+
+PrepOptions read_body_spec(const std::filesystem::path& spec) {
+  const std::string file = spec.string();
+  const Reader r(file);
+  if (!std::ifstream(spec)) throw std::invalid_argument(fmt::format("{}: cannot open the body spec", file));
+  YAML::Node loaded;
+  try {
+    loaded = YAML::LoadFile(file);
+  } catch (const YAML::Exception& e) {
+    throw std::invalid_argument(fmt::format("{}:{}: {}", file, e.mark.line + 1, e.msg));
+  }
+  const YAML::Node& root = loaded;  // const: operator[] never adds keys
+  r.expect_map(root, "the body spec",
+               {"input", "unit", "material", "mesh", "reduction", "interfaces", "load_points", "output_regions"});
+  PrepOptions options;
+  const std::filesystem::path base = spec.parent_path();
+  auto& recorded = options.recorded_options;
+  recorded.emplace_back("spec", file);
+
+  const std::string input = r.text(r.required(root, "input", "the body spec"), "input");
+  options.input = std::filesystem::path(input).is_absolute() ? std::filesystem::path(input) : base / input;
+  recorded.emplace_back("input", options.input.string());
+  if (const YAML::Node unit = root["unit"]) {
+    const std::string text = r.text(unit, "unit");
+    options.mesh.unit = length_unit_from_string(text);
+    if (!options.mesh.unit) r.fail(unit, fmt::format("unit '{}' is not one of mm, cm, m, in", text));
+    recorded.emplace_back("unit", text);
+  }
+  if (const YAML::Node material = root["material"]) {
+    if (material.IsScalar()) {
+      try {
+        options.material = parse_material(material.Scalar());
+      } catch (const std::exception& e) {
+        r.fail(material, e.what());
+      }
+    } else {
+      r.expect_map(material, "material", {"E", "nu", "rho"});
+      options.material = Material{"custom", r.number(r.required(material, "E", "material"), "material E"),
+                                  r.number(r.required(material, "nu", "material"), "material nu"),
+                                  r.number(r.required(material, "rho", "material"), "material rho")};
+      try {
+        check_material(options.material);
+      } catch (const std::exception& e) {
+        r.fail(material, e.what());
+      }
+    }
+    recorded.emplace_back("material", fmt::format("{} E={} nu={} rho={}", options.material.name,
+                                                  options.material.youngs_modulus, options.material.poisson_ratio,
+                                                  options.material.density));
+  }
+  if (const YAML::Node mesh = root["mesh"]) {
+    r.expect_map(mesh, "mesh", {"size", "order"});
+    if (mesh["size"]) options.mesh.mesh_size = r.positive(mesh["size"], "mesh size");
+    if (mesh["order"]) {
+      options.mesh.order = r.count(mesh["order"], "mesh order");
+      if (options.mesh.order != 1)
+        r.fail(mesh["order"], fmt::format("mesh order {}: only linear tetrahedra (order 1) are implemented",
+                                          options.mesh.order));
+    }
+    recorded.emplace_back("mesh_size", fmt::format("{}", options.mesh.mesh_size));
+  }
+  options.modes.modes = 10;
+  if (const YAML::Node reduction = root["reduction"]) {
+    r.expect_map(reduction, "reduction", {"kind", "modes", "fmax", "eigensolver"});
+    if (const YAML::Node kind = reduction["kind"]) {
+      const std::string k = r.text(kind, "reduction kind");
+      if (k == "craig-bampton") r.not_implemented(kind, "reduction kind 'craig-bampton'");
+      if (k != "free-free") r.fail(kind, fmt::format("reduction kind '{}' is unknown; use free-free or craig-bampton", k));
+    }
+    const bool has_modes = static_cast<bool>(reduction["modes"]), has_fmax = static_cast<bool>(reduction["fmax"]);
+    options.modes.modes = has_modes ? r.count(reduction["modes"], "reduction modes") : (has_fmax ? 0 : 10);
+    if (has_modes && options.modes.modes < 1) r.fail(reduction["modes"], "reduction modes must be at least 1");
+    if (has_fmax) options.modes.fmax_hz = r.positive(reduction["fmax"], "reduction fmax");
+    if (const YAML::Node solver = reduction["eigensolver"]) {
+      try {
+        options.modes.solver.backend = eigensolver_backend_from_string(r.text(solver, "reduction eigensolver"));
+      } catch (const std::invalid_argument& e) {
+        r.fail(solver, e.what());
+      }
+    }
+  }
+  recorded.emplace_back("modes", std::to_string(options.modes.modes));
+  recorded.emplace_back("fmax", fmt::format("{}", options.modes.fmax_hz));
+  recorded.emplace_back("eigensolver", std::string(to_string(options.modes.solver.backend)));
+  if (const YAML::Node interfaces = root["interfaces"]) {
+    if (!interfaces.IsMap()) r.fail(interfaces, "interfaces must be a map of names to interfaces");
+    std::set<std::string> names;
+    for (auto it = interfaces.begin(); it != interfaces.end(); ++it) {
+      const std::string name = it->first.Scalar();
+      if (!names.insert(name).second) r.fail(it->first, fmt::format("interface '{}' is defined twice", name));
+      const std::string where = fmt::format("interface '{}'", name);
+      r.expect_map(it->second, where, {"select", "coupling"});
+      InterfaceRequest request;
+      request.name = name;
+      request.select = read_selector(r, r.required(it->second, "select", where), where);
+      if (const YAML::Node coupling = it->second["coupling"]) {
+        request.coupling = r.text(coupling, where + " coupling");
+        if (request.coupling != "rbe2" && request.coupling != "rbe3")
+          r.fail(coupling, fmt::format("{}: coupling '{}' is unknown; use rbe2 or rbe3", where, request.coupling));
+      }
+      options.interfaces.push_back(std::move(request));
+    }
+    std::string list;
+    for (const auto& i : options.interfaces) list += (list.empty() ? "" : " ") + i.name + ":" + i.coupling;
+    recorded.emplace_back("interfaces", list);
+  }
+  if (const YAML::Node points = root["load_points"]) r.not_implemented(points, "load_points (static correction modes)");
+  if (const YAML::Node regions = root["output_regions"]) r.not_implemented(regions, "output_regions (stress recovery)");
+  return options;
+}
+
+}  // namespace flexbody::preprocess

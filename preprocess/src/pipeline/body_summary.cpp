@@ -1,0 +1,136 @@
+#include "flexbody/preprocess/body_summary.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <numbers>
+
+namespace flexbody::preprocess {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+std::string vector3(const Eigen::Vector3d& v) { return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", v(0), v(1), v(2)); }
+
+// Lowest and highest sqrt(λ)/2π of K̂ (λ clipped at 0: K̂ is positive semi-definite up to round-off).
+std::pair<double, double> stiffness_frequency_range(const Eigen::MatrixXd& k_hat) {
+  if (k_hat.size() == 0) return {0.0, 0.0};
+  const Eigen::VectorXd lambda = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(k_hat, Eigen::EigenvaluesOnly).eigenvalues();
+  auto hz = [](double l) { return std::sqrt(std::max(l, 0.0)) / kTwoPi; };
+  return {hz(lambda(0)), hz(lambda(lambda.size() - 1))};
+}
+
+std::uintmax_t file_bytes(const std::filesystem::path& file) {
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(file, error);
+  return error ? 0 : size;
+}
+
+nlohmann::ordered_json number_or_null(double value) {
+  return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
+}
+
+}  // namespace
+
+std::string body_report(const format::BodyData& body, const std::filesystem::path& file) {
+  std::string r;
+  auto line = [&r](std::string_view label, const std::string& value) { r += fmt::format("  {:<22}{}\n", label, value); };
+  const auto& p = body.provenance;
+  r += fmt::format("{} ({:.3g} MB): flexbody body file, format version {}\n", file.string(),
+                   static_cast<double>(file_bytes(file)) / 1e6, format::kFormatVersion);
+  line("created by", fmt::format("{}, {}", p.created_by, p.created_utc));
+  line("source", fmt::format("{} (sha256 {})", p.source_file, p.source_sha256));
+  line("length unit", fmt::format("{}: {}", p.input_unit, p.unit_reason));
+  std::string options;
+  for (const auto& [name, value] : p.options) options += fmt::format("{}{}={}", options.empty() ? "" : ", ", name, value);
+  line("options", options);
+
+  const auto& m = body.material;
+  r += "\nMaterial\n";
+  line(m.name, fmt::format("E = {:.4g} Pa, nu = {:.4g}, rho = {:.6g} kg/m^3", m.youngs_modulus, m.poisson_ratio,
+                           m.density));
+  r += "\nMass properties\n";
+  line("mass", fmt::format("{:.6g} kg", body.mass.mass));
+  line("centre of mass", vector3(body.mass.center_of_mass_input) + " m (input frame)");
+  for (int i = 0; i < 3; ++i)
+    line(i == 0 ? "inertia about CoM" : "",
+         vector3(body.mass.inertia_about_com.row(i).transpose()) + (i == 0 ? " kg m^2" : ""));
+
+  const auto& mesh = body.mesh;
+  r += "\nMesh (body frame: origin at the centre of mass)\n";
+  line("nodes", fmt::format("{} ({} DOFs)", mesh.nodes.rows(), 3 * mesh.nodes.rows()));
+  line("tetrahedra", fmt::format("{} (order {})", mesh.tets.rows(), mesh.element_order));
+  line("surface triangles", std::to_string(mesh.surface_triangles.rows()));
+  line("bounding box", vector3(mesh.nodes.colwise().minCoeff().transpose()) + " .. " +
+                           vector3(mesh.nodes.colwise().maxCoeff().transpose()) + " m");
+
+  const auto& modes = body.modes;
+  r += fmt::format("\nModes ({}, {} by {})\n", modes.count(), modes.kind, modes.eigensolver);
+  r += fmt::format("  {:>4}  {:>16}  {:>14}\n", "mode", "frequency [Hz]", "rel. residual");
+  for (Eigen::Index k = 0; k < modes.count(); ++k)
+    r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}\n", k + 1, modes.frequencies_hz(k), modes.relative_residuals(k));
+
+  const auto& g = body.gcms;
+  const auto [k_low, k_high] = stiffness_frequency_range(g.stiffness);
+  r += "\nGCMS constants\n";
+  line("fields", fmt::format("{} of {} ({} dropped as dependent, tolerance {:.0e})", g.field_count(),
+                             g.mode_coefficients.cols(), g.mode_coefficients.cols() - g.field_count(), g.drop_tolerance));
+  line("G", fmt::format("{} x {}; cond {:.3g} ({:.3g} before; {:.3g} Jacobi-scaled)", g.mass_matrix.rows(),
+                        g.mass_matrix.cols(), g.condition_mass_after, g.condition_mass_before,
+                        g.condition_mass_scaled_after));
+  line("K_hat", fmt::format("{} x {}; sqrt(eig)/2pi from {:.6g} to {:.6g} Hz", g.stiffness.rows(), g.stiffness.cols(),
+                            k_low, k_high));
+  line("cond(Ups^T M_s Ups)", fmt::format("{:.3g} (the modes' own fields)", g.condition_mode_gram_before));
+  return r;
+}
+
+std::string body_json(const format::BodyData& body, const std::filesystem::path& file) {
+  nlohmann::ordered_json j;
+  const auto& p = body.provenance;
+  j["file"] = file.string();
+  j["file_bytes"] = file_bytes(file);
+  j["format_version"] = format::kFormatVersion;
+  j["created_by"] = p.created_by;
+  j["created_utc"] = p.created_utc;
+  j["source_file"] = p.source_file;
+  j["source_sha256"] = p.source_sha256;
+  j["input_unit"] = p.input_unit;
+  nlohmann::ordered_json options = nlohmann::ordered_json::object();
+  for (const auto& [name, value] : p.options) options[name] = value;
+  j["options"] = options;
+  j["material"] = {{"name", body.material.name},
+                   {"E_pa", body.material.youngs_modulus},
+                   {"nu", body.material.poisson_ratio},
+                   {"rho_kgm3", body.material.density}};
+  j["mass_kg"] = body.mass.mass;
+  const Eigen::Vector3d& c = body.mass.center_of_mass_input;
+  j["center_of_mass_m"] = {c(0), c(1), c(2)};
+  const Eigen::Matrix3d& inertia = body.mass.inertia_about_com;
+  j["inertia_kgm2"] = {{inertia(0, 0), inertia(0, 1), inertia(0, 2)},
+                       {inertia(1, 0), inertia(1, 1), inertia(1, 2)},
+                       {inertia(2, 0), inertia(2, 1), inertia(2, 2)}};
+  j["nodes"] = body.mesh.nodes.rows();
+  j["elements"] = body.mesh.tets.rows();
+  j["surface_triangles"] = body.mesh.surface_triangles.rows();
+  j["modes_kind"] = body.modes.kind;
+  j["eigensolver"] = body.modes.eigensolver;
+  const auto& f = body.modes.frequencies_hz;
+  j["frequencies_hz"] = std::vector<double>(f.data(), f.data() + f.size());
+  const auto& res = body.modes.relative_residuals;
+  j["relative_residuals"] = std::vector<double>(res.data(), res.data() + res.size());
+  const auto& g = body.gcms;
+  const auto [k_low, k_high] = stiffness_frequency_range(g.stiffness);
+  j["gcms_fields"] = g.field_count();
+  j["dropped_fields"] = g.mode_coefficients.cols() - g.field_count();
+  j["drop_tolerance"] = g.drop_tolerance;
+  j["condition_mode_gram_before"] = number_or_null(g.condition_mode_gram_before);
+  j["condition_G_before"] = number_or_null(g.condition_mass_before);
+  j["condition_G_after"] = number_or_null(g.condition_mass_after);
+  j["condition_G_scaled_after"] = number_or_null(g.condition_mass_scaled_after);
+  j["k_hat_frequency_range_hz"] = {k_low, k_high};
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+}  // namespace flexbody::preprocess

@@ -1,0 +1,181 @@
+#include "flexbody/preprocess/interfaces.hpp"
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <type_traits>
+
+namespace flexbody::preprocess {
+namespace {
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d s;
+  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return s;
+}
+
+double default_tolerance(double tolerance, const RowMatrixX3d& nodes) {
+  if (tolerance > 0.0) return tolerance;
+  return kDefaultSelectorTolerance * (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm();
+}
+
+// Which nodes a selector takes (every node is tested; only surface nodes matter to the caller).
+std::vector<char> selected(const std::string& name, const Selector& selector, const RowMatrixX3d& nodes) {
+  std::vector<char> take(static_cast<std::size_t>(nodes.rows()), 0);
+  auto unit = [&name](const Eigen::Vector3d& v, const char* what) {
+    if (!(v.norm() > 0.0) || !v.allFinite())
+      throw std::invalid_argument(fmt::format("interface '{}': the {} must be a non-zero vector", name, what));
+    return Eigen::Vector3d(v.normalized());
+  };
+  if (const auto* plane = std::get_if<PlaneSelector>(&selector)) {
+    const Eigen::Vector3d n = unit(plane->normal, "plane normal");
+    const double tol = default_tolerance(plane->tolerance, nodes);
+    for (Eigen::Index i = 0; i < nodes.rows(); ++i)
+      take[i] = std::abs((nodes.row(i).transpose() - plane->point).dot(n)) <= tol;
+  } else if (const auto* cylinder = std::get_if<CylinderSelector>(&selector)) {
+    const Eigen::Vector3d axis = unit(cylinder->direction, "cylinder direction");
+    if (!(cylinder->radius > 0.0))
+      throw std::invalid_argument(fmt::format("interface '{}': the cylinder radius must be positive, got {}", name,
+                                              cylinder->radius));
+    const double tol = default_tolerance(cylinder->tolerance, nodes);
+    for (Eigen::Index i = 0; i < nodes.rows(); ++i) {
+      const Eigen::Vector3d d = nodes.row(i).transpose() - cylinder->point;
+      take[i] = std::abs((d - d.dot(axis) * axis).norm() - cylinder->radius) <= tol;
+    }
+  } else {
+    const auto& box = std::get<BoxSelector>(selector);
+    if (!(box.min.array() <= box.max.array()).all())
+      throw std::invalid_argument(fmt::format("interface '{}': the box min must not exceed its max", name));
+    for (Eigen::Index i = 0; i < nodes.rows(); ++i)
+      take[i] = (nodes.row(i).transpose().array() >= box.min.array()).all() &&
+                (nodes.row(i).transpose().array() <= box.max.array()).all();
+  }
+  return take;
+}
+
+}  // namespace
+
+Selector scaled(const Selector& selector, double factor) {
+  return std::visit(
+      [factor](auto s) -> Selector {
+        using T = decltype(s);
+        if constexpr (std::is_same_v<T, PlaneSelector>) {
+          s.point *= factor;
+          s.tolerance *= factor;
+        } else if constexpr (std::is_same_v<T, CylinderSelector>) {
+          s.point *= factor;
+          s.radius *= factor;
+          s.tolerance *= factor;
+        } else {
+          s.min *= factor;
+          s.max *= factor;
+        }
+        return s;
+      },
+      selector);
+}
+
+SurfacePatch select_surface_patch(const std::string& name, const Selector& selector, const RowMatrixX3d& nodes,
+                                  const RowMatrixX3i& surface_triangles) {
+  const std::vector<char> take = selected(name, selector, nodes);
+  std::map<int, double> area_share;  // node -> a third of its selected triangles' area
+  for (Eigen::Index t = 0; t < surface_triangles.rows(); ++t) {
+    const auto tri = surface_triangles.row(t);
+    if (!take[tri(0)] || !take[tri(1)] || !take[tri(2)]) continue;
+    const Eigen::Vector3d a = nodes.row(tri(0)), b = nodes.row(tri(1)), c = nodes.row(tri(2));
+    const double third = (b - a).cross(c - a).norm() / 6.0;
+    for (int k = 0; k < 3; ++k) area_share[tri(k)] += third;
+  }
+  if (area_share.empty()) {
+    const auto count = std::count(take.begin(), take.end(), 1);
+    throw std::invalid_argument(
+        count == 0 ? fmt::format("interface '{}': the selector takes no node of the part", name)
+                   : fmt::format("interface '{}': the selector takes {} nodes but no whole surface triangle (it must "
+                                 "select a surface patch, not a line or single nodes)", name, count));
+  }
+  double total = 0.0;
+  for (const auto& [node, area] : area_share) total += area;
+  SurfacePatch patch;
+  patch.nodes.resize(static_cast<Eigen::Index>(area_share.size()));
+  patch.weights.resize(patch.nodes.size());
+  Eigen::Index k = 0;
+  for (const auto& [node, area] : area_share) {
+    patch.nodes(k) = node;
+    patch.weights(k++) = area / total;
+  }
+  return patch;
+}
+
+format::Interface interface_marker(const std::string& name, const std::string& coupling, const SurfacePatch& patch,
+                                   const RowMatrixX3d& body_nodes, const Eigen::MatrixXd& fields) {
+  format::Interface marker;
+  marker.name = name;
+  marker.coupling = coupling;
+  marker.nodes = patch.nodes;
+  marker.weights = patch.weights;
+  const Eigen::Index n_f = fields.cols();
+  marker.y_row = Eigen::VectorXd::Zero(4 + n_f);
+  for (Eigen::Index j = 0; j < patch.nodes.size(); ++j) {
+    const double w = patch.weights(j);
+    const Eigen::Index i = patch.nodes(j);
+    marker.y_row(0) += w;
+    marker.y_row.segment<3>(1) += w * body_nodes.row(i).transpose();
+    marker.y_row.tail(n_f) += w * fields.row(i).transpose();
+  }
+  marker.reference_point = marker.y_row.segment<3>(1);
+  // Weighted least-squares rigid fit of the displacements u_i = Σ_f υ'_f(i) ξ̄_f about the reference
+  // point: H θ̄ = Σ_i w_i d_i × u_i with H = Σ_i w_i (|d_i|² I − d_i d_iᵀ), d_i = X̄_i − X̄_c.
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  Eigen::MatrixXd moments = Eigen::MatrixXd::Zero(3, 3 * n_f);  // Σ_i w_i υ'_f(i) skew(d_i), per field f
+  for (Eigen::Index j = 0; j < patch.nodes.size(); ++j) {
+    const double w = patch.weights(j);
+    const Eigen::Index i = patch.nodes(j);
+    const Eigen::Vector3d d = body_nodes.row(i).transpose() - marker.reference_point;
+    h += w * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+    const Eigen::Matrix3d s = skew(d);
+    for (Eigen::Index f = 0; f < n_f; ++f) moments.middleCols<3>(3 * f) += (w * fields(i, f)) * s;
+  }
+  // The smallest principal value of H is zero exactly when the nodes lie on one line.
+  const Eigen::Vector3d principal = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(h).eigenvalues();
+  if (!(principal(0) > 1e-10 * principal(2)))
+    throw std::invalid_argument(fmt::format("interface '{}': its nodes lie on a line, so their rotation about it is "
+                                            "undefined; select a surface patch", name));
+  marker.rotation = h.ldlt().solve(moments);
+  return marker;
+}
+
+std::vector<format::Interface> build_interfaces(const std::vector<InterfaceRequest>& requests,
+                                                const RowMatrixX3d& body_nodes,
+                                                const Eigen::Vector3d& center_of_mass_input,
+                                                const RowMatrixX3i& surface_triangles, const Eigen::MatrixXd& fields) {
+  const RowMatrixX3d input_nodes = body_nodes.rowwise() + center_of_mass_input.transpose();
+  std::vector<format::Interface> markers;
+  std::map<int, std::string> owner;  // node -> interface
+  std::set<std::string> names;
+  for (const InterfaceRequest& request : requests) {
+    if (request.name.empty() || request.name.find_first_of("/,") != std::string::npos || request.name == "order")
+      throw std::invalid_argument(fmt::format("interface name '{}' is not allowed (non-empty, no '/' or ',')", request.name));
+    if (!names.insert(request.name).second)
+      throw std::invalid_argument(fmt::format("interface '{}' is defined twice", request.name));
+    if (request.coupling != "rbe2" && request.coupling != "rbe3")
+      throw std::invalid_argument(
+          fmt::format("interface '{}': coupling '{}' is unknown; use rbe2 or rbe3", request.name, request.coupling));
+    const SurfacePatch patch = select_surface_patch(request.name, request.select, input_nodes, surface_triangles);
+    for (Eigen::Index j = 0; j < patch.nodes.size(); ++j) {
+      const auto [it, fresh] = owner.emplace(patch.nodes(j), request.name);
+      if (!fresh)
+        throw std::invalid_argument(fmt::format(
+            "interfaces '{}' and '{}' share node {} (at [{:.6g}, {:.6g}, {:.6g}] m): interfaces must not overlap",
+            it->second, request.name, patch.nodes(j), input_nodes(patch.nodes(j), 0), input_nodes(patch.nodes(j), 1),
+            input_nodes(patch.nodes(j), 2)));
+    }
+    markers.push_back(interface_marker(request.name, request.coupling, patch, body_nodes, fields));
+  }
+  return markers;
+}
+
+}  // namespace flexbody::preprocess

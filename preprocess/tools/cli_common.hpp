@@ -1,0 +1,31 @@
+#pragma once
+// cli_common.hpp: what every fbprep command shares: exit codes and the one-line error.
+//
+// Errors: one line on stderr and no file under the output name. Exit code 2 when the command line asks
+// for something impossible (an unknown option, a bad value, a request the part cannot meet: library
+// functions signal these with std::invalid_argument), 1 when reading the input or computing fails.
+
+#include <algorithm>
+#include <cstdio>
+#include <string>
+
+namespace flexbody::cli {
+
+inline constexpr int kBadCommandLine = 2;
+inline constexpr int kFailed = 1;
+
+/// Prints "fbprep: error: <message>" as one line on stderr (gmsh and OpenCASCADE messages may span
+/// lines) and returns `code`.
+inline int fail(std::string message, int code) {
+  std::replace(message.begin(), message.end(), '\n', ' ');
+  std::fflush(stdout);
+  std::fprintf(stderr, "fbprep: error: %s\n", message.c_str());
+  return code;
+}
+
+/// `fbprep INPUT ...`: mesh, assemble, modes, GCMS constants, body file.
+int prep_command(int argc, char** argv);
+/// `fbprep inspect FILE.fbh5 [--json]`: what a body file holds.
+int inspect_command(int argc, char** argv);
+
+}  // namespace flexbody::cli

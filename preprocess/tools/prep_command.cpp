@@ -1,0 +1,134 @@
+// prep_command.cpp: `fbprep INPUT ...`, CAD (STEP, IGES, BREP, .geo) or a tetrahedral .msh -> body file.
+#include "cli_common.hpp"
+
+#include "flexbody/preprocess/body_spec.hpp"
+#include "flexbody/preprocess/fbprep_pipeline.hpp"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+
+namespace fp = flexbody::preprocess;
+
+namespace flexbody::cli {
+
+int prep_command(int argc, char** argv) {
+  CLI::App app{"fbprep: mesh a part, assemble its mass and stiffness, compute its free-free modes and write a "
+               "flexible body file (*.fbh5)."};
+  app.get_formatter()->column_width(34);
+  app.footer("Other commands:\n  fbprep inspect FILE.fbh5 [--json]   check a body file and print what it holds");
+  std::string input, output, unit_text, material_text = "steel", solver_text = "arpack";
+  double mesh_size = 0.0, fmax = 0.0;
+  int order = 1, modes = 0;
+  bool json = false, quiet = false;
+  app.add_option("INPUT", input, "STEP/STP, IGES/IGS, BREP, gmsh .geo, gmsh .msh with tetrahedra, or a body spec "
+                                 "(.yaml: see README; the flags below override it)")->required();
+  app.add_option("-o,--output", output, "body file to write (default: INPUT's name with .fbh5, here)");
+  app.add_option("--unit", unit_text, "length unit of INPUT: mm|cm|m|in (required for BREP/.geo/.msh; STEP and "
+                                      "IGES declare their own: then only the unit of --mesh-size, default the "
+                                      "STEP's declared unit, mm for IGES)");
+  app.add_option("--mesh-size", mesh_size, "largest element size in --unit (default: bounding-box diagonal / 25; "
+                                           "a .msh is used as it is)");
+  app.add_option("--order", order, "element order: 1 (linear tetrahedra)");
+  app.add_option("--material", material_text, "steel|aluminium|titanium or E=210e9,nu=0.3,rho=7850 (SI)");
+  app.add_option("--modes", modes, "number of elastic free-free modes (rigid-body modes never count)");
+  app.add_option("--fmax", fmax, "all elastic modes up to this frequency [Hz]; with --modes, --modes caps");
+  app.add_option("--eigensolver", solver_text, "arpack|spectra");
+  app.add_flag("--json", json, "print the summary as one JSON object on stdout instead of the report");
+  app.add_flag("-q,--quiet", quiet, "no progress and no report (errors still go to stderr)");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    return fail(std::string(e.what()) + " (see fbprep --help)", kBadCommandLine);
+  }
+
+  // Option values: a bad one is a bad command line (exit 2). A body spec (.yaml) gives the defaults;
+  // flags given on the command line override it.
+  fp::PrepOptions options;
+  const auto start = std::chrono::steady_clock::now();
+  const bool from_spec = fp::is_body_spec(input);
+  auto given = [&app](const char* name) { return app.count(name) > 0; };
+  auto record = [&options](const std::string& name, const std::string& value) {
+    for (auto& [key, old] : options.recorded_options)
+      if (key == name) {
+        old = value;
+        return;
+      }
+    options.recorded_options.emplace_back(name, value);
+  };
+  try {
+    if (from_spec) {
+      options = fp::read_body_spec(input);
+    } else {
+      options.input = input;
+      options.modes.modes = 10;
+      record("input", input);
+    }
+    const std::filesystem::path stem_source = from_spec ? std::filesystem::path(input) : options.input;
+    options.output = output.empty() ? stem_source.filename().replace_extension(".fbh5") : std::filesystem::path(output);
+    record("output", options.output.string());
+    if (!from_spec || given("--unit")) {
+      if (!unit_text.empty()) {
+        options.mesh.unit = fp::length_unit_from_string(unit_text);
+        if (!options.mesh.unit) throw std::invalid_argument("--unit '" + unit_text + "' is not one of mm, cm, m, in");
+      }
+      record("unit", unit_text.empty() ? "(from file)" : unit_text);
+    }
+    if (!(mesh_size >= 0.0)) throw std::invalid_argument(fmt::format("--mesh-size must be positive, got {}", mesh_size));
+    if (modes < 0) throw std::invalid_argument(fmt::format("--modes must be positive, got {}", modes));
+    if (!(fmax >= 0.0)) throw std::invalid_argument(fmt::format("--fmax must be positive, got {}", fmax));
+    if (order != 1)
+      throw std::invalid_argument(fmt::format("--order {}: only linear tetrahedra (--order 1) are implemented", order));
+    if (!from_spec || given("--mesh-size")) {
+      options.mesh.mesh_size = mesh_size;
+      record("mesh_size", fmt::format("{}", mesh_size));
+    }
+    options.mesh.order = order;
+    record("element_order", std::to_string(order));
+    if (!from_spec || given("--material")) {
+      options.material = fp::parse_material(material_text);
+      record("material", material_text);
+    }
+    if (given("--modes") || given("--fmax")) {  // either flag replaces the spec's whole mode request
+      options.modes.modes = (modes == 0 && fmax == 0.0) ? 10 : modes;
+      options.modes.fmax_hz = fmax;
+    }
+    record("modes", std::to_string(options.modes.modes));
+    record("fmax", fmt::format("{}", options.modes.fmax_hz));
+    if (!from_spec || given("--eigensolver")) {
+      options.modes.solver.backend = fp::eigensolver_backend_from_string(solver_text);
+      record("eigensolver", solver_text);
+    }
+  } catch (const std::exception& e) {
+    return fail(e.what(), kBadCommandLine);
+  }
+
+  try {
+    if (!quiet && !json && ::isatty(STDERR_FILENO)) {
+      options.progress = [start](const std::string& message) {
+        const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        std::fprintf(stderr, "[%7.2f s] %s\n", t, message.c_str());
+      };
+    }
+    const fp::PrepSummary summary = fp::run_fbprep(options);
+    if (json) std::cout << summary.json() << '\n';
+    else if (!quiet) std::cout << summary.full_report();
+  } catch (const std::invalid_argument& e) {
+    return fail(e.what(), kBadCommandLine);
+  } catch (const std::exception& e) {
+    return fail(e.what(), kFailed);
+  } catch (...) {  // a library throwing something that is not a std::exception
+    return fail("internal error: unexpected exception type", kFailed);
+  }
+  return 0;
+}
+
+}  // namespace flexbody::cli

@@ -11,7 +11,9 @@
 #include <cerrno>
 #include <cstdio>
 #include <optional>
+#include <string>
 #include <system_error>
+#include <vector>
 
 namespace flexbody::format {
 namespace {
@@ -129,6 +131,17 @@ Eigen::VectorXd to_vector(const std::vector<double>& values) {
   return Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
 }
 
+/// The names in an `order` attribute: comma-separated, "" for none.
+std::vector<std::string> names_in_order(const std::string& order) {
+  std::vector<std::string> names;
+  for (std::size_t begin = 0; begin < order.size();) {
+    const std::size_t end = std::min(order.find(',', begin), order.size());
+    names.push_back(order.substr(begin, end - begin));
+    begin = end + 1;
+  }
+  return names;
+}
+
 Provenance read_provenance(const Location& root) {
   Provenance p;
   p.created_by = detail::read_string_attribute(root, "created_by");
@@ -138,13 +151,8 @@ Provenance read_provenance(const Location& root) {
   p.input_unit = detail::read_string_attribute(root, "input_unit");
   p.unit_reason = detail::read_string_attribute(root, "unit_reason");
   const Location options = detail::open_group(detail::open_group(root, "provenance"), "options");
-  const std::string order = detail::read_string_attribute(options, "order");
-  for (std::size_t begin = 0; begin < order.size();) {
-    const std::size_t end = std::min(order.find(',', begin), order.size());
-    const std::string name = order.substr(begin, end - begin);
+  for (const std::string& name : names_in_order(detail::read_string_attribute(options, "order")))
     p.options.emplace_back(name, detail::read_string_attribute(options, name));
-    begin = end + 1;
-  }
   return p;
 }
 
@@ -221,13 +229,10 @@ Gcms read_gcms(const Location& root) {
 
 std::vector<Interface> read_interfaces(const Location& root) {
   const Location group = detail::open_group(root, "interfaces");
-  const std::string order = detail::read_string_attribute(group, "order");
   std::vector<Interface> interfaces;
-  for (std::size_t begin = 0; begin < order.size();) {
-    const std::size_t end = std::min(order.find(',', begin), order.size());
+  for (const std::string& name : names_in_order(detail::read_string_attribute(group, "order"))) {
     Interface i;
-    i.name = order.substr(begin, end - begin);
-    begin = end + 1;
+    i.name = name;
     if (i.name.empty() || i.name.find('/') != std::string::npos)
       group.fail("/interfaces/order names an interface \"" + i.name + "\"; names are non-empty and have no '/'");
     const std::string path = "/interfaces/" + i.name;

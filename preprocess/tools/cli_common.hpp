@@ -27,5 +27,7 @@ inline int fail(std::string message, int code) {
 int prep_command(int argc, char** argv);
 /// `fbprep inspect FILE.fbh5 [--json]`: what a body file holds.
 int inspect_command(int argc, char** argv);
+/// `fbprep export-vtu FILE.fbh5 -o DIR`: the body for ParaView.
+int export_command(int argc, char** argv);
 
 }  // namespace flexbody::cli

@@ -3,14 +3,17 @@
 //
 //   fbprep part.step -o part.fbh5 --material steel --modes 12
 //   fbprep inspect part.fbh5 [--json]
+//   fbprep export-vtu part.fbh5 -o DIR
 //
 // The first argument picks the command; anything else is the input of the main command (a part file
-// literally named "inspect" is given as ./inspect).
+// literally named like a command is given as ./inspect).
 #include "cli_common.hpp"
 
 #include <string_view>
 
 int main(int argc, char** argv) {
-  if (argc >= 2 && std::string_view(argv[1]) == "inspect") return flexbody::cli::inspect_command(argc - 1, argv + 1);
+  const std::string_view command = argc >= 2 ? argv[1] : "";
+  if (command == "inspect") return flexbody::cli::inspect_command(argc - 1, argv + 1);
+  if (command == "export-vtu") return flexbody::cli::export_command(argc - 1, argv + 1);
   return flexbody::cli::prep_command(argc, argv);
 }

@@ -22,7 +22,8 @@ int prep_command(int argc, char** argv) {
   CLI::App app{"fbprep: mesh a part, assemble its mass and stiffness, compute its free-free modes and write a "
                "flexible body file (*.fbh5)."};
   app.get_formatter()->column_width(34);
-  app.footer("Other commands:\n  fbprep inspect FILE.fbh5 [--json]   check a body file and print what it holds");
+  app.footer("Other commands:\n  fbprep inspect FILE.fbh5 [--json]   check a body file and print what it holds\n"
+             "  fbprep export-vtu FILE.fbh5 -o DIR  mesh, mode shapes, fields, interfaces for ParaView");
   std::string input, output, unit_text, material_text = "steel", solver_text = "arpack";
   double mesh_size = 0.0, fmax = 0.0;
   int order = 1, modes = 0;

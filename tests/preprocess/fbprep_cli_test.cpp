@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cstring>
 #include <fstream>
 #include <numbers>
 
@@ -125,6 +126,64 @@ TEST(FbprepCli, InspectReadsBackWhatWasWritten) {
   const CliRun usage = fbprep(dir, "inspect b.fbh5 --frobnicate");
   EXPECT_EQ(usage.exit_code, 2);
   EXPECT_EQ(std::count(usage.err.begin(), usage.err.end(), '\n'), 1) << usage.err;
+}
+
+namespace {
+
+std::vector<unsigned char> base64_decode(const std::string& text) {
+  static const std::string alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::vector<unsigned char> out;
+  std::uint32_t buffer = 0;
+  int bits = 0;
+  for (char c : text) {
+    if (c == '=') break;
+    const auto value = alphabet.find(c);
+    if (value == std::string::npos) continue;
+    buffer = (buffer << 6) | static_cast<std::uint32_t>(value);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(static_cast<unsigned char>((buffer >> bits) & 0xFF));
+    }
+  }
+  return out;
+}
+
+// The base64 text of the DataArray named `name` in a .vtu file.
+std::string vtu_array(const std::string& vtu, const std::string& name) {
+  const auto at = vtu.find("Name=\"" + name + "\"");
+  if (at == std::string::npos) return "";
+  const auto begin = vtu.find('>', at) + 1;
+  return vtu.substr(begin, vtu.find("</DataArray>", begin) - begin);
+}
+
+}  // namespace
+
+TEST(FbprepCli, ExportVtuWritesTheModesForParaView) {
+  const auto dir = flexbody::test::scratch_dir();
+  const CliRun prep = fbprep(dir, fmt::format("'{}' -o b.fbh5 --modes 3 --mesh-size 6 --json", bracket_step().string()));
+  ASSERT_EQ(prep.exit_code, 0) << prep.err;
+  const CliRun run = fbprep(dir, "export-vtu b.fbh5 -o paraview");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.out, "paraview/b.vtu\n");
+  const std::string vtu = slurp(dir / "paraview" / "b.vtu");
+  const auto body = flexbody::format::read_body_file(dir / "b.fbh5");
+  EXPECT_NE(vtu.find(fmt::format("NumberOfPoints=\"{}\" NumberOfCells=\"{}\"", body.mesh.nodes.rows(),
+                                 body.mesh.tets.rows())), std::string::npos);
+  for (int m = 0; m < 3; ++m) {
+    const std::string name = fmt::format("mode_{:02d}_{:.6g}Hz", m + 1, body.modes.frequencies_hz(m));
+    const std::vector<unsigned char> bytes = base64_decode(vtu_array(vtu, name));
+    ASSERT_EQ(bytes.size(), 8 + 3 * 8 * static_cast<std::size_t>(body.mesh.nodes.rows())) << name;
+    std::vector<double> values(3 * body.mesh.nodes.rows());
+    std::memcpy(values.data(), bytes.data() + 8, values.size() * 8);
+    double worst = 0.0;
+    for (Eigen::Index i = 0; i < body.mesh.nodes.rows(); ++i)
+      for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(values[3 * i + k] - body.modes.upsilon(i, 3 * m + k)));
+    EXPECT_EQ(worst, 0.0) << name;  // the same doubles, bit for bit
+  }
+  EXPECT_NE(vtu_array(vtu, fmt::format("field_{:03d}", body.gcms.field_count())), "");
+  EXPECT_NE(vtu_array(vtu, "interface"), "");
+  EXPECT_EQ(fbprep(dir, "export-vtu absent.fbh5 -o paraview").exit_code, 1);
 }
 
 TEST(FbprepCli, GeoInMillimetresGivesTheSameBodyAsTheStep) {

@@ -29,5 +29,7 @@ int prep_command(int argc, char** argv);
 int inspect_command(int argc, char** argv);
 /// `fbprep export-vtu FILE.fbh5 -o DIR`: the body for ParaView.
 int export_command(int argc, char** argv);
+/// `fbprep list-surfaces INPUT [--unit U] [--mesh-size L] [--json]`: CAD surface tags for body specs.
+int list_surfaces_command(int argc, char** argv);
 
 }  // namespace flexbody::cli

@@ -23,7 +23,8 @@ int prep_command(int argc, char** argv) {
                "flexible body file (*.fbh5)."};
   app.get_formatter()->column_width(34);
   app.footer("Other commands:\n  fbprep inspect FILE.fbh5 [--json]   check a body file and print what it holds\n"
-             "  fbprep export-vtu FILE.fbh5 -o DIR  mesh, mode shapes, fields, interfaces for ParaView");
+             "  fbprep export-vtu FILE.fbh5 -o DIR  mesh, mode shapes, fields, interfaces for ParaView\n"
+             "  fbprep list-surfaces INPUT          CAD surface tags, areas, centroids (for body specs)");
   std::string input, output, unit_text, material_text = "steel", solver_text = "arpack";
   double mesh_size = 0.0, fmax = 0.0;
   int order = 1, modes = 0;

@@ -106,8 +106,45 @@ TEST(BodySpec, RefusalsNameTheLine) {
   expect_spec_error(head + "reduction: {kind: craig-bampton, modes: 8}\n", 3,
                     "reduction kind 'craig-bampton' is not implemented yet");
   expect_spec_error(head + "load_points: [[1, 0, 0]]\n", 3, "load_points (static correction modes) is not implemented yet");
-  expect_spec_error(head + "interfaces:\n  root: {select: {surfaces: [3]}}\n", 4,
-                    "interface 'root': selecting by CAD surface tags or gmsh physical groups is not implemented yet");
+  expect_spec_error(head + "interfaces:\n  root: {select: {surfaces: [0]}}\n", 4,
+                    "interface 'root' surfaces tags start at 1, got 0");
+  expect_spec_error(head + "interfaces:\n  root: {select: {surfaces: 3}}\n", 4,
+                    "interface 'root' surfaces must be a list of surface tags");
+}
+
+TEST(BodySpec, SurfaceTagsAndPhysicalGroupsSelectCadFaces) {
+  // The same end faces three ways: by plane, by CAD surface tag, by physical group. OpenCASCADE numbers
+  // a box's faces x-min, x-max, y-min, y-max, z-min, z-max: surface 2 is the face at x = 1.
+  const auto dir = flexbody::test::scratch_dir();
+  write_text(dir / "beam.geo", "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 0.05, 0.05};\n"
+                               "Physical Surface(\"clamp\") = {1};\nPhysical Volume(\"steel\") = {1};\n");
+  write_text(dir / "beam.yaml",
+             "input: beam.geo\nunit: m\nmesh: {size: 0.025}\nreduction: {modes: 2}\ninterfaces:\n"
+             "  by_group: {select: {group: clamp}}\n  by_tag: {select: {surfaces: [2]}}\n");
+  const CliRun run = run_fbprep(dir, "beam.yaml -o beam.fbh5 --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto body = flexbody::format::read_body_file(dir / "beam.fbh5");
+  ASSERT_EQ(body.interfaces.size(), 2u);
+  const Eigen::Vector3d group_point = body.interfaces[0].reference_point + body.mass.center_of_mass_input;
+  const Eigen::Vector3d tag_point = body.interfaces[1].reference_point + body.mass.center_of_mass_input;
+  EXPECT_LT((group_point - Eigen::Vector3d(0.0, 0.025, 0.025)).norm(), 1e-12);
+  EXPECT_LT((tag_point - Eigen::Vector3d(1.0, 0.025, 0.025)).norm(), 1e-12);
+  // Same nodes as the plane x = 0 takes.
+  write_text(dir / "plane.yaml", "input: beam.geo\nunit: m\nmesh: {size: 0.025}\nreduction: {modes: 2}\ninterfaces:\n"
+                                 "  root: {select: {plane: {point: [0, 0, 0], normal: [1, 0, 0]}}}\n");
+  ASSERT_EQ(run_fbprep(dir, "plane.yaml -o plane.fbh5").exit_code, 0);
+  EXPECT_EQ(flexbody::format::read_body_file(dir / "plane.fbh5").interfaces[0].nodes, body.interfaces[0].nodes);
+
+  write_text(dir / "bad.yaml", "input: beam.geo\nunit: m\ninterfaces:\n  x: {select: {surfaces: [99]}}\n");
+  const CliRun missing = run_fbprep(dir, "bad.yaml -o bad.fbh5");
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find("interface 'x': the part has no surface 99 (surfaces: 1, 2, 3, 4, 5, 6; see fbprep "
+                             "list-surfaces)"), std::string::npos) << missing.err;
+  write_text(dir / "bad.yaml", "input: beam.geo\nunit: m\ninterfaces:\n  x: {select: {group: flange}}\n");
+  const CliRun no_group = run_fbprep(dir, "bad.yaml -o bad.fbh5");
+  EXPECT_NE(no_group.err.find("interface 'x': the part has no surface group 'flange' (groups: clamp)"),
+            std::string::npos) << no_group.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.fbh5"));
 }
 
 TEST(BodySpec, RigidTieNeedsCraigBampton) {

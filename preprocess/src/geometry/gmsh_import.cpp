@@ -4,10 +4,12 @@
 #include "gmsh_session.hpp"
 #include "step_unit.hpp"
 
+#include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <gmsh.h>
 
 #include <algorithm>
+#include <array>
 #include <fstream>
 #include <stdexcept>
 #include <unordered_map>
@@ -84,7 +86,13 @@ void check_readable(const std::filesystem::path& path) {
   if (!probe) throw std::runtime_error(fmt::format("{}: cannot be opened for reading", path.string()));
 }
 
-TetMesh tetrahedra_from_gmsh(const std::string& name) {
+// The tetrahedra, and for every node tag the node's index in them (-1: not used by a tetrahedron).
+struct GmshTetrahedra {
+  TetMesh mesh;
+  std::unordered_map<std::size_t, std::int32_t> index_of_tag;
+};
+
+GmshTetrahedra tetrahedra_from_gmsh(const std::string& name) {
   std::vector<std::size_t> node_tags;
   std::vector<double> coordinates, parametric;
   gmsh::model::mesh::getNodes(node_tags, coordinates, parametric, -1, -1, /*includeBoundary=*/true, false);
@@ -114,8 +122,68 @@ TetMesh tetrahedra_from_gmsh(const std::string& name) {
                                              element_nodes[4 * e + a]));
       mesh.tets(static_cast<Eigen::Index>(e), a) = it->second;
     }
-  remove_unused_nodes(mesh);
-  return mesh;
+  const std::vector<std::int32_t> renumbered = remove_unused_nodes(mesh);
+  for (auto& [tag, k] : index) k = renumbered[static_cast<std::size_t>(k)];
+  return {std::move(mesh), std::move(index)};
+}
+
+constexpr int kGmshTriangle3 = 2;
+
+// Every surface entity's triangles in the tetrahedral mesh's numbering, with its physical groups.
+std::vector<CadSurface> cad_surfaces(const std::unordered_map<std::size_t, std::int32_t>& index_of_tag) {
+  gmsh::vectorpair entities;
+  gmsh::model::getEntities(entities, 2);
+  std::vector<CadSurface> surfaces;
+  for (const auto& [dim, tag] : entities) {
+    std::vector<std::size_t> element_tags, node_tags;
+    gmsh::model::mesh::getElementsByType(kGmshTriangle3, element_tags, node_tags, tag);
+    std::vector<std::array<std::int32_t, 3>> kept;
+    for (std::size_t t = 0; t < element_tags.size(); ++t) {
+      std::array<std::int32_t, 3> tri{};
+      bool ok = true;
+      for (int a = 0; a < 3; ++a) {
+        const auto it = index_of_tag.find(node_tags[3 * t + a]);
+        ok = ok && it != index_of_tag.end() && it->second >= 0;
+        if (ok) tri[a] = it->second;
+      }
+      if (ok) kept.push_back(tri);
+    }
+    if (kept.empty()) continue;  // a surface inside no tetrahedron's boundary, or without a mesh
+    CadSurface surface;
+    surface.tag = tag;
+    surface.triangles.resize(static_cast<Eigen::Index>(kept.size()), 3);
+    for (std::size_t t = 0; t < kept.size(); ++t)
+      for (int a = 0; a < 3; ++a) surface.triangles(static_cast<Eigen::Index>(t), a) = kept[t][a];
+    surfaces.push_back(std::move(surface));
+  }
+  gmsh::vectorpair groups;
+  gmsh::model::getPhysicalGroups(groups, 2);
+  for (const auto& [dim, group] : groups) {
+    std::string name;
+    gmsh::model::getPhysicalName(dim, group, name);
+    if (name.empty()) name = fmt::format("{}", group);  // unnamed groups go by their number
+    std::vector<int> members;
+    gmsh::model::getEntitiesForPhysicalGroup(dim, group, members);
+    for (CadSurface& surface : surfaces)
+      if (std::find(members.begin(), members.end(), surface.tag) != members.end()) surface.groups.push_back(name);
+  }
+  return surfaces;
+}
+
+// Area and centroid of each surface's triangles (nodes in metres).
+void measure(std::vector<CadSurface>& surfaces, const RowMatrixX3d& nodes) {
+  for (CadSurface& surface : surfaces) {
+    surface.area_m2 = 0.0;
+    Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+    for (Eigen::Index t = 0; t < surface.triangles.rows(); ++t) {
+      const Eigen::Vector3d a = nodes.row(surface.triangles(t, 0)), b = nodes.row(surface.triangles(t, 1)),
+                            c = nodes.row(surface.triangles(t, 2));
+      const double area = 0.5 * (b - a).cross(c - a).norm();
+      surface.area_m2 += area;
+      moment += area * (a + b + c) / 3.0;
+    }
+    surface.centroid_m = surface.area_m2 > 0.0 ? Eigen::Vector3d(moment / surface.area_m2) : moment;
+  }
 }
 
 }  // namespace
@@ -201,8 +269,13 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
     detail::SilencedStdStreams quiet;
     detail::gmsh_call(name + ": meshing failed", [] { gmsh::model::mesh::generate(3); });
   });
-  result.mesh = detail::gmsh_call(name, [&] { return tetrahedra_from_gmsh(name); });
+  detail::gmsh_call(name, [&] {
+    GmshTetrahedra tetrahedra = tetrahedra_from_gmsh(name);
+    result.mesh = std::move(tetrahedra.mesh);
+    result.surfaces = cad_surfaces(tetrahedra.index_of_tag);
+  });
   result.mesh.nodes *= unit.gmsh_to_metres;
+  measure(result.surfaces, result.mesh.nodes);
 
   const MeshComponents components = connected_components(result.mesh);
   if (components.count > 1)

@@ -52,20 +52,21 @@ MeshComponents connected_components(const TetMesh& mesh) {
   return result;
 }
 
-void remove_unused_nodes(TetMesh& mesh) {
+std::vector<std::int32_t> remove_unused_nodes(TetMesh& mesh) {
   std::vector<std::int32_t> new_index(mesh.node_count(), -1);
   for (Eigen::Index e = 0; e < mesh.element_count(); ++e)
     for (int a = 0; a < 4; ++a) new_index[mesh.tets(e, a)] = 0;
   std::int32_t next = 0;
   for (auto& index : new_index)
     if (index == 0) index = next++;
-  if (next == mesh.node_count()) return;
+  if (next == mesh.node_count()) return new_index;
   RowMatrixX3d nodes(next, 3);
   for (Eigen::Index i = 0; i < mesh.node_count(); ++i)
     if (new_index[i] >= 0) nodes.row(new_index[i]) = mesh.nodes.row(i);
   for (Eigen::Index e = 0; e < mesh.element_count(); ++e)
     for (int a = 0; a < 4; ++a) mesh.tets(e, a) = new_index[mesh.tets(e, a)];
   mesh.nodes = std::move(nodes);
+  return new_index;
 }
 
 void check_element_volumes(const TetMesh& mesh, const std::string& source) {

@@ -88,7 +88,8 @@ class Reader {
 
 Selector read_selector(const Reader& r, const YAML::Node& select, const std::string& where) {
   r.expect_map(select, where + " select", {"plane", "cylinder", "box", "surfaces", "group"});
-  if (select.size() != 1) r.fail(select, fmt::format("{} select needs exactly one of plane, cylinder, box", where));
+  if (select.size() != 1)
+    r.fail(select, fmt::format("{} select needs exactly one of plane, cylinder, box, surfaces, group", where));
   const auto entry = select.begin();
   const std::string kind = entry->first.Scalar();
   const YAML::Node s = entry->second;  // nodes are handles: copies are cheap and never dangle
@@ -113,7 +114,17 @@ Selector read_selector(const Reader& r, const YAML::Node& select, const std::str
     return BoxSelector{r.vector3(r.required(s, "min", what), what + " min"),
                        r.vector3(r.required(s, "max", what), what + " max")};
   }
-  r.not_implemented(entry->first, fmt::format("{}: selecting by CAD surface tags or gmsh physical groups", where));
+  if (kind == "surfaces") {
+    if (!s.IsSequence() || s.size() == 0) r.fail(s, fmt::format("{} must be a list of surface tags", what));
+    SurfaceSelector surfaces;
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      const int tag = r.count(s[k], what + " tag");
+      if (tag < 1) r.fail(s[k], fmt::format("{} tags start at 1, got {}", what, tag));
+      surfaces.tags.push_back(tag);
+    }
+    return surfaces;
+  }
+  return GroupSelector{r.text(s, what)};  // "group": a physical group's name
 }
 
 }  // namespace

@@ -152,7 +152,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     std::vector<InterfaceRequest> in_metres = options.interfaces;
     for (InterfaceRequest& request : in_metres) request.select = scaled(request.select, metres_per(imported.unit));
     return build_interfaces(in_metres, body.mesh.nodes, summary.mass.center_of_mass_input,
-                            body.mesh.surface_triangles, body.gcms.fields);
+                            body.mesh.surface_triangles, body.gcms.fields, imported.surfaces);
   });
   for (const format::Interface& i : body.interfaces)
     summary.interfaces.push_back({i.name, i.coupling, i.nodes.size(), i.reference_point + summary.mass.center_of_mass_input});

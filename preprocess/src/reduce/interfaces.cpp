@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <map>
 #include <set>
+#include <fmt/ranges.h>
 #include <stdexcept>
 #include <type_traits>
 
@@ -46,8 +47,8 @@ std::vector<char> selected(const std::string& name, const Selector& selector, co
       const Eigen::Vector3d d = nodes.row(i).transpose() - cylinder->point;
       take[i] = std::abs((d - d.dot(axis) * axis).norm() - cylinder->radius) <= tol;
     }
-  } else {
-    const auto& box = std::get<BoxSelector>(selector);
+  } else if (const auto* box_selector = std::get_if<BoxSelector>(&selector)) {
+    const auto& box = *box_selector;
     if (!(box.min.array() <= box.max.array()).all())
       throw std::invalid_argument(fmt::format("interface '{}': the box min must not exceed its max", name));
     for (Eigen::Index i = 0; i < nodes.rows(); ++i)
@@ -70,28 +71,69 @@ Selector scaled(const Selector& selector, double factor) {
           s.point *= factor;
           s.radius *= factor;
           s.tolerance *= factor;
-        } else {
+        } else if constexpr (std::is_same_v<T, BoxSelector>) {
           s.min *= factor;
           s.max *= factor;
-        }
+        }  // surface tags and groups have no lengths
         return s;
       },
       selector);
 }
 
+namespace {
+
+// The CAD surfaces a tag or group selector names.
+std::vector<const CadSurface*> named_surfaces(const std::string& name, const Selector& selector,
+                                              const std::vector<CadSurface>& surfaces) {
+  std::vector<const CadSurface*> chosen;
+  if (const auto* by_tag = std::get_if<SurfaceSelector>(&selector)) {
+    for (const int tag : by_tag->tags) {
+      const auto it = std::find_if(surfaces.begin(), surfaces.end(), [tag](const CadSurface& s) { return s.tag == tag; });
+      if (it == surfaces.end()) {
+        std::vector<int> known;
+        for (const CadSurface& s : surfaces) known.push_back(s.tag);
+        throw std::invalid_argument(fmt::format("interface '{}': the part has no surface {} (surfaces: {}; see fbprep "
+                                                "list-surfaces)", name, tag, known.empty() ? "none" : fmt::format("{}", fmt::join(known, ", "))));
+      }
+      chosen.push_back(&*it);
+    }
+  } else {
+    const std::string& group = std::get<GroupSelector>(selector).name;
+    std::set<std::string> known;
+    for (const CadSurface& s : surfaces) {
+      known.insert(s.groups.begin(), s.groups.end());
+      if (std::find(s.groups.begin(), s.groups.end(), group) != s.groups.end()) chosen.push_back(&s);
+    }
+    if (chosen.empty())
+      throw std::invalid_argument(fmt::format("interface '{}': the part has no surface group '{}' (groups: {})", name,
+                                              group, known.empty() ? "none" : fmt::format("{}", fmt::join(known, ", "))));
+  }
+  return chosen;
+}
+
+}  // namespace
+
 SurfacePatch select_surface_patch(const std::string& name, const Selector& selector, const RowMatrixX3d& nodes,
-                                  const RowMatrixX3i& surface_triangles) {
-  const std::vector<char> take = selected(name, selector, nodes);
+                                  const RowMatrixX3i& surface_triangles, const std::vector<CadSurface>& surfaces) {
   std::map<int, double> area_share;  // node -> a third of its selected triangles' area
-  for (Eigen::Index t = 0; t < surface_triangles.rows(); ++t) {
-    const auto tri = surface_triangles.row(t);
-    if (!take[tri(0)] || !take[tri(1)] || !take[tri(2)]) continue;
+  auto add = [&](const auto& tri) {
     const Eigen::Vector3d a = nodes.row(tri(0)), b = nodes.row(tri(1)), c = nodes.row(tri(2));
     const double third = (b - a).cross(c - a).norm() / 6.0;
     for (int k = 0; k < 3; ++k) area_share[tri(k)] += third;
+  };
+  std::vector<char> take;
+  if (std::holds_alternative<SurfaceSelector>(selector) || std::holds_alternative<GroupSelector>(selector)) {
+    for (const CadSurface* surface : named_surfaces(name, selector, surfaces))
+      for (Eigen::Index t = 0; t < surface->triangles.rows(); ++t) add(surface->triangles.row(t));
+  } else {
+    take = selected(name, selector, nodes);
+    for (Eigen::Index t = 0; t < surface_triangles.rows(); ++t) {
+      const auto tri = surface_triangles.row(t);
+      if (take[tri(0)] && take[tri(1)] && take[tri(2)]) add(tri);
+    }
   }
   if (area_share.empty()) {
-    const auto count = std::count(take.begin(), take.end(), 1);
+    const auto count = std::count(take.begin(), take.end(), char{1});
     throw std::invalid_argument(
         count == 0 ? fmt::format("interface '{}': the selector takes no node of the part", name)
                    : fmt::format("interface '{}': the selector takes {} nodes but no whole surface triangle (it must "
@@ -151,7 +193,8 @@ format::Interface interface_marker(const std::string& name, const std::string& c
 std::vector<format::Interface> build_interfaces(const std::vector<InterfaceRequest>& requests,
                                                 const RowMatrixX3d& body_nodes,
                                                 const Eigen::Vector3d& center_of_mass_input,
-                                                const RowMatrixX3i& surface_triangles, const Eigen::MatrixXd& fields) {
+                                                const RowMatrixX3i& surface_triangles, const Eigen::MatrixXd& fields,
+                                                const std::vector<CadSurface>& surfaces) {
   const RowMatrixX3d input_nodes = body_nodes.rowwise() + center_of_mass_input.transpose();
   std::vector<format::Interface> markers;
   std::map<int, std::string> owner;  // node -> interface
@@ -164,7 +207,8 @@ std::vector<format::Interface> build_interfaces(const std::vector<InterfaceReque
     if (request.coupling != "rbe2" && request.coupling != "rbe3")
       throw std::invalid_argument(
           fmt::format("interface '{}': coupling '{}' is unknown; use rbe2 or rbe3", request.name, request.coupling));
-    const SurfacePatch patch = select_surface_patch(request.name, request.select, input_nodes, surface_triangles);
+    const SurfacePatch patch =
+        select_surface_patch(request.name, request.select, input_nodes, surface_triangles, surfaces);
     for (Eigen::Index j = 0; j < patch.nodes.size(); ++j) {
       const auto [it, fresh] = owner.emplace(patch.nodes(j), request.name);
       if (!fresh)

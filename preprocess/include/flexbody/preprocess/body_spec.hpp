@@ -11,6 +11,8 @@
 //     root: {select: {plane: {point: [0, 0, 0], normal: [1, 0, 0], tolerance: 1e-6}}, coupling: rbe3}
 //     bore: {select: {cylinder: {point: [0.045, 0.02, 0], direction: [0, 0, 1], radius: 0.005}}}
 //     tip:  {select: {box: {min: [0.99, -1, -1], max: [1.01, 1, 1]}}}
+//     seat: {select: {surfaces: [7, 8]}}     # CAD surface tags (fbprep list-surfaces)
+//     flange: {select: {group: flange}}      # a gmsh physical group of surfaces (.geo, .msh)
 
 #include "flexbody/preprocess/fbprep_pipeline.hpp"
 
@@ -25,8 +27,8 @@ namespace flexbody::preprocess {
 /// progress are left to the caller) and records every value in `recorded_options`. Throws
 /// std::invalid_argument "<spec>:<line>: <problem>" for a missing or unreadable file, YAML syntax errors,
 /// unknown or repeated keys, wrong types, non-finite numbers and values out of range, and for the parts
-/// of the spec that are not implemented yet (Craig-Bampton reduction, load points, output regions, CAD
-/// surface and physical-group selectors), each naming its line.
+/// of the spec that are not implemented yet (Craig-Bampton reduction, load points, output regions), each
+/// naming its line.
 [[nodiscard]] PrepOptions read_body_spec(const std::filesystem::path& spec);
 
 }  // namespace flexbody::preprocess

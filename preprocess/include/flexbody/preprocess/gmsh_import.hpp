@@ -1,6 +1,7 @@
 #pragma once
 // flexbody/preprocess/gmsh_import.hpp: CAD or mesh file -> linear tetrahedral mesh in metres (gmsh).
 
+#include "flexbody/preprocess/cad_surface.hpp"
 #include "flexbody/preprocess/length_unit.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
 
@@ -37,6 +38,8 @@ struct ImportedMesh {
   int volumes = 0;                      ///< CAD volumes (0 for .msh)
   double mesh_size_m = 0.0;             ///< element size asked of gmsh [m] (0 for .msh)
   bool meshed_here = true;              ///< false when a .msh's tetrahedra were used as they are
+  /// The CAD surfaces that carry boundary triangles of the mesh, by tag (a .msh lists those it stores).
+  std::vector<CadSurface> surfaces;
 };
 
 /// Imports `path` with gmsh and returns its linear tetrahedra in metres. Throws std::runtime_error

@@ -4,6 +4,7 @@
 // rotation a 3 x 3 n_f matrix on ξ̄; both linear in q, so point joints have constant Jacobians).
 
 #include "flexbody/format/body_data.hpp"
+#include "flexbody/preprocess/cad_surface.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
 
 #include <string>
@@ -28,7 +29,15 @@ struct CylinderSelector {
 struct BoxSelector {
   Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();
 };
-using Selector = std::variant<PlaneSelector, CylinderSelector, BoxSelector>;
+/// The mesh triangles of CAD surfaces, by tag (`fbprep list-surfaces` lists the tags).
+struct SurfaceSelector {
+  std::vector<int> tags;
+};
+/// The mesh triangles of the surfaces in a gmsh physical group of dimension 2 (.geo, .msh).
+struct GroupSelector {
+  std::string name;
+};
+using Selector = std::variant<PlaneSelector, CylinderSelector, BoxSelector, SurfaceSelector, GroupSelector>;
 
 /// The default selector tolerance as a fraction of the part's bounding-box diagonal: CAD surface nodes
 /// lie on their surface to OpenCASCADE's 1e-7 mm, far inside it; mesh sizes are far outside it.
@@ -46,16 +55,19 @@ struct InterfaceRequest {
 };
 
 /// The selected surface patch: the nodes of every boundary triangle whose three nodes the selector
-/// takes, each weighted by a third of the area of its selected triangles, normalised to sum 1.
+/// takes (or of the CAD surfaces' triangles), each weighted by a third of the area of its selected
+/// triangles, normalised to sum 1.
 struct SurfacePatch {
   Eigen::VectorXi nodes;  ///< ascending
   Eigen::VectorXd weights;
 };
 
-/// Applies `selector` to the surface nodes (`nodes` in the same frame as the selector). Throws
-/// std::invalid_argument naming the interface if nothing, or no surface triangle, is selected.
+/// Applies `selector` to the surface nodes (`nodes` in the same frame as the selector) or to the CAD
+/// surfaces. Throws std::invalid_argument naming the interface if nothing, or no surface triangle, is
+/// selected, or a surface tag or group does not exist (the message lists the ones that do).
 [[nodiscard]] SurfacePatch select_surface_patch(const std::string& name, const Selector& selector,
-                                                const RowMatrixX3d& nodes, const RowMatrixX3i& surface_triangles);
+                                                const RowMatrixX3d& nodes, const RowMatrixX3i& surface_triangles,
+                                                const std::vector<CadSurface>& surfaces = {});
 
 /// The marker of a patch: reference point Σ w_i X̄_i, y_row = wᵀ Y (Y = [1, X̄, fields]) and the rotation
 /// matrix R (θ̄ = R ξ̄, weighted least-squares rigid fit). `body_nodes` are X̄ (body frame). Throws
@@ -71,6 +83,7 @@ struct SurfacePatch {
                                                               const RowMatrixX3d& body_nodes,
                                                               const Eigen::Vector3d& center_of_mass_input,
                                                               const RowMatrixX3i& surface_triangles,
-                                                              const Eigen::MatrixXd& fields);
+                                                              const Eigen::MatrixXd& fields,
+                                                              const std::vector<CadSurface>& surfaces = {});
 
 }  // namespace flexbody::preprocess

@@ -16,8 +16,9 @@ struct MeshComponents {
 };
 [[nodiscard]] MeshComponents connected_components(const TetMesh& mesh);
 
-/// Drops nodes no element uses and renumbers the rest in their original order.
-void remove_unused_nodes(TetMesh& mesh);
+/// Drops nodes no element uses and renumbers the rest in their original order. Returns the new index
+/// of every old node (-1 for a dropped one).
+std::vector<std::int32_t> remove_unused_nodes(TetMesh& mesh);
 
 /// Throws std::runtime_error naming the first element with zero or negative volume (relative to the
 /// mesh's size), and how many such elements there are. `source` prefixes the message.

@@ -5,4 +5,4 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
-build/bin/fbprep meshes/bracket.step -o build/bracket.fbh5 --mesh-size 3 --material steel --modes 12
+build/bin/fbprep meshes/bracket.yaml -o build/bracket.fbh5

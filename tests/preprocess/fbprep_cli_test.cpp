@@ -186,6 +186,23 @@ TEST(FbprepCli, ExportVtuWritesTheModesForParaView) {
   EXPECT_EQ(fbprep(dir, "export-vtu absent.fbh5 -o paraview").exit_code, 1);
 }
 
+TEST(FbprepCli, BundledBracketSpecPutsMarkersOnTheBoreAxes) {
+  // meshes/bracket.yaml (the quick start's spec), coarser and with fewer modes to stay quick.
+  const auto dir = flexbody::test::scratch_dir();
+  const auto spec = std::filesystem::path(FLEXBODY_SOURCE_DIR) / "meshes" / "bracket.yaml";
+  const CliRun run = fbprep(dir, fmt::format("'{}' -o b.fbh5 --mesh-size 6 --modes 2 --json", spec.string()));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto body = flexbody::format::read_body_file(dir / "b.fbh5");
+  ASSERT_EQ(body.interfaces.size(), 3u);
+  // Area centroids of the faceted bores: on the axis (the facets are symmetric to ~1e-5 m at 6 mm) and
+  // mid-way through the 8 mm wall.
+  const Eigen::Vector3d expected[3] = {{0.045, 0.020, 0.004}, {0.075, 0.020, 0.004}, {0.004, 0.020, 0.042}};
+  for (int k = 0; k < 3; ++k) {
+    SCOPED_TRACE(body.interfaces[k].name);
+    EXPECT_LT((body.interfaces[k].reference_point + body.mass.center_of_mass_input - expected[k]).norm(), 5e-5);
+  }
+}
+
 TEST(FbprepCli, ListSurfacesFindsTheBores) {
   const auto dir = flexbody::test::scratch_dir();
   const CliRun run = fbprep(dir, fmt::format("list-surfaces '{}' --mesh-size 3 --json", bracket_step().string()));

@@ -1,0 +1,56 @@
+#pragma once
+// flexbody/preprocess/craig_bampton.hpp: Craig-Bampton reduction of a free body with rigid (rbe2)
+// interfaces, orthonormalised as Adams and Altair do: fixed-interface normal modes (every interface
+// clamped) plus 6 constraint modes per interface (the static response to a unit rigid motion of one
+// interface with the others clamped), then the reduced eigenproblem on that basis, whose 6 rigid-body
+// vectors are dropped. The result spans the same space minus the rigid motions, M̄-orthonormal and
+// M̄-orthogonal to the rigid-body fields, so the translational Tisserand constraint holds identically.
+
+#include "flexbody/preprocess/eigensolver.hpp"
+#include "flexbody/preprocess/material.hpp"
+#include "flexbody/preprocess/shift_invert_operator.hpp"
+#include "flexbody/preprocess/tet_mesh.hpp"
+
+#include <vector>
+
+namespace flexbody::preprocess {
+
+/// One rbe2 interface: its nodes move rigidly with 6 DOFs (translation and small rotation about
+/// `reference_point`).
+struct RigidInterface {
+  Eigen::VectorXi nodes;
+  Eigen::Vector3d reference_point = Eigen::Vector3d::Zero();  ///< same frame as the nodes
+};
+
+struct CraigBamptonOptions {
+  int fixed_interface_modes = 8;  ///< normal modes with every interface clamped
+  EigensolverOptions solver;
+  double shift = 0.0;  ///< sigma < 0 for the clamped eigenproblem; 0 = automatic_shift
+};
+
+struct CraigBamptonModes {
+  /// The clamped problem: omega^2 [rad^2/s^2], frequencies and ||K φ - ω² M φ|| / ||K φ||.
+  Eigen::VectorXd fixed_interface_eigenvalues, fixed_interface_frequencies_hz, fixed_interface_residuals;
+  /// The Craig-Bampton basis before orthonormalisation: [fixed-interface modes, constraint modes]
+  /// (3 n_n x (n_fixed + 6 n_interfaces)); constraint mode 6 j + k moves interface j by unit DOF k
+  /// (translations x, y, z, then small rotations about x, y, z).
+  Eigen::MatrixXd basis;
+  /// The orthonormalised elastic modes (3 n_n x (n_fixed + 6 n_interfaces - 6)): M̄-orthonormal,
+  /// M̄-orthogonal to the rigid-body fields, ascending in omega^2.
+  Eigen::VectorXd eigenvalues, frequencies_hz;
+  /// ||K̄ψ − ω²M̄ψ|| / ||K̄ψ|| of each orthonormalised mode in the full model: how far it is from a
+  /// free-free eigenmode (Craig-Bampton modes are not eigenmodes of the full model).
+  Eigen::VectorXd relative_residuals;
+  Eigen::MatrixXd vectors;
+  double shift = 0.0;
+  ShiftSolveStats stats;
+};
+
+/// Throws std::invalid_argument for no interface or an impossible mode count, std::runtime_error when
+/// the reduced problem does not have exactly six zero-energy vectors (a mechanism) or a solver fails.
+[[nodiscard]] CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
+                                                    const SparseMatrix& scalar_mass_upper, const Material& material,
+                                                    const std::vector<RigidInterface>& interfaces,
+                                                    const CraigBamptonOptions& options);
+
+}  // namespace flexbody::preprocess

@@ -1,0 +1,165 @@
+#include "flexbody/preprocess/craig_bampton.hpp"
+
+#include "flexbody/preprocess/assembly.hpp"
+#include "flexbody/preprocess/free_free_modes.hpp"
+#include "flexbody/preprocess/rigid_body_modes.hpp"
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace flexbody::preprocess {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+// The submatrix of an upper-triangle CSC matrix on the rows and columns with new_index >= 0 (new_index
+// increasing with the old index, so the result is upper and sorted too).
+SparseMatrix upper_submatrix(const SparseMatrix& upper, const std::vector<std::int64_t>& new_index, Eigen::Index size) {
+  std::vector<Eigen::Triplet<double, std::int64_t>> entries;
+  entries.reserve(static_cast<std::size_t>(upper.nonZeros()));
+  for (Eigen::Index c = 0; c < upper.outerSize(); ++c) {
+    if (new_index[c] < 0) continue;
+    for (SparseMatrix::InnerIterator it(upper, c); it; ++it)
+      if (new_index[it.row()] >= 0) entries.emplace_back(new_index[it.row()], new_index[c], it.value());
+  }
+  SparseMatrix sub(size, size);
+  sub.setFromTriplets(entries.begin(), entries.end());
+  sub.makeCompressed();
+  return sub;
+}
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d s;
+  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return s;
+}
+
+}  // namespace
+
+CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
+                                      const SparseMatrix& scalar_mass_upper, const Material& material,
+                                      const std::vector<RigidInterface>& interfaces,
+                                      const CraigBamptonOptions& options) {
+  const Eigen::Index n_n = nodes.rows(), n = 3 * n_n;
+  if (interfaces.empty())
+    throw std::invalid_argument("craig-bampton: at least one rbe2 interface is needed (its constraint modes)");
+  if (options.fixed_interface_modes < 1)
+    throw std::invalid_argument(fmt::format("craig-bampton: modes must be >= 1, got {}", options.fixed_interface_modes));
+
+  // Interior (free) nodes and DOFs: every node not tied to an interface.
+  std::vector<char> boundary(static_cast<std::size_t>(n_n), 0);
+  for (const RigidInterface& i : interfaces)
+    for (Eigen::Index k = 0; k < i.nodes.size(); ++k) boundary[i.nodes(k)] = 1;
+  std::vector<std::int64_t> node_index(static_cast<std::size_t>(n_n), -1), dof_index(static_cast<std::size_t>(n), -1);
+  Eigen::Index n_interior = 0;
+  for (Eigen::Index i = 0; i < n_n; ++i)
+    if (!boundary[i]) {
+      node_index[i] = n_interior;
+      for (int c = 0; c < 3; ++c) dof_index[3 * i + c] = 3 * n_interior + c;
+      ++n_interior;
+    }
+  const int nev = options.fixed_interface_modes;
+  if (3 * n_interior < nev + 8)
+    throw std::invalid_argument(fmt::format("craig-bampton: {} fixed-interface modes need more than the {} interior "
+                                            "DOFs", nev, 3 * n_interior));
+  const SparseMatrix k_ii = upper_submatrix(stiffness_upper, dof_index, 3 * n_interior);
+  const SparseMatrix m_ii = upper_submatrix(scalar_mass_upper, node_index, n_interior);
+
+  // 1. Fixed-interface modes: K_ii φ = ω² M_ii φ, positive definite (the interfaces hold the body).
+  CraigBamptonModes result;
+  result.shift = options.shift < 0.0 ? options.shift : automatic_shift(nodes, material);
+  CholmodShiftSolve op(k_ii, m_ii, Eigen::MatrixXd(3 * n_interior, 0));
+  op.set_shift(result.shift);
+  const VectorMassOperator mass_ii(m_ii);
+  const EigenPairs fixed = solve_shift_invert(op, mass_ii, nev, options.solver);
+  result.fixed_interface_eigenvalues = fixed.eigenvalues;
+  result.fixed_interface_frequencies_hz = fixed.eigenvalues.cwiseMax(0.0).cwiseSqrt() / kTwoPi;
+  result.fixed_interface_residuals.resize(nev);
+  {
+    Eigen::VectorXd kphi(3 * n_interior), mphi(3 * n_interior);
+    for (int m = 0; m < nev; ++m) {
+      apply_symmetric(k_ii, fixed.vectors.col(m), kphi);
+      mass_ii.perform_op(fixed.vectors.col(m).data(), mphi.data());
+      result.fixed_interface_residuals(m) = (kphi - fixed.eigenvalues(m) * mphi).norm() / kphi.norm();
+    }
+  }
+
+  // 2. Constraint modes: unit rigid motions of one interface, the others clamped, the interior in
+  // static equilibrium: x_i = -K_ii^-1 K_ib u_b.
+  op.set_shift(0.0);
+  const Eigen::Index n_c = 6 * static_cast<Eigen::Index>(interfaces.size());
+  result.basis = Eigen::MatrixXd::Zero(n, nev + n_c);
+  for (int m = 0; m < nev; ++m)
+    for (Eigen::Index d = 0; d < n; ++d)
+      if (dof_index[d] >= 0) result.basis(d, m) = fixed.vectors(dof_index[d], m);
+  Eigen::VectorXd u(n), ku(n), rhs(3 * n_interior), x(3 * n_interior);
+  for (std::size_t j = 0; j < interfaces.size(); ++j)
+    for (int k = 0; k < 6; ++k) {
+      u.setZero();
+      const RigidInterface& face = interfaces[j];
+      for (Eigen::Index a = 0; a < face.nodes.size(); ++a) {
+        const Eigen::Index i = face.nodes(a);
+        const Eigen::Vector3d d = nodes.row(i).transpose() - face.reference_point;
+        // Translation e_k, or the small rotation e_(k-3) x d.
+        u.segment<3>(3 * i) = k < 3 ? Eigen::Vector3d(Eigen::Vector3d::Unit(k)) : Eigen::Vector3d(-skew(d).col(k - 3));
+      }
+      apply_symmetric(stiffness_upper, u, ku);
+      for (Eigen::Index d = 0; d < n; ++d)
+        if (dof_index[d] >= 0) rhs(dof_index[d]) = -ku(d);
+      op.perform_op(rhs.data(), x.data());
+      for (Eigen::Index d = 0; d < n; ++d)
+        if (dof_index[d] >= 0) u(d) = x(dof_index[d]);
+      result.basis.col(nev + 6 * static_cast<Eigen::Index>(j) + k) = u;
+    }
+  result.stats = op.stats();
+
+  // 3. Orthonormalise: the reduced eigenproblem on the basis (Eqs. of a Rayleigh-Ritz step).
+  const Eigen::Index m_b = result.basis.cols();
+  Eigen::MatrixXd k_basis(n, m_b), m_basis(n, m_b);
+  for (Eigen::Index c = 0; c < m_b; ++c) {
+    apply_symmetric(stiffness_upper, result.basis.col(c), k_basis.col(c));
+    apply_vector_mass(scalar_mass_upper, result.basis.col(c), m_basis.col(c));
+  }
+  Eigen::MatrixXd k_r = result.basis.transpose() * k_basis, m_r = result.basis.transpose() * m_basis;
+  k_r = 0.5 * (k_r + k_r.transpose()).eval();
+  m_r = 0.5 * (m_r + m_r.transpose()).eval();
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> reduced(k_r, m_r);
+  if (reduced.info() != Eigen::Success)
+    throw std::runtime_error("craig-bampton: the reduced eigenproblem failed (dependent basis vectors?)");
+  // Zero-energy vectors: below 1e-10 of the body's reference frequency squared, as for free-free modes.
+  const double f_ref = std::sqrt(material.youngs_modulus / material.density) /
+                       (2.0 * (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm());
+  const double zero_energy = 1e-10 * std::pow(kTwoPi * f_ref, 2);
+  const Eigen::Index rigid = (reduced.eigenvalues().array() < zero_energy).count();
+  if (rigid != 6)
+    throw std::runtime_error(fmt::format("craig-bampton: the reduced model has {} zero-energy vectors, expected the "
+                                         "6 rigid-body motions (a mechanism in the part?)", rigid));
+  const Eigen::Index n_e = m_b - 6;
+  Eigen::MatrixXd modes = result.basis * reduced.eigenvectors().rightCols(n_e);
+  // Exactly free of rigid motion (the translational Tisserand constraint then holds identically):
+  // project with the closed-form rigid fields and M̄-orthonormalise again (a change at round-off level).
+  const Eigen::MatrixXd r = rigid_body_modes(nodes, scalar_mass_upper);
+  Eigen::MatrixXd m_modes(n, n_e), m_rigid(n, 6);
+  for (int c = 0; c < 6; ++c) apply_vector_mass(scalar_mass_upper, r.col(c), m_rigid.col(c));
+  modes -= r * (m_rigid.transpose() * modes);
+  for (Eigen::Index c = 0; c < n_e; ++c) apply_vector_mass(scalar_mass_upper, modes.col(c), m_modes.col(c));
+  const Eigen::MatrixXd gram = modes.transpose() * m_modes;
+  const Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (gram + gram.transpose()));
+  result.vectors = llt.matrixU().solve<Eigen::OnTheRight>(modes);  // V U^-1: M̄-orthonormal
+  result.eigenvalues = reduced.eigenvalues().tail(n_e);
+  result.frequencies_hz = result.eigenvalues.cwiseMax(0.0).cwiseSqrt() / kTwoPi;
+  result.relative_residuals.resize(n_e);
+  Eigen::VectorXd kv(n), mv(n);
+  for (Eigen::Index c = 0; c < n_e; ++c) {
+    apply_symmetric(stiffness_upper, result.vectors.col(c), kv);
+    apply_vector_mass(scalar_mass_upper, result.vectors.col(c), mv);
+    result.relative_residuals(c) = (kv - result.eigenvalues(c) * mv).norm() / kv.norm();
+  }
+  return result;
+}
+
+}  // namespace flexbody::preprocess

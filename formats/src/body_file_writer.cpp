@@ -82,6 +82,7 @@ void write_modes(const Location& root, const Modes& modes) {
   detail::write_double_attribute(group, "shift", modes.shift);
   detail::write_vector(group, "frequencies_hz", values_of(modes.frequencies_hz), "Hz");
   detail::write_vector(group, "relative_residuals", values_of(modes.relative_residuals), "1");
+  detail::write_vector(group, "fixed_interface_frequencies_hz", values_of(modes.fixed_interface_frequencies_hz), "Hz");
   const RowMatrixXd upsilon = modes.upsilon;  // the file is row-major, Eigen::MatrixXd column-major
   detail::write_matrix(group, "upsilon", rows_of(upsilon), cols_of(upsilon), upsilon.data(), "kg^-1/2");
 }

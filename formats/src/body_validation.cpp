@@ -67,6 +67,7 @@ void check_finite(const BodyData& body, const std::string& context) {
   check_value(body.modes.shift, "/modes/shift", context);
   check_values(body.modes.frequencies_hz, "/modes/frequencies_hz", context);
   check_values(body.modes.relative_residuals, "/modes/relative_residuals", context);
+  check_values(body.modes.fixed_interface_frequencies_hz, "/modes/fixed_interface_frequencies_hz", context);
   check_values(body.modes.upsilon, "/modes/upsilon", context);
   check_gcms_finite(body, context);
   check_interfaces_finite(body, context);
@@ -91,6 +92,15 @@ void check_ranges(const BodyData& body, const std::string& context) {
                         number(f[m - 1]) + " Hz; frequencies must be ascending");
     }
   }
+  if (body.modes.kind != "free-free" && body.modes.kind != "craig-bampton")
+    fail(context, "/modes/kind is \"" + body.modes.kind + "\", expected \"free-free\" or \"craig-bampton\"");
+  const Eigen::VectorXd& fixed = body.modes.fixed_interface_frequencies_hz;
+  if (body.modes.kind == "free-free" && fixed.size() > 0)
+    fail(context, "/modes/fixed_interface_frequencies_hz has entries, but free-free modes have no fixed interfaces");
+  for (Eigen::Index m = 0; m < fixed.size(); ++m)
+    if (!(fixed[m] > 0.0) || (m > 0 && fixed[m] < fixed[m - 1]))
+      fail(context, "/modes/fixed_interface_frequencies_hz" + index(m) + " is " + number(fixed[m]) +
+                        " Hz, expected positive and ascending");
   const Eigen::VectorXd& r = body.modes.relative_residuals;
   for (Eigen::Index m = 0; m < r.size(); ++m) {
     if (r[m] < 0.0) fail(context, "/modes/relative_residuals" + index(m) + " is " + number(r[m]) + ", expected >= 0");

@@ -42,6 +42,7 @@ void expect_same(const BodyData& a, const BodyData& b) {
   EXPECT_EQ(a.modes.frequencies_hz, b.modes.frequencies_hz);
   ASSERT_EQ(a.modes.relative_residuals.size(), b.modes.relative_residuals.size());
   EXPECT_EQ(a.modes.relative_residuals, b.modes.relative_residuals);
+  EXPECT_EQ(a.modes.fixed_interface_frequencies_hz, b.modes.fixed_interface_frequencies_hz);
   ASSERT_EQ(a.modes.upsilon.rows(), b.modes.upsilon.rows());
   ASSERT_EQ(a.modes.upsilon.cols(), b.modes.upsilon.cols());
   EXPECT_EQ(a.modes.upsilon, b.modes.upsilon);

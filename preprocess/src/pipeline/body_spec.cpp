@@ -199,8 +199,8 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
     r.expect_map(reduction, "reduction", {"kind", "modes", "fmax", "eigensolver"});
     if (const YAML::Node kind = reduction["kind"]) {
       const std::string k = r.text(kind, "reduction kind");
-      if (k == "craig-bampton") r.not_implemented(kind, "reduction kind 'craig-bampton'");
-      if (k != "free-free") r.fail(kind, fmt::format("reduction kind '{}' is unknown; use free-free or craig-bampton", k));
+      if (k == "craig-bampton") options.reduction = ReductionKind::craig_bampton;
+      else if (k != "free-free") r.fail(kind, fmt::format("reduction kind '{}' is unknown; use free-free or craig-bampton", k));
     }
     const bool has_modes = static_cast<bool>(reduction["modes"]), has_fmax = static_cast<bool>(reduction["fmax"]);
     options.modes.modes = has_modes ? r.count(reduction["modes"], "reduction modes") : (has_fmax ? 0 : 10);
@@ -214,6 +214,7 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
       }
     }
   }
+  recorded.emplace_back("reduction", std::string(to_string(options.reduction)));
   recorded.emplace_back("modes", std::to_string(options.modes.modes));
   recorded.emplace_back("fmax", fmt::format("{}", options.modes.fmax_hz));
   recorded.emplace_back("eigensolver", std::string(to_string(options.modes.solver.backend)));

@@ -2,12 +2,14 @@
 
 #include "flexbody/format/body_file.hpp"
 #include "flexbody/preprocess/assembly.hpp"
+#include "flexbody/preprocess/craig_bampton.hpp"
 #include "flexbody/preprocess/gcms_constants.hpp"
 #include "flexbody/preprocess/mass_properties.hpp"
 
 #include <fmt/chrono.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 
@@ -51,16 +53,30 @@ void check_output_location(const std::filesystem::path& input, const std::filesy
 
 }  // namespace
 
+std::string_view to_string(ReductionKind kind) {
+  return kind == ReductionKind::free_free ? "free-free" : "craig-bampton";
+}
+
 PrepSummary run_fbprep(const PrepOptions& options) {
   const auto start = Clock::now();
   check_material(options.material);
   check_output_location(options.input, options.output);
-  for (const InterfaceRequest& i : options.interfaces)
-    if (i.coupling == "rbe2")  // refused before any work: a free-free basis cannot honour the tie
-      throw std::invalid_argument(fmt::format(
-          "interface '{}': coupling rbe2 ties its nodes rigidly, which changes the modes; free-free modes "
-          "support rbe3 interfaces only (Craig-Bampton reduction, which rbe2 needs, is not implemented yet)",
-          i.name));
+  // Refused before any work: a free-free basis cannot honour a rigid tie, and Craig-Bampton needs one.
+  const bool any_rbe2 = std::any_of(options.interfaces.begin(), options.interfaces.end(),
+                                    [](const InterfaceRequest& i) { return i.coupling == "rbe2"; });
+  if (options.reduction == ReductionKind::free_free)
+    for (const InterfaceRequest& i : options.interfaces)
+      if (i.coupling == "rbe2")
+        throw std::invalid_argument(fmt::format(
+            "interface '{}': coupling rbe2 ties its nodes rigidly, which changes the modes; free-free modes take "
+            "rbe3 interfaces only (use reduction kind craig-bampton for rbe2)", i.name));
+  if (options.reduction == ReductionKind::craig_bampton) {
+    if (!any_rbe2)
+      throw std::invalid_argument("craig-bampton reduction: no rbe2 interface; its constraint modes need at least one");
+    if (options.modes.fmax_hz > 0.0 || options.modes.modes < 1)
+      throw std::invalid_argument("craig-bampton reduction: give the number of fixed-interface modes (modes); "
+                                  "fmax is not implemented for it");
+  }
   PrepSummary summary;
   summary.input = options.input;
   summary.output = options.output;
@@ -118,29 +134,64 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   body.mesh.surface_triangles = boundary_triangles(mesh);
   summary.surface_triangles = body.mesh.surface_triangles.rows();
 
-  // 3. Free-free modes.
-  StageTimer modes_timer(summary, "modes");
-  FreeFreeOptions mode_options = options.modes;
-  mode_options.progress = options.progress;
-  const FreeFreeModes modes = in_stage("modes", [&] {
-    return free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options);
+  // Interfaces are selected now (Craig-Bampton needs their nodes); their markers follow the GCMS fields.
+  const std::vector<SelectedInterface> selected = in_stage("interfaces", [&] {
+    std::vector<InterfaceRequest> in_metres = options.interfaces;
+    for (InterfaceRequest& request : in_metres) request.select = scaled(request.select, metres_per(imported.unit));
+    return select_interfaces(in_metres, mesh.nodes, body.mesh.surface_triangles, imported.surfaces);
   });
-  summary.frequencies_hz = modes.frequencies_hz;
-  summary.relative_residuals = modes.relative_residuals;
-  summary.shift = modes.shift;
+
+  // 3. Modes: free-free, or Craig-Bampton on the rbe2 interfaces.
+  StageTimer modes_timer(summary, "modes");
+  summary.reduction = options.reduction;
   summary.eigensolver = std::string(to_string(options.modes.solver.backend));
-  summary.rigid_body_residual = modes.rigid_body_residual;
-  summary.rigid_body_coupling = modes.rigid_body_coupling;
-  summary.solver_runs = modes.solver_runs;
-  summary.restarts = modes.restarts;
-  summary.operator_applies = modes.operator_applies;
-  summary.factor = modes.stats;
+  Eigen::MatrixXd mode_vectors;
+  if (options.reduction == ReductionKind::free_free) {
+    FreeFreeOptions mode_options = options.modes;
+    mode_options.progress = options.progress;
+    const FreeFreeModes modes = in_stage("modes", [&] {
+      return free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options);
+    });
+    summary.frequencies_hz = modes.frequencies_hz;
+    summary.relative_residuals = modes.relative_residuals;
+    summary.shift = modes.shift;
+    summary.rigid_body_residual = modes.rigid_body_residual;
+    summary.rigid_body_coupling = modes.rigid_body_coupling;
+    summary.solver_runs = modes.solver_runs;
+    summary.restarts = modes.restarts;
+    summary.operator_applies = modes.operator_applies;
+    summary.factor = modes.stats;
+    mode_vectors = modes.vectors;
+  } else {
+    std::vector<RigidInterface> rigid;
+    for (const SelectedInterface& s : selected)
+      if (s.coupling == "rbe2") rigid.push_back({s.patch.nodes, patch_centroid(s.patch, body.mesh.nodes)});
+    CraigBamptonOptions cb_options;
+    cb_options.fixed_interface_modes = options.modes.modes;
+    cb_options.solver = options.modes.solver;
+    cb_options.shift = options.modes.shift;
+    if (options.progress)
+      options.progress(fmt::format("Craig-Bampton: {} fixed-interface modes, {} rbe2 interfaces", options.modes.modes,
+                                   rigid.size()));
+    const CraigBamptonModes modes = in_stage("modes", [&] {
+      return craig_bampton_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, rigid, cb_options);
+    });
+    summary.frequencies_hz = modes.frequencies_hz;
+    summary.relative_residuals = modes.relative_residuals;
+    summary.fixed_interface_frequencies_hz = modes.fixed_interface_frequencies_hz;
+    summary.fixed_interface_residuals = modes.fixed_interface_residuals;
+    summary.shift = modes.shift;
+    summary.solver_runs = 1;
+    summary.factor = modes.stats;
+    summary.operator_applies = static_cast<int>(modes.stats.solves);
+    mode_vectors = modes.vectors;
+  }
   modes_timer.stop();
 
   // 4. The constant blocks of the improved GCMS: fields, G, K̂ (FORMULATION.md sections 2 and 7).
   StageTimer reduce_timer(summary, "gcms");
   if (options.progress) options.progress("GCMS constants (G, K_hat)");
-  body.modes.upsilon = upsilon_from_modes(modes.vectors);
+  body.modes.upsilon = upsilon_from_modes(mode_vectors);
   body.gcms = in_stage("gcms", [&] { return gcms_constants(stiffness, scalar_mass, body.mesh.nodes, body.modes.upsilon); });
   summary.gcms_fields = body.gcms.field_count();
   summary.dropped_fields = body.modes.upsilon.cols() - summary.gcms_fields;
@@ -149,10 +200,10 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.condition_mass_after = body.gcms.condition_mass_after;
   summary.condition_mass_scaled_after = body.gcms.condition_mass_scaled_after;
   body.interfaces = in_stage("interfaces", [&] {
-    std::vector<InterfaceRequest> in_metres = options.interfaces;
-    for (InterfaceRequest& request : in_metres) request.select = scaled(request.select, metres_per(imported.unit));
-    return build_interfaces(in_metres, body.mesh.nodes, summary.mass.center_of_mass_input,
-                            body.mesh.surface_triangles, body.gcms.fields, imported.surfaces);
+    std::vector<format::Interface> markers;
+    for (const SelectedInterface& s : selected)
+      markers.push_back(interface_marker(s.name, s.coupling, s.patch, body.mesh.nodes, body.gcms.fields));
+    return markers;
   });
   for (const format::Interface& i : body.interfaces)
     summary.interfaces.push_back({i.name, i.coupling, i.nodes.size(), i.reference_point + summary.mass.center_of_mass_input});
@@ -170,11 +221,12 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   body.provenance.options = options.recorded_options;
   body.material = options.material;
   body.mass = summary.mass;
-  body.modes.kind = "free-free";
-  body.modes.frequencies_hz = modes.frequencies_hz;
-  body.modes.relative_residuals = modes.relative_residuals;
+  body.modes.kind = std::string(to_string(options.reduction));
+  body.modes.frequencies_hz = summary.frequencies_hz;
+  body.modes.relative_residuals = summary.relative_residuals;
+  body.modes.fixed_interface_frequencies_hz = summary.fixed_interface_frequencies_hz;
   body.modes.eigensolver = summary.eigensolver;
-  body.modes.shift = modes.shift;
+  body.modes.shift = summary.shift;
   format::write_body_file(body, options.output);
   summary.output_bytes = std::filesystem::file_size(options.output);
   write_timer.stop();

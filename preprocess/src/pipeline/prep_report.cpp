@@ -53,13 +53,25 @@ std::string PrepSummary::full_report() const {
   line("centre of mass", vector3(mass.center_of_mass_input) + " m (input frame)");
   for (int i = 0; i < 3; ++i)
     line(i == 0 ? "inertia about CoM" : "", vector3(mass.inertia_about_com.row(i).transpose()) + (i == 0 ? " kg m^2" : ""));
-  r += fmt::format("\nFree-free modes ({}, shift-invert on CHOLMOD, sigma = {}, 6 rigid-body modes deflated)\n",
-                   eigensolver, shift_as_frequency(shift));
+  if (reduction == ReductionKind::craig_bampton) {
+    r += fmt::format("\nCraig-Bampton: fixed-interface modes ({}, shift-invert on CHOLMOD, sigma = {}, rbe2 interfaces "
+                     "clamped)\n", eigensolver, shift_as_frequency(shift));
+    r += fmt::format("  {:>4}  {:>16}  {:>14}\n", "mode", "frequency [Hz]", "rel. residual");
+    for (Eigen::Index k = 0; k < fixed_interface_frequencies_hz.size(); ++k)
+      r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}\n", k + 1, fixed_interface_frequencies_hz(k),
+                       fixed_interface_residuals(k));
+    r += "\nOrthonormalised modes (reduced eigenproblem on fixed-interface + constraint modes, 6 rigid dropped;\n"
+         "residual: distance from a free-free eigenmode of the full model)\n";
+  } else {
+    r += fmt::format("\nFree-free modes ({}, shift-invert on CHOLMOD, sigma = {}, 6 rigid-body modes deflated)\n",
+                     eigensolver, shift_as_frequency(shift));
+  }
   r += fmt::format("  {:>4}  {:>16}  {:>14}\n", "mode", "frequency [Hz]", "rel. residual");
   for (Eigen::Index k = 0; k < frequencies_hz.size(); ++k)
     r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}\n", k + 1, frequencies_hz(k), relative_residuals(k));
-  line("rigid-body check", fmt::format("|K r|/(|K| |r|) = {:.1e}, max |r^T M phi| = {:.1e}", rigid_body_residual,
-                                       rigid_body_coupling));
+  if (reduction == ReductionKind::free_free)
+    line("rigid-body check", fmt::format("|K r|/(|K| |r|) = {:.1e}, max |r^T M phi| = {:.1e}", rigid_body_residual,
+                                         rigid_body_coupling));
   line("factorization", fmt::format("nnz(L) = {:.3g}, {:.3g} GFlop; ordering {:.2f} s, numeric {:.2f} s",
                                     factor.factor_nonzeros, factor.factor_flops * 1e-9, factor.analyze_seconds,
                                     factor.factorize_seconds));
@@ -116,7 +128,9 @@ std::string PrepSummary::json() const {
   j["inertia_kgm2"] = to_rows(mass.inertia_about_com);
   j["eigensolver"] = eigensolver;
   j["shift_rad2_s2"] = shift;
+  j["reduction"] = std::string(to_string(reduction));
   j["frequencies_hz"] = to_std(frequencies_hz);
+  j["fixed_interface_frequencies_hz"] = to_std(fixed_interface_frequencies_hz);
   j["relative_residuals"] = to_std(relative_residuals);
   j["max_relative_residual"] = relative_residuals.size() ? relative_residuals.maxCoeff() : 0.0;
   j["rigid_body_residual"] = rigid_body_residual;

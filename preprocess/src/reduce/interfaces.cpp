@@ -190,13 +190,10 @@ format::Interface interface_marker(const std::string& name, const std::string& c
   return marker;
 }
 
-std::vector<format::Interface> build_interfaces(const std::vector<InterfaceRequest>& requests,
-                                                const RowMatrixX3d& body_nodes,
-                                                const Eigen::Vector3d& center_of_mass_input,
-                                                const RowMatrixX3i& surface_triangles, const Eigen::MatrixXd& fields,
+std::vector<SelectedInterface> select_interfaces(const std::vector<InterfaceRequest>& requests,
+                                                const RowMatrixX3d& input_nodes, const RowMatrixX3i& surface_triangles,
                                                 const std::vector<CadSurface>& surfaces) {
-  const RowMatrixX3d input_nodes = body_nodes.rowwise() + center_of_mass_input.transpose();
-  std::vector<format::Interface> markers;
+  std::vector<SelectedInterface> selected_interfaces;
   std::map<int, std::string> owner;  // node -> interface
   std::set<std::string> names;
   for (const InterfaceRequest& request : requests) {
@@ -207,8 +204,7 @@ std::vector<format::Interface> build_interfaces(const std::vector<InterfaceReque
     if (request.coupling != "rbe2" && request.coupling != "rbe3")
       throw std::invalid_argument(
           fmt::format("interface '{}': coupling '{}' is unknown; use rbe2 or rbe3", request.name, request.coupling));
-    const SurfacePatch patch =
-        select_surface_patch(request.name, request.select, input_nodes, surface_triangles, surfaces);
+    SurfacePatch patch = select_surface_patch(request.name, request.select, input_nodes, surface_triangles, surfaces);
     for (Eigen::Index j = 0; j < patch.nodes.size(); ++j) {
       const auto [it, fresh] = owner.emplace(patch.nodes(j), request.name);
       if (!fresh)
@@ -217,8 +213,26 @@ std::vector<format::Interface> build_interfaces(const std::vector<InterfaceReque
             it->second, request.name, patch.nodes(j), input_nodes(patch.nodes(j), 0), input_nodes(patch.nodes(j), 1),
             input_nodes(patch.nodes(j), 2)));
     }
-    markers.push_back(interface_marker(request.name, request.coupling, patch, body_nodes, fields));
+    selected_interfaces.push_back({request.name, request.coupling, std::move(patch)});
   }
+  return selected_interfaces;
+}
+
+Eigen::Vector3d patch_centroid(const SurfacePatch& patch, const RowMatrixX3d& nodes) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (Eigen::Index j = 0; j < patch.nodes.size(); ++j) centroid += patch.weights(j) * nodes.row(patch.nodes(j)).transpose();
+  return centroid;
+}
+
+std::vector<format::Interface> build_interfaces(const std::vector<InterfaceRequest>& requests,
+                                                const RowMatrixX3d& body_nodes,
+                                                const Eigen::Vector3d& center_of_mass_input,
+                                                const RowMatrixX3i& surface_triangles, const Eigen::MatrixXd& fields,
+                                                const std::vector<CadSurface>& surfaces) {
+  const RowMatrixX3d input_nodes = body_nodes.rowwise() + center_of_mass_input.transpose();
+  std::vector<format::Interface> markers;
+  for (const SelectedInterface& s : select_interfaces(requests, input_nodes, surface_triangles, surfaces))
+    markers.push_back(interface_marker(s.name, s.coupling, s.patch, body_nodes, fields));
   return markers;
 }
 

@@ -62,7 +62,7 @@ struct BodyMesh {
 
 /// The reduction basis.
 struct Modes {
-  std::string kind = "free-free";  ///< how the modes were computed
+  std::string kind = "free-free";  ///< how the modes were computed: "free-free" or "craig-bampton"
   /// Elastic frequencies [Hz], ascending; rigid-body modes never appear here.
   Eigen::VectorXd frequencies_hz;
   /// ||K phi - omega^2 M phi|| / ||K phi|| for each mode, as computed by fbprep.
@@ -70,6 +70,9 @@ struct Modes {
   /// Ῡ of Eq. (49): n_n x 3 n_m, row i = [psi_1^(i)T ... psi_nm^(i)T], M-orthonormal modes
   /// (Psiᵀ M̄ Psi = I, unit kg^-1/2).
   Eigen::MatrixXd upsilon;
+  /// Craig-Bampton only (empty otherwise): the fixed-interface frequencies [Hz], every rbe2 interface
+  /// clamped, ascending.
+  Eigen::VectorXd fixed_interface_frequencies_hz;
   std::string eigensolver;  ///< "arpack" or "spectra"
   double shift = 0.0;       ///< sigma of the shift-invert solve [rad^2/s^2]
 

@@ -38,8 +38,9 @@ struct CraigBamptonModes {
   /// The orthonormalised elastic modes (3 n_n x (n_fixed + 6 n_interfaces - 6)): M̄-orthonormal,
   /// M̄-orthogonal to the rigid-body fields, ascending in omega^2.
   Eigen::VectorXd eigenvalues, frequencies_hz;
-  /// ||K̄ψ − ω²M̄ψ|| / ||K̄ψ|| of each orthonormalised mode in the full model: how far it is from a
-  /// free-free eigenmode (Craig-Bampton modes are not eigenmodes of the full model).
+  /// ||K̄ψ − ω²M̄ψ|| / ||K̄ψ|| of each orthonormalised mode in the tied model (interior nodal forces, and
+  /// per interface the resultant force and moment): how far it is from an eigenmode of the free body with
+  /// rigid interfaces (Craig-Bampton modes are not eigenmodes; this measures the reduction error).
   Eigen::VectorXd relative_residuals;
   Eigen::MatrixXd vectors;
   double shift = 0.0;
@@ -47,7 +48,8 @@ struct CraigBamptonModes {
 };
 
 /// Throws std::invalid_argument for no interface or an impossible mode count, std::runtime_error when
-/// the reduced problem does not have exactly six zero-energy vectors (a mechanism) or a solver fails.
+/// a fixed-interface mode's residual exceeds 1e-8, the reduced problem does not have exactly six
+/// zero-energy vectors (a mechanism) or a solver fails.
 [[nodiscard]] CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
                                                     const SparseMatrix& scalar_mass_upper, const Material& material,
                                                     const std::vector<RigidInterface>& interfaces,

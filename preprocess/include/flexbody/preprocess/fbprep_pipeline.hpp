@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -27,12 +28,17 @@ namespace flexbody::preprocess {
 /// The fbprep version written into every body file (created_by).
 inline constexpr const char* kFbprepVersion = "0.2.0";
 
+/// How the reduction basis is made.
+enum class ReductionKind { free_free, craig_bampton };
+[[nodiscard]] std::string_view to_string(ReductionKind kind);  ///< "free-free", "craig-bampton"
+
 struct PrepOptions {
   std::filesystem::path input;
   std::filesystem::path output;
   GmshImportOptions mesh;  ///< unit, mesh size, order
   Material material = parse_material("steel");
-  FreeFreeOptions modes;   ///< number of modes, fmax, eigensolver backend
+  FreeFreeOptions modes;   ///< number of modes (Craig-Bampton: fixed-interface modes), fmax, eigensolver
+  ReductionKind reduction = ReductionKind::free_free;
   /// Interfaces to build as markers (input frame, lengths in the input's unit, like mesh.mesh_size).
   /// With free-free modes only rbe3 couplings: an rbe2 tie changes the modes and needs a Craig-Bampton
   /// reduction.
@@ -63,7 +69,10 @@ struct PrepSummary {
   MeshQuality quality;
   Material material;
   format::MassProperties mass;
+  ReductionKind reduction = ReductionKind::free_free;
   Eigen::VectorXd frequencies_hz, relative_residuals;
+  /// Craig-Bampton only: the clamped problem's frequencies and residuals.
+  Eigen::VectorXd fixed_interface_frequencies_hz, fixed_interface_residuals;
   double shift = 0.0;
   std::string eigensolver;
   double rigid_body_residual = 0.0, rigid_body_coupling = 0.0;

@@ -76,6 +76,22 @@ struct SurfacePatch {
                                                  const SurfacePatch& patch, const RowMatrixX3d& body_nodes,
                                                  const Eigen::MatrixXd& fields);
 
+/// An interface's selected patch, before the modes exist.
+struct SelectedInterface {
+  std::string name, coupling;
+  SurfacePatch patch;
+};
+
+/// Selects every requested interface (`input_nodes` in the selectors' frame, metres): names unique and
+/// allowed, couplings known, no node in two interfaces. Throws std::invalid_argument naming the interface.
+[[nodiscard]] std::vector<SelectedInterface> select_interfaces(const std::vector<InterfaceRequest>& requests,
+                                                               const RowMatrixX3d& input_nodes,
+                                                               const RowMatrixX3i& surface_triangles,
+                                                               const std::vector<CadSurface>& surfaces = {});
+
+/// The area centroid Σ w_i X_i of a patch (in the frame of `nodes`).
+[[nodiscard]] Eigen::Vector3d patch_centroid(const SurfacePatch& patch, const RowMatrixX3d& nodes);
+
 /// Every requested interface: selects in the input frame (`body_nodes` + `center_of_mass_input`),
 /// checks that no two share a node, and builds the markers. Throws std::invalid_argument naming the
 /// interface for an empty selection, an unknown coupling, overlapping interfaces or a duplicate name.

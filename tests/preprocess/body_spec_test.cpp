@@ -176,6 +176,9 @@ interfaces:
   EXPECT_EQ(body.modes.fixed_interface_frequencies_hz.size(), 8);
   ASSERT_EQ(body.interfaces.size(), 1u);
   EXPECT_EQ(body.interfaces[0].coupling, "rbe2");
+  const CliRun inspect = run_fbprep(dir, "inspect cb.fbh5 --json");
+  ASSERT_EQ(inspect.exit_code, 0) << inspect.err;
+  EXPECT_EQ(nlohmann::json::parse(inspect.out)["fixed_interface_frequencies_hz"], json["fixed_interface_frequencies_hz"]);
 }
 
 TEST(BodySpec, RigidTieNeedsCraigBampton) {

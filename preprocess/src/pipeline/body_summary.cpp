@@ -72,6 +72,12 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
   for (Eigen::Index k = 0; k < modes.count(); ++k)
     r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}\n", k + 1, modes.frequencies_hz(k), modes.relative_residuals(k));
 
+  const auto& fixed = modes.fixed_interface_frequencies_hz;
+  if (fixed.size() > 0) {
+    std::string list;
+    for (Eigen::Index k = 0; k < fixed.size(); ++k) list += fmt::format("{}{:.6g}", k ? ", " : "", fixed(k));
+    line("fixed-interface [Hz]", list);
+  }
   const auto& g = body.gcms;
   const auto [k_low, k_high] = stiffness_frequency_range(g.stiffness);
   r += "\nGCMS constants\n";
@@ -118,6 +124,8 @@ std::string body_json(const format::BodyData& body, const std::filesystem::path&
   j["eigensolver"] = body.modes.eigensolver;
   const auto& f = body.modes.frequencies_hz;
   j["frequencies_hz"] = std::vector<double>(f.data(), f.data() + f.size());
+  const auto& fixed = body.modes.fixed_interface_frequencies_hz;
+  j["fixed_interface_frequencies_hz"] = std::vector<double>(fixed.data(), fixed.data() + fixed.size());
   const auto& res = body.modes.relative_residuals;
   j["relative_residuals"] = std::vector<double>(res.data(), res.data() + res.size());
   const auto& g = body.gcms;

@@ -45,8 +45,7 @@ constexpr Required kRequired[] = {
     {Item::group, "/modes"},                    {Item::attribute, "/modes/kind"},
     {Item::attribute, "/modes/eigensolver"},    {Item::attribute, "/modes/shift"},
     {Item::dataset, "/modes/frequencies_hz"},   {Item::dataset, "/modes/relative_residuals"},
-    {Item::dataset, "/modes/upsilon"},          {Item::dataset, "/modes/fixed_interface_frequencies_hz"},
-    {Item::group, "/gcms"},
+    {Item::dataset, "/modes/upsilon"},          {Item::group, "/gcms"},
     {Item::dataset, "/gcms/fields"},            {Item::dataset, "/gcms/field_mode"},
     {Item::dataset, "/gcms/mode_coefficients"}, {Item::dataset, "/gcms/G"},
     {Item::dataset, "/gcms/K_hat"},             {Item::attribute, "/gcms/drop_tolerance"},
@@ -203,7 +202,10 @@ Modes read_modes(const Location& root) {
   modes.shift = detail::read_double_attribute(group, "shift");
   modes.frequencies_hz = to_vector(detail::read_double_vector(group, "frequencies_hz"));
   modes.relative_residuals = to_vector(detail::read_double_vector(group, "relative_residuals"));
-  modes.fixed_interface_frequencies_hz = to_vector(detail::read_double_vector(group, "fixed_interface_frequencies_hz"));
+  // Optional: absent means none (files written before Craig-Bampton existed).
+  if (detail::object_kind(root, "/modes/fixed_interface_frequencies_hz") != detail::ObjectKind::missing)
+    modes.fixed_interface_frequencies_hz =
+        to_vector(detail::read_double_vector(group, "fixed_interface_frequencies_hz"));
   modes.upsilon = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(group, "upsilon"));
   return modes;
 }

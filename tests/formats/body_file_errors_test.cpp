@@ -229,6 +229,13 @@ TEST_F(ReadErrors, InterfaceWithoutWeights) {
   expect_read_error(path, {"no_weights.fbh5: missing dataset /interfaces/bore A/weights"});
 }
 
+TEST_F(ReadErrors, FixedInterfaceFrequenciesAreOptional) {
+  // Written by every fbprep since Craig-Bampton; absent in earlier version-2 files, which stay readable.
+  const auto path = good_file("no_fixed.fbh5");
+  delete_link(path, "/modes/fixed_interface_frequencies_hz");
+  EXPECT_EQ(read_body_file(path).modes.fixed_interface_frequencies_hz.size(), 0);
+}
+
 TEST_F(ReadErrors, TruncatedFile) {
   const auto good = good_file("whole.fbh5");
   const std::string bytes = read_bytes(good);

@@ -71,6 +71,8 @@ CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMat
 
   // 1. Fixed-interface modes: K_ii φ = ω² M_ii φ, positive definite (the interfaces hold the body).
   CraigBamptonModes result;
+  if (options.shift > 0.0 || !std::isfinite(options.shift))
+    throw std::invalid_argument(fmt::format("craig-bampton: shift must be negative, got {}", options.shift));
   result.shift = options.shift < 0.0 ? options.shift : automatic_shift(nodes, material);
   CholmodShiftSolve op(k_ii, m_ii, Eigen::MatrixXd(3 * n_interior, 0));
   op.set_shift(result.shift);
@@ -140,10 +142,13 @@ CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMat
   const double f_ref = std::sqrt(material.youngs_modulus / material.density) /
                        (2.0 * (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm());
   const double zero_energy = 1e-10 * std::pow(kTwoPi * f_ref, 2);
-  const Eigen::Index rigid = (reduced.eigenvalues().array() < zero_energy).count();
-  if (rigid != 6)
-    throw std::runtime_error(fmt::format("craig-bampton: the reduced model has {} zero-energy vectors, expected the "
-                                         "6 rigid-body motions (a mechanism in the part?)", rigid));
+  // The six rigid motions lie in the basis exactly; they are told from the elastic vectors by the gap
+  // (relative, so independent of how the basis vectors are scaled), and the 7th must have real energy.
+  const Eigen::VectorXd& lambda = reduced.eigenvalues();
+  if (m_b < 7 || !(std::abs(lambda(5)) <= 1e-6 * lambda(6)) || !(lambda(6) > zero_energy))
+    throw std::runtime_error(fmt::format("craig-bampton: the reduced model does not have exactly 6 zero-energy vectors "
+                                         "(6th and 7th eigenvalues {:.3g} and {:.3g} rad^2/s^2): a mechanism in the "
+                                         "part?", m_b > 5 ? lambda(5) : 0.0, m_b > 6 ? lambda(6) : 0.0));
   const Eigen::Index n_e = m_b - 6;
   Eigen::MatrixXd modes = result.basis * reduced.eigenvectors().rightCols(n_e);
   // Exactly free of rigid motion (the translational Tisserand constraint then holds identically):
@@ -155,9 +160,18 @@ CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMat
   for (Eigen::Index c = 0; c < n_e; ++c) apply_vector_mass(scalar_mass_upper, modes.col(c), m_modes.col(c));
   const Eigen::MatrixXd gram = modes.transpose() * m_modes;
   const Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (gram + gram.transpose()));
-  result.vectors = llt.matrixU().solve<Eigen::OnTheRight>(modes);  // V U^-1: M̄-orthonormal
-  result.eigenvalues = reduced.eigenvalues().tail(n_e);
+  if (llt.info() != Eigen::Success) throw std::runtime_error("craig-bampton: the orthonormalised modes are dependent");
+  Eigen::MatrixXd w = llt.matrixU().solve<Eigen::OnTheRight>(modes);  // W U^-1: M̄-orthonormal
+  // A last Rayleigh-Ritz step on W, so that the eigenvalues belong to these very vectors (the projection
+  // and re-orthonormalisation moved them at round-off level).
+  Eigen::MatrixXd k_w(n, n_e);
+  for (Eigen::Index c = 0; c < n_e; ++c) apply_symmetric(stiffness_upper, w.col(c), k_w.col(c));
+  Eigen::MatrixXd h = w.transpose() * k_w;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (h + h.transpose()));
+  result.vectors = w * ritz.eigenvectors();
+  result.eigenvalues = ritz.eigenvalues();
   result.frequencies_hz = result.eigenvalues.cwiseMax(0.0).cwiseSqrt() / kTwoPi;
+  result.rigid_body_coupling = (m_rigid.transpose() * result.vectors).cwiseAbs().maxCoeff();
   // Residuals in the tied model (the rbe2 patches rigid): nodal forces on interior DOFs, and on each
   // interface the resultant force and moment about its reference point. The untied residual would be
   // dominated by the tie's reactions, which are forces of the constraint, not errors.
@@ -179,9 +193,10 @@ CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMat
     return tied;
   };
   result.relative_residuals.resize(n_e);
-  Eigen::VectorXd kv(n), mv(n);
+  const Eigen::MatrixXd k_vectors = k_w * ritz.eigenvectors();
+  Eigen::VectorXd mv(n);
   for (Eigen::Index c = 0; c < n_e; ++c) {
-    apply_symmetric(stiffness_upper, result.vectors.col(c), kv);
+    const Eigen::VectorXd kv = k_vectors.col(c);
     apply_vector_mass(scalar_mass_upper, result.vectors.col(c), mv);
     result.relative_residuals(c) =
         in_tied_model(kv - result.eigenvalues(c) * mv).norm() / in_tied_model(kv).norm();

@@ -138,7 +138,13 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   const std::vector<SelectedInterface> selected = in_stage("interfaces", [&] {
     std::vector<InterfaceRequest> in_metres = options.interfaces;
     for (InterfaceRequest& request : in_metres) request.select = scaled(request.select, metres_per(imported.unit));
-    return select_interfaces(in_metres, mesh.nodes, body.mesh.surface_triangles, imported.surfaces);
+    std::vector<SelectedInterface> chosen =
+        select_interfaces(in_metres, mesh.nodes, body.mesh.surface_triangles, imported.surfaces);
+    // A patch whose nodes lie on a line has no defined rotation (and would leave Craig-Bampton's interior
+    // singular): refuse it now, before the modes, naming the interface.
+    for (const SelectedInterface& s : chosen)
+      (void)interface_marker(s.name, s.coupling, s.patch, body.mesh.nodes, Eigen::MatrixXd(mesh.node_count(), 0));
+    return chosen;
   });
 
   // 3. Modes: free-free, or Craig-Bampton on the rbe2 interfaces.
@@ -181,6 +187,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     summary.fixed_interface_frequencies_hz = modes.fixed_interface_frequencies_hz;
     summary.fixed_interface_residuals = modes.fixed_interface_residuals;
     summary.shift = modes.shift;
+    summary.rigid_body_coupling = modes.rigid_body_coupling;
     summary.solver_runs = 1;
     summary.factor = modes.stats;
     summary.operator_applies = static_cast<int>(modes.stats.solves);

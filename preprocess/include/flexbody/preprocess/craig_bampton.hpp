@@ -43,6 +43,7 @@ struct CraigBamptonModes {
   /// rigid interfaces (Craig-Bampton modes are not eigenmodes; this measures the reduction error).
   Eigen::VectorXd relative_residuals;
   Eigen::MatrixXd vectors;
+  double rigid_body_coupling = 0.0;  ///< max |r_kᵀ M̄ ψ| over the rigid fields r_k and the modes
   double shift = 0.0;
   ShiftSolveStats stats;
 };

@@ -1,5 +1,5 @@
-// export_command.cpp: `fbprep export-vtu FILE.fbh5 -o DIR`: the mesh with every mode shape, the GCMS
-// fields and the interfaces as a ParaView file, DIR/<name>.vtu.
+// export_command.cpp: `fbprep export-vtu FILE.fbh5 -o DIR`: the mesh with every mode shape and its
+// stresses, the GCMS fields and the interfaces as a ParaView file, DIR/<name>.vtu.
 #include "cli_common.hpp"
 
 #include "flexbody/format/body_file.hpp"
@@ -12,8 +12,8 @@
 namespace flexbody::cli {
 
 int export_command(int argc, char** argv) {
-  CLI::App app{"fbprep export-vtu: write a body file's mesh, mode shapes, GCMS fields and interfaces as a "
-               "VTK unstructured grid (.vtu) for ParaView."};
+  CLI::App app{"fbprep export-vtu: write a body file's mesh, mode shapes with their stresses, GCMS fields and "
+               "interfaces as a VTK unstructured grid (.vtu) for ParaView."};
   app.name("fbprep export-vtu");
   std::string file, directory;
   app.add_option("FILE", file, "body file to read")->required();

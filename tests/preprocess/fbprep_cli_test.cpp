@@ -1,6 +1,7 @@
 // fbprep as a user runs it: the bundled bracket end to end, units, and every refused input (one line
 // on stderr naming the problem, a non-zero exit, and no file under the output name).
 #include "flexbody/format/body_file.hpp"
+#include "flexbody/preprocess/stress_recovery.hpp"
 #include "cli_run.hpp"
 #include "test_meshes.hpp"
 
@@ -180,6 +181,36 @@ TEST(FbprepCli, ExportVtuWritesTheModesForParaView) {
     for (Eigen::Index i = 0; i < body.mesh.nodes.rows(); ++i)
       for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(values[3 * i + k] - body.modes.upsilon(i, 3 * m + k)));
     EXPECT_EQ(worst, 0.0) << name;  // the same doubles, bit for bit
+  }
+  // Mode 2's stress tensor and von Mises stress: nodal_stresses of the modes (all three at once, as the export
+  // computes them: same call, same bits), reordered to ParaView's XX, YY, ZZ, XY, YZ, XZ.
+  {
+    const Eigen::Index n = body.mesh.nodes.rows();
+    Eigen::MatrixXd displacements(3 * n, 3);
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (int m = 0; m < 3; ++m) displacements.col(m).segment<3>(3 * i) = body.modes.upsilon.block<1, 3>(i, 3 * m).transpose();
+    const Eigen::MatrixXd stresses = flexbody::preprocess::nodal_stresses({body.mesh.nodes, body.mesh.tets}, body.material,
+                                                                          displacements);
+    const std::string name = fmt::format("stress_02_{:.6g}Hz", body.modes.frequencies_hz(1));
+    const std::vector<unsigned char> bytes = base64_decode(vtu_array(vtu, name));
+    ASSERT_EQ(bytes.size(), 8 + 6 * 8 * static_cast<std::size_t>(n)) << name;
+    EXPECT_NE(vtu.find("Name=\"" + name + "\" NumberOfComponents=\"6\""), std::string::npos);
+    std::vector<double> values(6 * n);
+    std::memcpy(values.data(), bytes.data() + 8, values.size() * 8);
+    const std::vector<unsigned char> mises_bytes = base64_decode(vtu_array(vtu, "mises_02"));
+    ASSERT_EQ(mises_bytes.size(), 8 + 8 * static_cast<std::size_t>(n));
+    std::vector<double> mises(n);
+    std::memcpy(mises.data(), mises_bytes.data() + 8, mises.size() * 8);
+    const int voigt_of_paraview[6] = {0, 1, 2, 3, 5, 4};  // ours: xx yy zz xy xz yz
+    double worst = 0.0, worst_mises = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::Matrix<double, 6, 1> s = stresses.col(1).segment<6>(6 * i);
+      for (int k = 0; k < 6; ++k) worst = std::max(worst, std::abs(values[6 * i + k] - s(voigt_of_paraview[k])));
+      worst_mises = std::max(worst_mises, std::abs(mises[i] - flexbody::preprocess::von_mises(s)));
+    }
+    EXPECT_EQ(worst, 0.0) << name;
+    EXPECT_EQ(worst_mises, 0.0);
+    EXPECT_GT(stresses.col(1).cwiseAbs().maxCoeff(), 0.0);  // an elastic mode stresses the part
   }
   EXPECT_NE(vtu_array(vtu, fmt::format("field_{:03d}", body.gcms.field_count())), "");
   EXPECT_NE(vtu_array(vtu, "interface"), "");

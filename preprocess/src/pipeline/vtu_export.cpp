@@ -1,11 +1,16 @@
 #include "flexbody/preprocess/vtu_export.hpp"
 
+#include "flexbody/preprocess/stress_recovery.hpp"
+
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
+#include <string_view>
 #include <unistd.h>
 #include <vector>
 
@@ -13,6 +18,10 @@ namespace flexbody::preprocess {
 namespace {
 
 constexpr std::uint8_t kVtkTetra = 10;
+// Stresses are computed for this many modes at a time: 6 n_n doubles each (48 MB per mode at 1M nodes).
+constexpr Eigen::Index kStressModeBlock = 8;
+// ParaView's SymmetricTensor order XX, YY, ZZ, XY, YZ, XZ as indices into our Voigt order xx, yy, zz, xy, xz, yz.
+constexpr std::array<int, kStressComponents> kParaViewFromVoigt = {0, 1, 2, 3, 5, 4};
 
 // Base64 of a VTK binary block: an 8-byte length header (header_type="UInt64") followed by the data.
 std::string base64_block(const void* data, std::size_t bytes) {
@@ -45,6 +54,12 @@ void data_array(std::ofstream& out, const char* type, const std::string& name, i
 
 std::string mode_array_name(int m, double frequency_hz) { return fmt::format("mode_{:02d}_{:.6g}Hz", m + 1, frequency_hz); }
 
+std::string stress_array_name(int m, double frequency_hz) {
+  return "stress_" + mode_array_name(m, frequency_hz).substr(std::string_view("mode_").size());
+}
+
+std::string mises_array_name(int m) { return fmt::format("mises_{:02d}", m + 1); }
+
 void write_body_vtu(const format::BodyData& body, const std::filesystem::path& path) {
   const auto& mesh = body.mesh;
   const Eigen::Index n_n = mesh.nodes.rows(), n_e = mesh.tets.rows();
@@ -58,11 +73,30 @@ void write_body_vtu(const format::BodyData& body, const std::filesystem::path& p
         << "  <UnstructuredGrid>\n"
         << fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", n_n, n_e);
     out << "      <PointData>\n";
-    std::vector<double> vectors(static_cast<std::size_t>(3 * n_n));
-    for (Eigen::Index m = 0; m < body.modes.count(); ++m) {
-      for (Eigen::Index i = 0; i < n_n; ++i)
-        for (int k = 0; k < 3; ++k) vectors[3 * i + k] = body.modes.upsilon(i, 3 * m + k);
-      data_array(out, "Float64", mode_array_name(static_cast<int>(m), body.modes.frequencies_hz(m)), 3, vectors);
+    std::vector<double> vectors(static_cast<std::size_t>(3 * n_n)), tensors(static_cast<std::size_t>(6 * n_n)),
+        mises(static_cast<std::size_t>(n_n));
+    const TetMesh tet_mesh{mesh.nodes, mesh.tets};
+    for (Eigen::Index first = 0; first < body.modes.count(); first += kStressModeBlock) {
+      const Eigen::Index block = std::min(kStressModeBlock, body.modes.count() - first);
+      Eigen::MatrixXd displacements(3 * n_n, block);  // node-interleaved columns of Ῡ
+      for (Eigen::Index c = 0; c < block; ++c)
+        for (Eigen::Index i = 0; i < n_n; ++i)
+          for (int k = 0; k < 3; ++k) displacements(3 * i + k, c) = body.modes.upsilon(i, 3 * (first + c) + k);
+      const Eigen::MatrixXd stresses = nodal_stresses(tet_mesh, body.material, displacements);
+      for (Eigen::Index c = 0; c < block; ++c) {
+        const int m = static_cast<int>(first + c);
+        const double frequency = body.modes.frequencies_hz(m);
+        for (Eigen::Index i = 0; i < n_n; ++i)
+          for (int k = 0; k < 3; ++k) vectors[3 * i + k] = displacements(3 * i + k, c);
+        data_array(out, "Float64", mode_array_name(m, frequency), 3, vectors);
+        for (Eigen::Index i = 0; i < n_n; ++i) {
+          const Eigen::Matrix<double, kStressComponents, 1> s = stresses.col(c).segment<kStressComponents>(6 * i);
+          for (int k = 0; k < kStressComponents; ++k) tensors[6 * i + k] = s(kParaViewFromVoigt[k]);
+          mises[i] = von_mises(s);
+        }
+        data_array(out, "Float64", stress_array_name(m, frequency), 6, tensors);
+        data_array(out, "Float64", mises_array_name(m), 1, mises);
+      }
     }
     std::vector<double> scalars(static_cast<std::size_t>(n_n));
     for (Eigen::Index f = 0; f < body.gcms.field_count(); ++f) {

@@ -206,6 +206,11 @@ Modes read_modes(const Location& root) {
   if (detail::object_kind(root, "/modes/fixed_interface_frequencies_hz") != detail::ObjectKind::missing)
     modes.fixed_interface_frequencies_hz =
         to_vector(detail::read_double_vector(group, "fixed_interface_frequencies_hz"));
+  // Optional: absent means no static correction (files written before load points existed).
+  if (detail::has_attribute(root, "/modes", "static_loads"))
+    modes.static_loads = names_in_order(detail::read_string_attribute(group, "static_loads"));
+  if (detail::has_attribute(root, "/modes", "static_correction_modes"))
+    modes.static_correction_modes = detail::read_int_attribute(group, "static_correction_modes");
   modes.upsilon = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(group, "upsilon"));
   return modes;
 }
@@ -258,6 +263,33 @@ std::vector<Interface> read_interfaces(const Location& root) {
   return interfaces;
 }
 
+// Optional: absent means no output regions (files written before stress recovery existed).
+std::vector<RecoveryRegion> read_recovery(const Location& root) {
+  std::vector<RecoveryRegion> regions;
+  if (detail::object_kind(root, "/recovery") == detail::ObjectKind::missing) return regions;
+  const Location group = detail::open_group(root, "recovery");
+  for (const char* attribute : {"order", "stress_components"})
+    if (!detail::has_attribute(root, "/recovery", attribute)) group.fail(std::string("missing attribute /recovery/") + attribute);
+  const std::string components = detail::read_string_attribute(group, "stress_components");
+  if (components != "xx,yy,zz,xy,xz,yz")
+    group.fail("/recovery/stress_components is \"" + components + "\", expected \"xx,yy,zz,xy,xz,yz\"");
+  for (const std::string& name : names_in_order(detail::read_string_attribute(group, "order"))) {
+    RecoveryRegion r;
+    r.name = name;
+    if (r.name.empty() || r.name.find('/') != std::string::npos)
+      group.fail("/recovery/order names a region \"" + r.name + "\"; names are non-empty and have no '/'");
+    const std::string path = "/recovery/" + r.name;
+    if (detail::object_kind(root, path) != detail::ObjectKind::group)
+      group.fail("/recovery/order names \"" + r.name + "\" but there is no group " + path);
+    const Location g = detail::open_group(group, r.name);
+    const std::vector<std::int32_t> nodes = detail::read_int_vector(g, "nodes");
+    r.nodes = Eigen::Map<const Eigen::VectorXi>(nodes.data(), static_cast<Eigen::Index>(nodes.size()));
+    r.stress_modes = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(g, "stress_modes"));
+    regions.push_back(std::move(r));
+  }
+  return regions;
+}
+
 }  // namespace
 
 BodyData read_body_file(const std::filesystem::path& path) {
@@ -277,6 +309,7 @@ BodyData read_body_file(const std::filesystem::path& path) {
     body.modes = read_modes(root);
     body.gcms = read_gcms(root);
     body.interfaces = read_interfaces(root);
+    body.recovery = read_recovery(root);
   }
   detail::check_structure(body, label);
   detail::check_finite(body, label);

@@ -83,6 +83,10 @@ void write_modes(const Location& root, const Modes& modes) {
   detail::write_vector(group, "frequencies_hz", values_of(modes.frequencies_hz), "Hz");
   detail::write_vector(group, "relative_residuals", values_of(modes.relative_residuals), "1");
   detail::write_vector(group, "fixed_interface_frequencies_hz", values_of(modes.fixed_interface_frequencies_hz), "Hz");
+  std::string loads;
+  for (const std::string& label : modes.static_loads) loads += (loads.empty() ? "" : ",") + label;
+  detail::write_string_attribute(group, "static_loads", loads);
+  detail::write_int_attribute(group, "static_correction_modes", static_cast<int>(modes.static_correction_modes));
   const RowMatrixXd upsilon = modes.upsilon;  // the file is row-major, Eigen::MatrixXd column-major
   detail::write_matrix(group, "upsilon", rows_of(upsilon), cols_of(upsilon), upsilon.data(), "kg^-1/2");
 }
@@ -127,6 +131,21 @@ void write_interfaces(const Location& root, const std::vector<Interface>& interf
   }
 }
 
+void write_recovery(const Location& root, const std::vector<RecoveryRegion>& regions) {
+  const Location group = detail::create_group(root, "recovery");
+  std::string order;
+  for (const RecoveryRegion& r : regions) order += (order.empty() ? "" : ",") + r.name;
+  detail::write_string_attribute(group, "order", order);
+  detail::write_string_attribute(group, "stress_components", "xx,yy,zz,xy,xz,yz");
+  for (const RecoveryRegion& r : regions) {
+    const Location g = detail::create_group(group, r.name);
+    const std::vector<std::int32_t> nodes(r.nodes.data(), r.nodes.data() + r.nodes.size());
+    detail::write_int_vector(g, "nodes", nodes, "");
+    const RowMatrixXd stress = r.stress_modes;
+    detail::write_matrix(g, "stress_modes", rows_of(stress), cols_of(stress), stress.data(), "Pa kg^-1/2 m^-1");
+  }
+}
+
 /// Writes the whole layout into a new file at `path`; every handle is closed on return.
 void write_layout(const BodyData& body, const std::filesystem::path& path, const std::string& label) {
   Location file = detail::create_file(path, label);
@@ -138,6 +157,7 @@ void write_layout(const BodyData& body, const std::filesystem::path& path, const
   write_modes(file, body.modes);
   write_gcms(file, body.gcms);
   write_interfaces(file, body.interfaces);
+  write_recovery(file, body.recovery);
   detail::flush_and_close(file);
 }
 

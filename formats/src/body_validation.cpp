@@ -54,6 +54,20 @@ void check_structure(const BodyData& body, const std::string& context) {
   check_options(body.provenance, context);
   check_gcms_structure(body, context);
   check_interfaces_structure(body, context);
+  check_recovery_structure(body, context);
+  if (modes.static_correction_modes < 0 || modes.static_correction_modes > n_m)
+    fail(context, "/modes/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
+                      ", expected 0 to n_m = " + std::to_string(n_m));
+  if (modes.kind == "craig-bampton" && modes.static_correction_modes != 0)
+    fail(context, "/modes/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
+                      ", expected 0 for craig-bampton modes (the static responses are part of its basis)");
+  if (modes.static_correction_modes > 0 && modes.static_loads.empty())
+    fail(context, "/modes/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
+                      " but /modes/static_loads names no load");
+  for (std::size_t k = 0; k < modes.static_loads.size(); ++k)
+    if (modes.static_loads[k].empty() || modes.static_loads[k].find(',') != std::string::npos)
+      fail(context, "/modes/static_loads" + index(static_cast<Eigen::Index>(k)) + " is \"" + modes.static_loads[k] +
+                        "\"; labels are non-empty and have no ','");
 }
 
 void check_finite(const BodyData& body, const std::string& context) {
@@ -71,6 +85,7 @@ void check_finite(const BodyData& body, const std::string& context) {
   check_values(body.modes.upsilon, "/modes/upsilon", context);
   check_gcms_finite(body, context);
   check_interfaces_finite(body, context);
+  check_recovery_finite(body, context);
 }
 
 void check_ranges(const BodyData& body, const std::string& context) {

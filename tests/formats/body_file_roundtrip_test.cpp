@@ -71,6 +71,14 @@ void expect_same(const BodyData& a, const BodyData& b) {
     EXPECT_EQ(ia.y_row, ib.y_row);
     EXPECT_EQ(ia.rotation, ib.rotation);
   }
+  EXPECT_EQ(a.modes.static_loads, b.modes.static_loads);
+  EXPECT_EQ(a.modes.static_correction_modes, b.modes.static_correction_modes);
+  ASSERT_EQ(a.recovery.size(), b.recovery.size());
+  for (std::size_t k = 0; k < a.recovery.size(); ++k) {
+    EXPECT_EQ(a.recovery[k].name, b.recovery[k].name);
+    EXPECT_EQ(a.recovery[k].nodes, b.recovery[k].nodes);
+    EXPECT_EQ(a.recovery[k].stress_modes, b.recovery[k].stress_modes);
+  }
 }
 
 using RoundTrip = TempDirTest;
@@ -95,6 +103,9 @@ TEST_F(RoundTrip, KeepsEmptyOptionsTrianglesAndModes) {
   body.gcms.mass_matrix = Eigen::MatrixXd(body.gcms.mass_matrix.topLeftCorner(4, 4));  // rigid: [1, X̄] only
   body.gcms.stiffness.resize(0, 0);
   body.interfaces.clear();
+  body.recovery.clear();
+  body.modes.static_loads.clear();
+  body.modes.static_correction_modes = 0;
   const auto path = dir() / "bare.fbh5";
   write_body_file(body, path);
   expect_same(body, read_body_file(path));

@@ -173,5 +173,30 @@ TEST(Validate, Interfaces) {
   expect_invalid(body, "interface name \"a/b\" is not allowed");
 }
 
+TEST(Validate, StaticCorrectionAndRecovery) {
+  BodyData body = make_body();
+  body.modes.static_correction_modes = 9;
+  expect_invalid(body, "/modes/static_correction_modes is 9, expected 0 to n_m = 2");
+  body = make_body();
+  body.modes.static_loads.clear();
+  expect_invalid(body, "/modes/static_correction_modes is 1 but /modes/static_loads names no load");
+  body = make_body();
+  body.modes.kind = "craig-bampton";
+  body.modes.fixed_interface_frequencies_hz = Eigen::VectorXd::Constant(1, 10.0);
+  expect_invalid(body, "/modes/static_correction_modes is 1, expected 0 for craig-bampton modes");
+  body = make_body();
+  body.recovery[0].nodes(1) = 7;
+  expect_invalid(body, "/recovery/fillet/nodes[1] is 7 but the mesh has 5 nodes");
+  body = make_body();
+  body.recovery[0].stress_modes.conservativeResize(6, Eigen::NoChange);
+  expect_invalid(body, "/recovery/fillet/stress_modes has shape 6 x 15, expected 12 x 15 (6 k x 3 n_f)");
+  body = make_body();
+  body.recovery[0].stress_modes(3, 2) = std::numeric_limits<double>::quiet_NaN();
+  expect_invalid(body, "/recovery/fillet/stress_modes");
+  body = make_body();
+  body.recovery.push_back(body.recovery[0]);
+  expect_invalid(body, "two output regions are named \"fillet\"");
+}
+
 }  // namespace
 }  // namespace flexbody::format::test

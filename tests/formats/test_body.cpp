@@ -148,6 +148,18 @@ BodyData make_body() {
   for (Eigen::Index r = 0; r < 3; ++r)
     for (Eigen::Index c = 0; c < 3 * kFields; ++c) face.rotation(r, c) = static_cast<double>(r - c) / 17.0;
   body.interfaces.push_back(face);
+
+  // A static correction mode (the last one) and an output region on nodes 0 and 3.
+  body.modes.static_loads = {"bore A:fx", "bore A:mz"};
+  body.modes.static_correction_modes = 1;
+  RecoveryRegion region;
+  region.name = "fillet";
+  region.nodes.resize(2);
+  region.nodes << 0, 3;
+  region.stress_modes.resize(12, 3 * kFields);
+  for (Eigen::Index r = 0; r < 12; ++r)
+    for (Eigen::Index c = 0; c < 3 * kFields; ++c) region.stress_modes(r, c) = 1e9 * static_cast<double>(r + 2 * c) / 13.0;
+  body.recovery.push_back(region);
   return body;
 }
 

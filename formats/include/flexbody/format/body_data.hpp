@@ -75,6 +75,13 @@ struct Modes {
   Eigen::VectorXd fixed_interface_frequencies_hz;
   std::string eigensolver;  ///< "arpack" or "spectra"
   double shift = 0.0;       ///< sigma of the shift-invert solve [rad^2/s^2]
+  /// The unit loads ("load point:fx", ...: forces fx, fy, fz, moments mx, my, mz) whose residual static
+  /// responses (static correction modes) are in the basis; empty if none.
+  std::vector<std::string> static_loads;
+  /// Free-free only: the last this many modes are the static correction modes (Ritz vectors, not
+  /// eigenmodes: their frequencies are Ritz values, their residuals large). Craig-Bampton folds the static
+  /// responses into its basis before orthonormalising, so every mode is a Ritz vector and this is 0.
+  Eigen::Index static_correction_modes = 0;
 
   [[nodiscard]] Eigen::Index count() const { return frequencies_hz.size(); }
 };
@@ -124,6 +131,17 @@ struct Interface {
   Eigen::MatrixXd rotation;
 };
 
+/// Stress recovery for one output region: σ̄ = S ξ̄ at the region's nodes (body axes), linear in the
+/// body-frame field coordinates ξ̄ (ξ̄_f = Aᵀ ξ_f for field f).
+struct RecoveryRegion {
+  std::string name;
+  Eigen::VectorXi nodes;  ///< k node indices, ascending, unique
+  /// S (6 k x 3 n_f) [Pa kg^-1/2 m^-1]: row 6 j + c is stress component c (xx, yy, zz, xy, xz, yz) at
+  /// nodes(j); column 3 f + d is the stress of the displacement field υ'_f e_d (field f along axis d):
+  /// element-constant stresses of the linear tetrahedra, averaged to the nodes by element volume.
+  Eigen::MatrixXd stress_modes;
+};
+
 /// Everything a flexible body file holds.
 struct BodyData {
   Provenance provenance;
@@ -133,6 +151,7 @@ struct BodyData {
   Modes modes;
   Gcms gcms;
   std::vector<Interface> interfaces;  ///< in the order the body spec names them; names unique
+  std::vector<RecoveryRegion> recovery;  ///< output regions, in the body spec's order; names unique
 };
 
 }  // namespace flexbody::format

@@ -102,9 +102,19 @@ TEST(BodySpec, RefusalsNameTheLine) {
   expect_spec_error(head + "interfaces:\n  root: {select: {plane: {point: [0, 0, 0], normal: [1, 0, 0]}}, coupling: glue}\n",
                     4, "interface 'root': coupling 'glue' is unknown");
   expect_spec_error(head + "material: {E: 210e9, nu: 0.3, rho: [7850\n", 4, "end of sequence flow not found");  // YAML syntax
-  // The parts of the spec that are not implemented yet say so, at their line.
   expect_spec_error(head + "reduction: {kind: guyan}\n", 3, "reduction kind 'guyan' is unknown");
-  expect_spec_error(head + "load_points: [[1, 0, 0]]\n", 3, "load_points (static correction modes) is not implemented yet");
+  expect_spec_error(head + "load_points: [[1, 0, 0]]\n", 3, "load_points must be a map of names to load points");
+  const std::string tip = "{select: {plane: {point: [1, 0, 0], normal: [1, 0, 0]}}";
+  expect_spec_error(head + "load_points:\n  hook: " + tip + ", loads: [fx, fw]}\n", 4,
+                    "load point 'hook': load 'fw' is unknown; use fx, fy, fz, mx, my, mz");
+  expect_spec_error(head + "load_points:\n  hook: " + tip + ", loads: [fx, fx]}\n", 4,
+                    "load point 'hook': load 'fx' is listed twice");
+  expect_spec_error(head + "interfaces:\n  a: " + tip + "}\nload_points:\n  a: " + tip + "}\n", 6,
+                    "load point 'a': the name is already an interface or load point");
+  expect_spec_error(head + "output_regions:\n  top: {select: everywhere}\n", 4,
+                    "output region 'top' select must be a selector map or 'all' (every node), got 'everywhere'");
+  expect_spec_error(head + "output_regions:\n  \"a,b\": {select: all}\n", 4,
+                    "output region 'a,b': the name is not allowed");
   expect_spec_error(head + "interfaces:\n  root: {select: {surfaces: [0]}}\n", 4,
                     "interface 'root' surfaces tags start at 1, got 0");
   expect_spec_error(head + "interfaces:\n  root: {select: {surfaces: 3}}\n", 4,
@@ -179,6 +189,59 @@ interfaces:
   const CliRun inspect = run_fbprep(dir, "inspect cb.fbh5 --json");
   ASSERT_EQ(inspect.exit_code, 0) << inspect.err;
   EXPECT_EQ(nlohmann::json::parse(inspect.out)["fixed_interface_frequencies_hz"], json["fixed_interface_frequencies_hz"]);
+}
+
+TEST(BodySpec, LoadPointsAndOutputRegions) {
+  // A free-free beam with a load point at its tip (fy and mz only) and one output region at its root.
+  const auto dir = beam_folder();
+  write_text(dir / "part" / "loads.yaml", R"(input: beam.geo
+unit: m
+mesh: {size: 0.025}
+reduction: {modes: 4}
+load_points:
+  tip: {select: {plane: {point: [1, 0, 0], normal: [1, 0, 0]}}, loads: [fy, mz]}
+output_regions:
+  root: {select: {plane: {point: [0, 0, 0], normal: [1, 0, 0]}}}
+)");
+  const CliRun run = run_fbprep(dir, "part/loads.yaml -o loads.fbh5 --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto json = nlohmann::json::parse(run.out);
+  EXPECT_EQ(json["static_loads"], nlohmann::json::array({"tip:fy", "tip:mz"}));
+  EXPECT_EQ(json["static_correction"]["loads"], 2);
+  EXPECT_EQ(json["static_correction"]["dropped"], 0);
+  EXPECT_EQ(json["static_correction"]["modes"], 2);
+  // The CG stops at 1e-10 of the projected load; the true residual adds rounding.
+  EXPECT_LT(json["static_correction"]["max_relative_residual"].get<double>(), 1e-9);
+  ASSERT_EQ(json["frequencies_hz"].size(), 6u);
+  EXPECT_EQ(json["output_regions"][0]["name"], "root");
+
+  const auto body = flexbody::format::read_body_file(dir / "loads.fbh5");
+  EXPECT_EQ(body.modes.static_correction_modes, 2);
+  EXPECT_EQ(body.modes.static_loads, (std::vector<std::string>{"tip:fy", "tip:mz"}));
+  ASSERT_EQ(body.interfaces.size(), 1u);  // the load point is an rbe3 marker
+  EXPECT_EQ(body.interfaces[0].name, "tip");
+  EXPECT_EQ(body.interfaces[0].coupling, "rbe3");
+  // The static corrections are Ritz vectors above the normal modes; the normal modes keep their residuals.
+  EXPECT_GT(body.modes.frequencies_hz(4), body.modes.frequencies_hz(3));
+  EXPECT_LT(body.modes.relative_residuals.head(4).maxCoeff(), 1e-8);
+  ASSERT_EQ(body.recovery.size(), 1u);
+  const auto& root = body.recovery[0];
+  for (Eigen::Index j = 0; j < root.nodes.size(); ++j)  // the root face: x = 0 in the input frame
+    EXPECT_NEAR(body.mesh.nodes(root.nodes(j), 0) + body.mass.center_of_mass_input(0), 0.0, 1e-12);
+  EXPECT_EQ(root.stress_modes.rows(), 6 * root.nodes.size());
+  EXPECT_EQ(root.stress_modes.cols(), 3 * body.gcms.field_count());
+
+  // Without output_regions a mesh this small gets the whole body; with an empty map, none.
+  write_text(dir / "part" / "whole.yaml", "input: beam.geo\nunit: m\nmesh: {size: 0.025}\nreduction: {modes: 2}\n");
+  ASSERT_EQ(run_fbprep(dir, "part/whole.yaml -o whole.fbh5 -q").exit_code, 0);
+  const auto whole = flexbody::format::read_body_file(dir / "whole.fbh5");
+  ASSERT_EQ(whole.recovery.size(), 1u);
+  EXPECT_EQ(whole.recovery[0].name, "body");
+  EXPECT_EQ(whole.recovery[0].nodes.size(), whole.mesh.nodes.rows());
+  write_text(dir / "part" / "none.yaml",
+             "input: beam.geo\nunit: m\nmesh: {size: 0.025}\nreduction: {modes: 2}\noutput_regions: {}\n");
+  ASSERT_EQ(run_fbprep(dir, "part/none.yaml -o none.fbh5 -q").exit_code, 0);
+  EXPECT_TRUE(flexbody::format::read_body_file(dir / "none.fbh5").recovery.empty());
 }
 
 TEST(BodySpec, RigidTieNeedsCraigBampton) {

@@ -170,3 +170,24 @@ TEST(CraigBampton, OrthonormalisedModesConvergeToFreeFreeFromAbove) {
   // With 12 fixed-interface modes the first four free-free frequencies are within 1 %.
   EXPECT_LT((previous.array() / ff.eigenvalues.array()).sqrt().maxCoeff(), 1.01);
 }
+
+TEST(CraigBampton, FmaxSelectsTheFixedInterfaceModesBelowIt) {
+  // fmax between the 3rd and 4th clamped frequencies keeps exactly three, the same as a 3-mode request
+  // (the same clamped eigenpairs: ARPACK converges each to ~1e-12, so 1e-9 is a wide margin).
+  const Bar bar;
+  const auto six = bar.reduce({bar.root}, 6);
+  const Eigen::VectorXd& f = six.fixed_interface_frequencies_hz;
+  fp::CraigBamptonOptions options;
+  options.fixed_interface_modes = 0;
+  options.fmax_hz = 0.5 * (f(2) + f(3));
+  const auto by_fmax =
+      fp::craig_bampton_modes(bar.model.mesh.nodes, bar.model.stiffness, bar.model.scalar_mass, kSteel, {bar.root}, options);
+  ASSERT_EQ(by_fmax.fixed_interface_frequencies_hz.size(), 3);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(by_fmax.fixed_interface_frequencies_hz(i), f(i), 1e-9 * f(i));
+  EXPECT_EQ(by_fmax.vectors.cols(), 3 + 6 - 6);
+  // Below the first clamped frequency there is nothing to keep: one clear error.
+  options.fmax_hz = 0.5 * f(0);
+  EXPECT_THROW((void)fp::craig_bampton_modes(bar.model.mesh.nodes, bar.model.stiffness, bar.model.scalar_mass, kSteel,
+                                             {bar.root}, options),
+               std::invalid_argument);
+}

@@ -157,7 +157,7 @@ TEST(Interfaces, RefusalsNameTheInterface) {
   expect_refused(part,
                  {request("root", fp::PlaneSelector{{0, 0, 0}, {1, 0, 0}, 0.0}),
                   request("corner", fp::BoxSelector{{-1, -1, -1}, {0.06, 0.03, 1}})},
-                 "interfaces 'root' and 'corner' share node");
+                 "interface 'root' and interface 'corner' share node");
   expect_refused(part, {request("a", fp::PlaneSelector{}), request("a", fp::BoxSelector{{0.2, -1, -1}, {1, 1, 1}})},
                  "interface 'a' is defined twice");
   expect_refused(part, {{"glued", fp::PlaneSelector{}, "tied"}}, "interface 'glued': coupling 'tied' is unknown");

@@ -43,12 +43,15 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
                                       const SparseMatrix& scalar_mass_upper, const Material& material,
                                       const std::vector<RigidInterface>& interfaces,
-                                      const CraigBamptonOptions& options) {
+                                      const CraigBamptonOptions& options, const Eigen::MatrixXd& static_loads) {
   const Eigen::Index n_n = nodes.rows(), n = 3 * n_n;
   if (interfaces.empty())
     throw std::invalid_argument("craig-bampton: at least one rbe2 interface is needed (its constraint modes)");
-  if (options.fixed_interface_modes < 1)
-    throw std::invalid_argument(fmt::format("craig-bampton: modes must be >= 1, got {}", options.fixed_interface_modes));
+  if (options.fixed_interface_modes < 0 || (options.fixed_interface_modes == 0 && !(options.fmax_hz > 0.0)))
+    throw std::invalid_argument(fmt::format("craig-bampton: give modes >= 1 or fmax > 0 (modes {}, fmax {})",
+                                            options.fixed_interface_modes, options.fmax_hz));
+  if (options.fmax_hz < 0.0 || !std::isfinite(options.fmax_hz))
+    throw std::invalid_argument(fmt::format("craig-bampton: fmax must be a positive frequency, got {}", options.fmax_hz));
 
   // Interior (free) nodes and DOFs: every node not tied to an interface.
   std::vector<char> boundary(static_cast<std::size_t>(n_n), 0);
@@ -62,10 +65,10 @@ CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMat
       for (int c = 0; c < 3; ++c) dof_index[3 * i + c] = 3 * n_interior + c;
       ++n_interior;
     }
-  const int nev = options.fixed_interface_modes;
-  if (3 * n_interior < nev + 8)
+  const int limit = static_cast<int>(3 * n_interior) - 8;  // the solvers need nev < ncv <= n
+  if (options.fixed_interface_modes > limit || limit < 1)
     throw std::invalid_argument(fmt::format("craig-bampton: {} fixed-interface modes need more than the {} interior "
-                                            "DOFs", nev, 3 * n_interior));
+                                            "DOFs", options.fixed_interface_modes, 3 * n_interior));
   const SparseMatrix k_ii = upper_submatrix(stiffness_upper, dof_index, 3 * n_interior);
   const SparseMatrix m_ii = upper_submatrix(scalar_mass_upper, node_index, n_interior);
 
@@ -77,7 +80,28 @@ CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMat
   CholmodShiftSolve op(k_ii, m_ii, Eigen::MatrixXd(3 * n_interior, 0));
   op.set_shift(result.shift);
   const VectorMassOperator mass_ii(m_ii);
-  const EigenPairs fixed = solve_shift_invert(op, mass_ii, nev, options.solver);
+  // With fmax: solve for more modes until the last one lies above it, then keep those at or below.
+  int nev = options.fixed_interface_modes > 0 ? options.fixed_interface_modes : std::min(12, limit);
+  EigenPairs fixed = solve_shift_invert(op, mass_ii, nev, options.solver);
+  if (options.fmax_hz > 0.0) {
+    auto top_hz = [&] { return std::sqrt(std::max(fixed.eigenvalues(nev - 1), 0.0)) / kTwoPi; };
+    while (options.fixed_interface_modes == 0 && top_hz() <= options.fmax_hz) {
+      if (nev >= limit)
+        throw std::invalid_argument(fmt::format("craig-bampton: more than {} fixed-interface modes lie below fmax = {} Hz; "
+                                                "lower fmax or cap with modes", nev, options.fmax_hz));
+      nev = std::min(2 * nev, limit);
+      fixed = solve_shift_invert(op, mass_ii, nev, options.solver);
+    }
+    int keep = 0;
+    while (keep < nev && std::sqrt(std::max(fixed.eigenvalues(keep), 0.0)) / kTwoPi <= options.fmax_hz) ++keep;
+    if (keep == 0)
+      throw std::invalid_argument(fmt::format("craig-bampton: no fixed-interface mode at or below fmax = {} Hz (the "
+                                              "first is {:.6g} Hz)", options.fmax_hz,
+                                              std::sqrt(std::max(fixed.eigenvalues(0), 0.0)) / kTwoPi));
+    nev = keep;
+    fixed.eigenvalues.conservativeResize(keep);
+    fixed.vectors.conservativeResize(Eigen::NoChange, keep);
+  }
   result.fixed_interface_eigenvalues = fixed.eigenvalues;
   result.fixed_interface_frequencies_hz = fixed.eigenvalues.cwiseMax(0.0).cwiseSqrt() / kTwoPi;
   result.fixed_interface_residuals.resize(nev);
@@ -123,9 +147,25 @@ CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMat
         if (dof_index[d] >= 0) u(d) = x(dof_index[d]);
       result.basis.col(nev + 6 * static_cast<Eigen::Index>(j) + k) = u;
     }
+
+  // 3. Static corrections: the clamped body's responses to the loads, less what the fixed-interface modes
+  // hold (the same factor of K_ii solves them; the loads' shares on interface nodes go into the ties).
+  if (static_loads.cols() > 0) {
+    if (static_loads.rows() != n) throw std::invalid_argument("craig-bampton: the static loads have the wrong length");
+    Eigen::MatrixXd interior_loads(3 * n_interior, static_loads.cols());
+    for (Eigen::Index d = 0; d < n; ++d)
+      if (dof_index[d] >= 0) interior_loads.row(dof_index[d]) = static_loads.row(d);
+    const StaticCorrectionModes correction = static_correction_modes(op, k_ii, m_ii, fixed.vectors, interior_loads);
+    result.static_correction = correction.stats;
+    const Eigen::Index n_s = correction.vectors.cols(), first = result.basis.cols();
+    result.basis.conservativeResize(n, first + n_s);
+    result.basis.rightCols(n_s).setZero();
+    for (Eigen::Index d = 0; d < n; ++d)
+      if (dof_index[d] >= 0) result.basis.row(d).tail(n_s) = correction.vectors.row(dof_index[d]);
+  }
   result.stats = op.stats();
 
-  // 3. Orthonormalise: the reduced eigenproblem on the basis (Eqs. of a Rayleigh-Ritz step).
+  // 4. Orthonormalise: the reduced eigenproblem on the basis (Eqs. of a Rayleigh-Ritz step).
   const Eigen::Index m_b = result.basis.cols();
   Eigen::MatrixXd k_basis(n, m_b), m_basis(n, m_b);
   for (Eigen::Index c = 0; c < m_b; ++c) {

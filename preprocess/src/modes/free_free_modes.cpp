@@ -58,7 +58,7 @@ Eigen::MatrixXd upsilon_from_modes(const Eigen::MatrixXd& modes) {
 
 FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
                               const SparseMatrix& scalar_mass_upper, const Material& material,
-                              const FreeFreeOptions& options) {
+                              const FreeFreeOptions& options, const Eigen::MatrixXd& static_loads) {
   if (options.modes < 0) throw std::invalid_argument(fmt::format("modes: must be >= 0, got {}", options.modes));
   if (options.fmax_hz < 0.0 || !std::isfinite(options.fmax_hz))
     throw std::invalid_argument(fmt::format("fmax: must be a positive frequency, got {}", options.fmax_hz));
@@ -132,19 +132,34 @@ FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& sti
   if (keep == 0)
     throw std::runtime_error(fmt::format("free-free modes: no elastic mode at or below fmax = {} Hz (the first is "
                                          "{:.6g} Hz)", options.fmax_hz, std::sqrt(pairs.eigenvalues(0)) / kTwoPi));
+  result.normal_modes = keep;
   result.eigenvalues = pairs.eigenvalues.head(keep);
   result.vectors = pairs.vectors.leftCols(keep);
-  result.frequencies_hz = result.eigenvalues.cwiseSqrt() / kTwoPi;
-  result.relative_residuals.resize(keep);
+  if (static_loads.cols() > 0) {
+    if (static_loads.rows() != n) throw std::invalid_argument("free-free modes: the static loads have the wrong length");
+    if (options.progress) options.progress(fmt::format("static correction: {} unit loads", static_loads.cols()));
+    Eigen::MatrixXd known(n, 6 + keep);
+    known << rigid, result.vectors;
+    StaticCorrectionModes correction =
+        static_correction_modes(op, stiffness_upper, scalar_mass_upper, known, static_loads);
+    result.static_correction = correction.stats;
+    result.vectors.conservativeResize(n, keep + correction.vectors.cols());
+    result.vectors.rightCols(correction.vectors.cols()) = correction.vectors;
+    result.eigenvalues.conservativeResize(result.vectors.cols());
+    result.eigenvalues.tail(correction.eigenvalues.size()) = correction.eigenvalues;
+  }
+  const Eigen::Index n_m = result.vectors.cols();
+  result.frequencies_hz = result.eigenvalues.cwiseMax(0.0).cwiseSqrt() / kTwoPi;
+  result.relative_residuals.resize(n_m);
   Eigen::VectorXd kphi(n), mphi(n);
-  for (Eigen::Index k = 0; k < keep; ++k) {
+  for (Eigen::Index k = 0; k < n_m; ++k) {
     apply_symmetric(stiffness_upper, result.vectors.col(k), kphi);
     mass.perform_op(result.vectors.col(k).data(), mphi.data());
     result.relative_residuals(k) = (kphi - result.eigenvalues(k) * mphi).norm() / kphi.norm();
     result.rigid_body_coupling = std::max(result.rigid_body_coupling, (rigid.transpose() * mphi).cwiseAbs().maxCoeff());
   }
   result.stats = op.stats();
-  const Eigen::Index worst = [&] { Eigen::Index w; result.relative_residuals.maxCoeff(&w); return w; }();
+  const Eigen::Index worst = [&] { Eigen::Index w; result.relative_residuals.head(keep).maxCoeff(&w); return w; }();
   if (!(result.relative_residuals(worst) <= kMaxRelativeResidual))
     throw std::runtime_error(fmt::format("free-free modes: mode {} ({:.6g} Hz) has relative residual {:.3g} > {:.0e}",
                                          worst + 1, result.frequencies_hz(worst), result.relative_residuals(worst),

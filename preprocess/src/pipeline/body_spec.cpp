@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -76,10 +77,6 @@ class Reader {
     const YAML::Node value = map[key];
     if (!value.IsDefined()) fail(map, fmt::format("{} needs '{}'", what, key));
     return value;
-  }
-
-  [[noreturn]] void not_implemented(const YAML::Node& at, const std::string& what) const {
-    fail(at, fmt::format("{} is not implemented yet", what));
   }
 
  private:
@@ -240,8 +237,73 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
     for (const auto& i : options.interfaces) list += (list.empty() ? "" : " ") + i.name + ":" + i.coupling;
     recorded.emplace_back("interfaces", list);
   }
-  if (const YAML::Node points = root["load_points"]) r.not_implemented(points, "load_points (static correction modes)");
-  if (const YAML::Node regions = root["output_regions"]) r.not_implemented(regions, "output_regions (stress recovery)");
+  std::set<std::string> marker_names;
+  for (const InterfaceRequest& i : options.interfaces) marker_names.insert(i.name);
+  if (const YAML::Node points = root["load_points"]) {
+    if (!points.IsMap()) r.fail(points, "load_points must be a map of names to load points");
+    for (auto it = points.begin(); it != points.end(); ++it) {
+      const std::string name = it->first.Scalar();
+      if (!marker_names.insert(name).second)
+        r.fail(it->first, fmt::format("load point '{}': the name is already an interface or load point", name));
+      const std::string where = fmt::format("load point '{}'", name);
+      r.expect_map(it->second, where, {"select", "loads"});
+      LoadPointRequest request;
+      request.name = name;
+      request.select = read_selector(r, r.required(it->second, "select", where), where);
+      if (const YAML::Node loads = it->second["loads"]) {
+        if (!loads.IsSequence() || loads.size() == 0)
+          r.fail(loads, fmt::format("{} loads must be a list of fx, fy, fz, mx, my, mz", where));
+        request.loads.fill(false);
+        for (std::size_t k = 0; k < loads.size(); ++k) {
+          const std::string load = r.text(loads[k], where + " load");
+          const auto* found = std::find(kUnitLoadNames.begin(), kUnitLoadNames.end(), load);
+          if (found == kUnitLoadNames.end())
+            r.fail(loads[k], fmt::format("{}: load '{}' is unknown; use fx, fy, fz, mx, my, mz", where, load));
+          auto& on = request.loads[static_cast<std::size_t>(found - kUnitLoadNames.begin())];
+          if (on) r.fail(loads[k], fmt::format("{}: load '{}' is listed twice", where, load));
+          on = true;
+        }
+      }
+      options.load_points.push_back(std::move(request));
+    }
+    std::string list;
+    for (const LoadPointRequest& p : options.load_points) {
+      list += (list.empty() ? "" : " ") + p.name + ":";
+      for (std::size_t k = 0; k < 6; ++k)
+        if (p.loads[k]) list += kUnitLoadNames[k];
+    }
+    recorded.emplace_back("load_points", list);
+  }
+  if (const YAML::Node regions = root["output_regions"]) {
+    // An empty map asks for no stress recovery at all (overriding the whole-body default of small meshes).
+    if (!regions.IsMap()) r.fail(regions, "output_regions must be a map of names to regions (or {} for none)");
+    std::vector<OutputRegionRequest> requests;
+    for (auto it = regions.begin(); it != regions.end(); ++it) {
+      const std::string name = it->first.Scalar();
+      const std::string where = fmt::format("output region '{}'", name);
+      if (name.empty() || name.find_first_of("/,") != std::string::npos || name == "order" || name == "stress_components")
+        r.fail(it->first, fmt::format("{}: the name is not allowed (non-empty, no '/' or ',', not order or "
+                                      "stress_components)", where));
+      for (const OutputRegionRequest& other : requests)
+        if (other.name == name) r.fail(it->first, fmt::format("{} is defined twice", where));
+      r.expect_map(it->second, where, {"select"});
+      const YAML::Node select = r.required(it->second, "select", where);
+      OutputRegionRequest request;
+      request.name = name;
+      if (select.IsScalar()) {
+        if (select.Scalar() != "all")
+          r.fail(select, fmt::format("{} select must be a selector map or 'all' (every node), got '{}'", where,
+                                     select.Scalar()));
+      } else {
+        request.select = read_selector(r, select, where);
+      }
+      requests.push_back(std::move(request));
+    }
+    std::string list;
+    for (const OutputRegionRequest& q : requests) list += (list.empty() ? "" : " ") + q.name;
+    recorded.emplace_back("output_regions", list.empty() ? "none" : list);
+    options.output_regions = std::move(requests);
+  }
   return options;
 }
 

@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -69,8 +70,11 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
   const auto& modes = body.modes;
   r += fmt::format("\nModes ({}, {} by {})\n", modes.count(), modes.kind, modes.eigensolver);
   r += fmt::format("  {:>4}  {:>16}  {:>14}\n", "mode", "frequency [Hz]", "rel. residual");
+  const Eigen::Index first_static = modes.count() - modes.static_correction_modes;
   for (Eigen::Index k = 0; k < modes.count(); ++k)
-    r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}\n", k + 1, modes.frequencies_hz(k), modes.relative_residuals(k));
+    r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}{}\n", k + 1, modes.frequencies_hz(k), modes.relative_residuals(k),
+                     k >= first_static ? "  static correction (Ritz value)" : "");
+  if (!modes.static_loads.empty()) line("static loads", fmt::format("{}", fmt::join(modes.static_loads, " ")));
 
   const auto& fixed = modes.fixed_interface_frequencies_hz;
   if (fixed.size() > 0) {
@@ -89,6 +93,16 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
   line("K_hat", fmt::format("{} x {}; sqrt(eig)/2pi from {:.6g} to {:.6g} Hz", g.stiffness.rows(), g.stiffness.cols(),
                             k_low, k_high));
   line("cond(Ups^T M_s Ups)", fmt::format("{:.3g} (the modes' own fields)", g.condition_mode_gram_before));
+  if (!body.interfaces.empty()) {
+    r += "\nInterfaces (body frame)\n";
+    for (const format::Interface& i : body.interfaces)
+      line(i.name, fmt::format("{}, {} nodes, reference point {} m", i.coupling, i.nodes.size(), vector3(i.reference_point)));
+  }
+  r += "\nStress recovery\n";
+  if (body.recovery.empty()) line("output regions", "none");
+  for (const format::RecoveryRegion& region : body.recovery)
+    line(region.name, fmt::format("{} nodes, stress modes {} x {}", region.nodes.size(), region.stress_modes.rows(),
+                                  region.stress_modes.cols()));
   return r;
 }
 
@@ -138,6 +152,16 @@ std::string body_json(const format::BodyData& body, const std::filesystem::path&
   j["condition_G_after"] = number_or_null(g.condition_mass_after);
   j["condition_G_scaled_after"] = number_or_null(g.condition_mass_scaled_after);
   j["k_hat_frequency_range_hz"] = {k_low, k_high};
+  j["static_loads"] = body.modes.static_loads;
+  j["static_correction_modes"] = body.modes.static_correction_modes;
+  nlohmann::ordered_json interfaces = nlohmann::ordered_json::array();
+  for (const format::Interface& i : body.interfaces)
+    interfaces.push_back({{"name", i.name}, {"coupling", i.coupling}, {"nodes", i.nodes.size()}});
+  j["interfaces"] = interfaces;
+  nlohmann::ordered_json regions = nlohmann::ordered_json::array();
+  for (const format::RecoveryRegion& region : body.recovery)
+    regions.push_back({{"name", region.name}, {"nodes", region.nodes.size()}});
+  j["output_regions"] = regions;
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 

@@ -5,6 +5,7 @@
 #include "flexbody/preprocess/craig_bampton.hpp"
 #include "flexbody/preprocess/gcms_constants.hpp"
 #include "flexbody/preprocess/mass_properties.hpp"
+#include "flexbody/preprocess/stress_recovery.hpp"
 
 #include <fmt/chrono.h>
 #include <fmt/format.h>
@@ -73,9 +74,8 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   if (options.reduction == ReductionKind::craig_bampton) {
     if (!any_rbe2)
       throw std::invalid_argument("craig-bampton reduction: no rbe2 interface; its constraint modes need at least one");
-    if (options.modes.fmax_hz > 0.0 || options.modes.modes < 1)
-      throw std::invalid_argument("craig-bampton reduction: give the number of fixed-interface modes (modes); "
-                                  "fmax is not implemented for it");
+    if (options.modes.modes < 1 && !(options.modes.fmax_hz > 0.0))
+      throw std::invalid_argument("craig-bampton reduction: give the number of fixed-interface modes (modes) or fmax");
   }
   PrepSummary summary;
   summary.input = options.input;
@@ -135,8 +135,10 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.surface_triangles = body.mesh.surface_triangles.rows();
 
   // Interfaces are selected now (Craig-Bampton needs their nodes); their markers follow the GCMS fields.
+  // Load points are rbe3 interfaces too (the runtime applies their loads there).
   const std::vector<SelectedInterface> selected = in_stage("interfaces", [&] {
     std::vector<InterfaceRequest> in_metres = options.interfaces;
+    for (const LoadPointRequest& p : options.load_points) in_metres.push_back({p.name, p.select, "rbe3", "load point"});
     for (InterfaceRequest& request : in_metres) request.select = scaled(request.select, metres_per(imported.unit));
     std::vector<SelectedInterface> chosen =
         select_interfaces(in_metres, mesh.nodes, body.mesh.surface_triangles, imported.surfaces);
@@ -147,6 +149,17 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     return chosen;
   });
 
+  // The load points' unit loads, whose static corrections join the modes.
+  std::vector<LoadPoint> load_points;
+  for (const LoadPointRequest& request : options.load_points)
+    for (const SelectedInterface& s : selected)
+      if (s.name == request.name)
+        load_points.push_back(
+            {s.name, s.patch.nodes, s.patch.weights, patch_centroid(s.patch, body.mesh.nodes), request.loads});
+  const Eigen::MatrixXd static_loads =
+      in_stage("interfaces", [&] { return unit_load_vectors(body.mesh.nodes, load_points); });
+  summary.static_loads = unit_load_labels(load_points);
+
   // 3. Modes: free-free, or Craig-Bampton on the rbe2 interfaces.
   StageTimer modes_timer(summary, "modes");
   summary.reduction = options.reduction;
@@ -156,8 +169,10 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     FreeFreeOptions mode_options = options.modes;
     mode_options.progress = options.progress;
     const FreeFreeModes modes = in_stage("modes", [&] {
-      return free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options);
+      return free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options, static_loads);
     });
+    summary.static_correction = modes.static_correction;
+    summary.static_correction_modes = modes.vectors.cols() - modes.normal_modes;
     summary.frequencies_hz = modes.frequencies_hz;
     summary.relative_residuals = modes.relative_residuals;
     summary.shift = modes.shift;
@@ -174,14 +189,19 @@ PrepSummary run_fbprep(const PrepOptions& options) {
       if (s.coupling == "rbe2") rigid.push_back({s.patch.nodes, patch_centroid(s.patch, body.mesh.nodes)});
     CraigBamptonOptions cb_options;
     cb_options.fixed_interface_modes = options.modes.modes;
+    cb_options.fmax_hz = options.modes.fmax_hz;
     cb_options.solver = options.modes.solver;
     cb_options.shift = options.modes.shift;
     if (options.progress)
-      options.progress(fmt::format("Craig-Bampton: {} fixed-interface modes, {} rbe2 interfaces", options.modes.modes,
+      options.progress(fmt::format("Craig-Bampton: fixed-interface modes ({}), {} rbe2 interfaces",
+                                   options.modes.modes > 0 ? std::to_string(options.modes.modes)
+                                                           : fmt::format("up to {} Hz", options.modes.fmax_hz),
                                    rigid.size()));
     const CraigBamptonModes modes = in_stage("modes", [&] {
-      return craig_bampton_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, rigid, cb_options);
+      return craig_bampton_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, rigid, cb_options,
+                                 static_loads);
     });
+    summary.static_correction = modes.static_correction;
     summary.frequencies_hz = modes.frequencies_hz;
     summary.relative_residuals = modes.relative_residuals;
     summary.fixed_interface_frequencies_hz = modes.fixed_interface_frequencies_hz;
@@ -216,7 +236,47 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     summary.interfaces.push_back({i.name, i.coupling, i.nodes.size(), i.reference_point + summary.mass.center_of_mass_input});
   reduce_timer.stop();
 
-  // 5. The body file.
+  // 5. Stress recovery: stress modes of the fields at the output regions' nodes.
+  StageTimer recovery_timer(summary, "recovery");
+  std::vector<OutputRegionRequest> regions;
+  const double whole_body_bytes = 8.0 * 6.0 * static_cast<double>(mesh.node_count()) * 3.0 *
+                                  static_cast<double>(body.gcms.field_count());
+  if (options.output_regions) {
+    regions = *options.output_regions;
+    summary.output_regions_reason = regions.empty() ? "none: the body spec asks for none" : "as the body spec names them";
+  } else if (whole_body_bytes <= kDefaultRecoveryBytes) {
+    regions.push_back({"body", std::nullopt});
+    summary.output_regions_reason = fmt::format("the whole body by default (its stress modes take {:.3g} MB, at most "
+                                                "{:.0f})", whole_body_bytes / 1e6, kDefaultRecoveryBytes / 1e6);
+  } else {
+    summary.output_regions_reason = fmt::format("none: the whole body's stress modes would take {:.3g} MB (default "
+                                                "limit {:.0f}); name output_regions in the body spec",
+                                                whole_body_bytes / 1e6, kDefaultRecoveryBytes / 1e6);
+  }
+  if (options.progress && !regions.empty())
+    options.progress(fmt::format("stress modes for {} output region{}", regions.size(), regions.size() == 1 ? "" : "s"));
+  body.recovery = in_stage("recovery", [&] {
+    std::vector<format::RecoveryRegion> recovery;
+    for (const OutputRegionRequest& request : regions) {
+      format::RecoveryRegion region;
+      region.name = request.name;
+      if (request.select) {
+        region.nodes = select_surface_patch(fmt::format("output region '{}'", request.name),
+                                            scaled(*request.select, metres_per(imported.unit)), mesh.nodes,
+                                            body.mesh.surface_triangles, imported.surfaces)
+                           .nodes;
+      } else {
+        region.nodes = Eigen::VectorXi::LinSpaced(mesh.node_count(), 0, static_cast<int>(mesh.node_count() - 1));
+      }
+      region.stress_modes = nodal_stress_modes(mesh, options.material, body.gcms.fields, region.nodes);
+      recovery.push_back(std::move(region));
+    }
+    return recovery;
+  });
+  for (const format::RecoveryRegion& region : body.recovery) summary.output_regions.push_back({region.name, region.nodes.size()});
+  recovery_timer.stop();
+
+  // 6. The body file.
   StageTimer write_timer(summary, "write");
   if (options.progress) options.progress("writing " + options.output.string());
   body.provenance.created_by = fmt::format("fbprep {}", kFbprepVersion);
@@ -234,6 +294,8 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   body.modes.fixed_interface_frequencies_hz = summary.fixed_interface_frequencies_hz;
   body.modes.eigensolver = summary.eigensolver;
   body.modes.shift = summary.shift;
+  body.modes.static_loads = summary.static_loads;
+  body.modes.static_correction_modes = summary.static_correction_modes;
   format::write_body_file(body, options.output);
   summary.output_bytes = std::filesystem::file_size(options.output);
   write_timer.stop();

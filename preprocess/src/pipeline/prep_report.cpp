@@ -67,8 +67,19 @@ std::string PrepSummary::full_report() const {
                      eigensolver, shift_as_frequency(shift));
   }
   r += fmt::format("  {:>4}  {:>16}  {:>14}\n", "mode", "frequency [Hz]", "rel. residual");
+  const Eigen::Index first_static = frequencies_hz.size() - static_correction_modes;
   for (Eigen::Index k = 0; k < frequencies_hz.size(); ++k)
-    r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}\n", k + 1, frequencies_hz(k), relative_residuals(k));
+    r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}{}\n", k + 1, frequencies_hz(k), relative_residuals(k),
+                     k >= first_static ? "  static correction (Ritz value)" : "");
+  if (!static_loads.empty()) {
+    line("static correction", fmt::format("{} unit loads ({}), {} dropped as dependent", static_correction.loads,
+                                          fmt::join(static_loads, " "), static_correction.dropped));
+    line("", fmt::format("{} preconditioned CG iterations, max static residual {:.1e}; {}", static_correction.iterations,
+                         static_correction.max_relative_residual,
+                         reduction == ReductionKind::free_free
+                             ? "inertia relief, less the normal modes' part"
+                             : "interfaces clamped, in the basis before orthonormalisation"));
+  }
   if (reduction == ReductionKind::free_free)
     line("rigid-body check", fmt::format("|K r|/(|K| |r|) = {:.1e}, max |r^T M phi| = {:.1e}", rigid_body_residual,
                                          rigid_body_coupling));
@@ -91,6 +102,9 @@ std::string PrepSummary::full_report() const {
       line(i.name, fmt::format("{}, {} nodes, reference point {} m (input frame)", i.coupling, i.nodes,
                                vector3(i.reference_point_input)));
   }
+  r += "\nStress recovery (nodal stress modes: xx yy zz xy xz yz per field and direction)\n";
+  line("output regions", output_regions_reason);
+  for (const auto& region : output_regions) line(region.name, fmt::format("{} nodes", region.nodes));
   r += fmt::format("\n  {:<22}{:>10}  {:>18}\n", "stage", "time [s]", "peak memory [MB]");
   for (const auto& stage : stages) r += fmt::format("  {:<22}{:>10.3f}  {:>18.1f}\n", stage.name, stage.seconds, stage.peak_memory_mb);
   r += fmt::format("  {:<22}{:>10.3f}  {:>18.1f}\n", "total", total_seconds, peak_memory_mb);
@@ -157,6 +171,16 @@ std::string PrepSummary::json() const {
                               {"reference_point_m", {i.reference_point_input(0), i.reference_point_input(1),
                                                      i.reference_point_input(2)}}});
   j["interfaces"] = interface_list;
+  j["static_loads"] = static_loads;
+  j["static_correction"] = {{"loads", static_correction.loads},
+                            {"dropped", static_correction.dropped},
+                            {"modes", static_correction_modes},
+                            {"iterations", static_correction.iterations},
+                            {"max_relative_residual", static_correction.max_relative_residual}};
+  nlohmann::ordered_json region_list = nlohmann::ordered_json::array();
+  for (const auto& region : output_regions) region_list.push_back({{"name", region.name}, {"nodes", region.nodes}});
+  j["output_regions"] = region_list;
+  j["output_regions_reason"] = output_regions_reason;
   nlohmann::ordered_json timings, memory;
   for (const auto& stage : stages) {
     timings[stage.name] = stage.seconds;

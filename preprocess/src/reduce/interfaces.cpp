@@ -29,7 +29,7 @@ std::vector<char> selected(const std::string& name, const Selector& selector, co
   std::vector<char> take(static_cast<std::size_t>(nodes.rows()), 0);
   auto unit = [&name](const Eigen::Vector3d& v, const char* what) {
     if (!(v.norm() > 0.0) || !v.allFinite())
-      throw std::invalid_argument(fmt::format("interface '{}': the {} must be a non-zero vector", name, what));
+      throw std::invalid_argument(fmt::format("{}: the {} must be a non-zero vector", name, what));
     return Eigen::Vector3d(v.normalized());
   };
   if (const auto* plane = std::get_if<PlaneSelector>(&selector)) {
@@ -40,7 +40,7 @@ std::vector<char> selected(const std::string& name, const Selector& selector, co
   } else if (const auto* cylinder = std::get_if<CylinderSelector>(&selector)) {
     const Eigen::Vector3d axis = unit(cylinder->direction, "cylinder direction");
     if (!(cylinder->radius > 0.0))
-      throw std::invalid_argument(fmt::format("interface '{}': the cylinder radius must be positive, got {}", name,
+      throw std::invalid_argument(fmt::format("{}: the cylinder radius must be positive, got {}", name,
                                               cylinder->radius));
     const double tol = default_tolerance(cylinder->tolerance, nodes);
     for (Eigen::Index i = 0; i < nodes.rows(); ++i) {
@@ -50,7 +50,7 @@ std::vector<char> selected(const std::string& name, const Selector& selector, co
   } else if (const auto* box_selector = std::get_if<BoxSelector>(&selector)) {
     const auto& box = *box_selector;
     if (!(box.min.array() <= box.max.array()).all())
-      throw std::invalid_argument(fmt::format("interface '{}': the box min must not exceed its max", name));
+      throw std::invalid_argument(fmt::format("{}: the box min must not exceed its max", name));
     for (Eigen::Index i = 0; i < nodes.rows(); ++i)
       take[i] = (nodes.row(i).transpose().array() >= box.min.array()).all() &&
                 (nodes.row(i).transpose().array() <= box.max.array()).all();
@@ -92,7 +92,7 @@ std::vector<const CadSurface*> named_surfaces(const std::string& name, const Sel
       if (it == surfaces.end()) {
         std::vector<int> known;
         for (const CadSurface& s : surfaces) known.push_back(s.tag);
-        throw std::invalid_argument(fmt::format("interface '{}': the part has no surface {} (surfaces: {}; see fbprep "
+        throw std::invalid_argument(fmt::format("{}: the part has no surface {} (surfaces: {}; see fbprep "
                                                 "list-surfaces)", name, tag, known.empty() ? "none" : fmt::format("{}", fmt::join(known, ", "))));
       }
       chosen.push_back(&*it);
@@ -105,7 +105,7 @@ std::vector<const CadSurface*> named_surfaces(const std::string& name, const Sel
       if (std::find(s.groups.begin(), s.groups.end(), group) != s.groups.end()) chosen.push_back(&s);
     }
     if (chosen.empty())
-      throw std::invalid_argument(fmt::format("interface '{}': the part has no surface group '{}' (groups: {})", name,
+      throw std::invalid_argument(fmt::format("{}: the part has no surface group '{}' (groups: {})", name,
                                               group, known.empty() ? "none" : fmt::format("{}", fmt::join(known, ", "))));
   }
   return chosen;
@@ -113,7 +113,7 @@ std::vector<const CadSurface*> named_surfaces(const std::string& name, const Sel
 
 }  // namespace
 
-SurfacePatch select_surface_patch(const std::string& name, const Selector& selector, const RowMatrixX3d& nodes,
+SurfacePatch select_surface_patch(const std::string& label, const Selector& selector, const RowMatrixX3d& nodes,
                                   const RowMatrixX3i& surface_triangles, const std::vector<CadSurface>& surfaces) {
   std::map<int, double> area_share;  // node -> a third of its selected triangles' area
   auto add = [&](const auto& tri) {
@@ -123,10 +123,10 @@ SurfacePatch select_surface_patch(const std::string& name, const Selector& selec
   };
   std::vector<char> take;
   if (std::holds_alternative<SurfaceSelector>(selector) || std::holds_alternative<GroupSelector>(selector)) {
-    for (const CadSurface* surface : named_surfaces(name, selector, surfaces))
+    for (const CadSurface* surface : named_surfaces(label, selector, surfaces))
       for (Eigen::Index t = 0; t < surface->triangles.rows(); ++t) add(surface->triangles.row(t));
   } else {
-    take = selected(name, selector, nodes);
+    take = selected(label, selector, nodes);
     for (Eigen::Index t = 0; t < surface_triangles.rows(); ++t) {
       const auto tri = surface_triangles.row(t);
       if (take[tri(0)] && take[tri(1)] && take[tri(2)]) add(tri);
@@ -135,9 +135,9 @@ SurfacePatch select_surface_patch(const std::string& name, const Selector& selec
   if (area_share.empty()) {
     const auto count = std::count(take.begin(), take.end(), char{1});
     throw std::invalid_argument(
-        count == 0 ? fmt::format("interface '{}': the selector takes no node of the part", name)
-                   : fmt::format("interface '{}': the selector takes {} nodes but no whole surface triangle (it must "
-                                 "select a surface patch, not a line or single nodes)", name, count));
+        count == 0 ? fmt::format("{}: the selector takes no node of the part", label)
+                   : fmt::format("{}: the selector takes {} nodes but no whole surface triangle (it must "
+                                 "select a surface patch, not a line or single nodes)", label, count));
   }
   double total = 0.0;
   for (const auto& [node, area] : area_share) total += area;
@@ -199,18 +199,18 @@ std::vector<SelectedInterface> select_interfaces(const std::vector<InterfaceRequ
   for (const InterfaceRequest& request : requests) {
     if (request.name.empty() || request.name.find_first_of("/,") != std::string::npos || request.name == "order")
       throw std::invalid_argument(fmt::format("interface name '{}' is not allowed (non-empty, no '/' or ',')", request.name));
-    if (!names.insert(request.name).second)
-      throw std::invalid_argument(fmt::format("interface '{}' is defined twice", request.name));
+    const std::string label = fmt::format("{} '{}'", request.kind, request.name);
+    if (!names.insert(request.name).second) throw std::invalid_argument(fmt::format("{} is defined twice", label));
     if (request.coupling != "rbe2" && request.coupling != "rbe3")
       throw std::invalid_argument(
-          fmt::format("interface '{}': coupling '{}' is unknown; use rbe2 or rbe3", request.name, request.coupling));
-    SurfacePatch patch = select_surface_patch(request.name, request.select, input_nodes, surface_triangles, surfaces);
+          fmt::format("{}: coupling '{}' is unknown; use rbe2 or rbe3", label, request.coupling));
+    SurfacePatch patch = select_surface_patch(label, request.select, input_nodes, surface_triangles, surfaces);
     for (Eigen::Index j = 0; j < patch.nodes.size(); ++j) {
-      const auto [it, fresh] = owner.emplace(patch.nodes(j), request.name);
+      const auto [it, fresh] = owner.emplace(patch.nodes(j), label);
       if (!fresh)
         throw std::invalid_argument(fmt::format(
-            "interfaces '{}' and '{}' share node {} (at [{:.6g}, {:.6g}, {:.6g}] m): interfaces must not overlap",
-            it->second, request.name, patch.nodes(j), input_nodes(patch.nodes(j), 0), input_nodes(patch.nodes(j), 1),
+            "{} and {} share node {} (at [{:.6g}, {:.6g}, {:.6g}] m): interfaces and load points must not overlap",
+            it->second, label, patch.nodes(j), input_nodes(patch.nodes(j), 0), input_nodes(patch.nodes(j), 1),
             input_nodes(patch.nodes(j), 2)));
     }
     selected_interfaces.push_back({request.name, request.coupling, std::move(patch)});

@@ -13,6 +13,11 @@
 //     tip:  {select: {box: {min: [0.99, -1, -1], max: [1.01, 1, 1]}}}
 //     seat: {select: {surfaces: [7, 8]}}     # CAD surface tags (fbprep list-surfaces)
 //     flange: {select: {group: flange}}      # a gmsh physical group of surfaces (.geo, .msh)
+//   load_points:                     # rbe3 interfaces that also get static correction modes
+//     hook: {select: {cylinder: {...}}, loads: [fx, fy, mz]}   # default: all of fx fy fz mx my mz
+//   output_regions:                  # stress recovery; absent: the whole body if small; {}: none
+//     fillet: {select: {box: {min: [...], max: [...]}}}        # the selected surface's nodes
+//     body: {select: all}                                       # every node
 
 #include "flexbody/preprocess/fbprep_pipeline.hpp"
 
@@ -23,12 +28,11 @@ namespace flexbody::preprocess {
 /// True for a .yaml or .yml file name.
 [[nodiscard]] bool is_body_spec(const std::filesystem::path& path);
 
-/// Reads a body spec into fbprep options (input, unit, material, mesh, modes, interfaces; output and
-/// progress are left to the caller) and records every value in `recorded_options`. Throws
-/// std::invalid_argument "<spec>:<line>: <problem>" for a missing or unreadable file, YAML syntax errors,
-/// unknown or repeated keys, wrong types, non-finite numbers and values out of range, and for the parts
-/// of the spec that are not implemented yet (Craig-Bampton reduction, load points, output regions), each
-/// naming its line.
+/// Reads a body spec into fbprep options (input, unit, material, mesh, reduction, interfaces, load points,
+/// output regions; output and progress are left to the caller) and records every value in
+/// `recorded_options`. Throws std::invalid_argument "<spec>:<line>: <problem>" for a missing or unreadable
+/// file, YAML syntax errors, unknown or repeated keys or names, wrong types, non-finite numbers and values
+/// out of range, each naming its line.
 [[nodiscard]] PrepOptions read_body_spec(const std::filesystem::path& spec);
 
 }  // namespace flexbody::preprocess

@@ -9,6 +9,7 @@
 #include "flexbody/preprocess/eigensolver.hpp"
 #include "flexbody/preprocess/material.hpp"
 #include "flexbody/preprocess/shift_invert_operator.hpp"
+#include "flexbody/preprocess/static_correction.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
 
 #include <vector>
@@ -23,7 +24,10 @@ struct RigidInterface {
 };
 
 struct CraigBamptonOptions {
-  int fixed_interface_modes = 8;  ///< normal modes with every interface clamped
+  /// Normal modes with every interface clamped; 0 = not set (then fmax_hz decides).
+  int fixed_interface_modes = 8;
+  /// All fixed-interface modes up to this frequency [Hz]; 0 = not set. With both, the count caps.
+  double fmax_hz = 0.0;
   EigensolverOptions solver;
   double shift = 0.0;  ///< sigma < 0 for the clamped eigenproblem; 0 = automatic_shift
 };
@@ -31,11 +35,13 @@ struct CraigBamptonOptions {
 struct CraigBamptonModes {
   /// The clamped problem: omega^2 [rad^2/s^2], frequencies and ||K φ - ω² M φ|| / ||K φ||.
   Eigen::VectorXd fixed_interface_eigenvalues, fixed_interface_frequencies_hz, fixed_interface_residuals;
-  /// The Craig-Bampton basis before orthonormalisation: [fixed-interface modes, constraint modes]
-  /// (3 n_n x (n_fixed + 6 n_interfaces)); constraint mode 6 j + k moves interface j by unit DOF k
-  /// (translations x, y, z, then small rotations about x, y, z).
+  /// The Craig-Bampton basis before orthonormalisation: [fixed-interface modes, constraint modes, static
+  /// corrections] (3 n_n x (n_fixed + 6 n_interfaces + n_static)); constraint mode 6 j + k moves interface j
+  /// by unit DOF k (translations x, y, z, then small rotations about x, y, z); the static corrections are
+  /// the clamped body's residual responses to the static loads (zero on the interfaces).
   Eigen::MatrixXd basis;
-  /// The orthonormalised elastic modes (3 n_n x (n_fixed + 6 n_interfaces - 6)): M̄-orthonormal,
+  StaticCorrectionStats static_correction;
+  /// The orthonormalised elastic modes (3 n_n x (n_fixed + 6 n_interfaces + n_static - 6)): M̄-orthonormal,
   /// M̄-orthogonal to the rigid-body fields, ascending in omega^2.
   Eigen::VectorXd eigenvalues, frequencies_hz;
   /// ||K̄ψ − ω²M̄ψ|| / ||K̄ψ|| of each orthonormalised mode in the tied model (interior nodal forces, and
@@ -48,12 +54,15 @@ struct CraigBamptonModes {
   ShiftSolveStats stats;
 };
 
+/// `static_loads` (3 n_n x s nodal force vectors, e.g. unit_load_vectors, zero on the interfaces) add their
+/// static responses with every interface clamped, less what the fixed-interface modes hold, to the basis.
 /// Throws std::invalid_argument for no interface or an impossible mode count, std::runtime_error when
 /// a fixed-interface mode's residual exceeds 1e-8, the reduced problem does not have exactly six
 /// zero-energy vectors (a mechanism) or a solver fails.
 [[nodiscard]] CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
                                                     const SparseMatrix& scalar_mass_upper, const Material& material,
                                                     const std::vector<RigidInterface>& interfaces,
-                                                    const CraigBamptonOptions& options);
+                                                    const CraigBamptonOptions& options,
+                                                    const Eigen::MatrixXd& static_loads = Eigen::MatrixXd());
 
 }  // namespace flexbody::preprocess

@@ -15,9 +15,11 @@
 #include "flexbody/preprocess/interfaces.hpp"
 #include "flexbody/preprocess/material.hpp"
 #include "flexbody/preprocess/mesh_topology.hpp"
+#include "flexbody/preprocess/static_correction.hpp"
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -27,6 +29,16 @@ namespace flexbody::preprocess {
 
 /// The fbprep version written into every body file (created_by).
 inline constexpr const char* kFbprepVersion = "0.2.0";
+
+/// An output region for stress recovery: the nodes of the selected surface patch, or every node.
+struct OutputRegionRequest {
+  std::string name;
+  std::optional<Selector> select;  ///< input frame, the input's length unit; nullopt: the whole body
+};
+
+/// Without output regions in the request, the whole body is one ("body") if its stress modes take at
+/// most this many bytes (6 n_n x 3 n_f doubles), and there are none otherwise.
+inline constexpr double kDefaultRecoveryBytes = 64e6;
 
 /// How the reduction basis is made.
 enum class ReductionKind { free_free, craig_bampton };
@@ -43,6 +55,10 @@ struct PrepOptions {
   /// With free-free modes only rbe3 couplings: an rbe2 tie changes the modes and needs a Craig-Bampton
   /// reduction.
   std::vector<InterfaceRequest> interfaces;
+  /// Load points: rbe3 interfaces that also add their static correction modes to the basis.
+  std::vector<LoadPointRequest> load_points;
+  /// Output regions for stress recovery; nullopt: the default (kDefaultRecoveryBytes), empty: none.
+  std::optional<std::vector<OutputRegionRequest>> output_regions;
   /// The options as the user gave them, recorded in the body file's provenance.
   std::vector<std::pair<std::string, std::string>> recorded_options;
   /// Called with a short message at the start of each long step.
@@ -90,6 +106,18 @@ struct PrepSummary {
     Eigen::Vector3d reference_point_input = Eigen::Vector3d::Zero();
   };
   std::vector<InterfaceLine> interfaces;
+  /// Static correction: the unit loads ("hook:fx", ...), the solves, and how many modes are static
+  /// corrections (free-free: the last ones; Craig-Bampton: 0, they are folded into its basis).
+  std::vector<std::string> static_loads;
+  StaticCorrectionStats static_correction;
+  Eigen::Index static_correction_modes = 0;
+  /// Output regions for stress recovery (name, nodes) and why these (the default rule or the spec).
+  struct RegionLine {
+    std::string name;
+    Eigen::Index nodes = 0;
+  };
+  std::vector<RegionLine> output_regions;
+  std::string output_regions_reason;
   std::vector<StageRecord> stages;
   double total_seconds = 0.0;
   double peak_memory_mb = 0.0;

@@ -3,6 +3,7 @@
 
 #include "flexbody/preprocess/eigensolver.hpp"
 #include "flexbody/preprocess/material.hpp"
+#include "flexbody/preprocess/static_correction.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
 
 #include <Eigen/Core>
@@ -29,10 +30,16 @@ struct FreeFreeOptions {
 };
 
 struct FreeFreeModes {
-  Eigen::VectorXd eigenvalues;     ///< omega^2 [rad^2/s^2], ascending, elastic only
+  /// omega^2 [rad^2/s^2], ascending, elastic only: the normal modes, then the static correction modes'
+  /// Ritz values (all above the normal modes').
+  Eigen::VectorXd eigenvalues;
   Eigen::VectorXd frequencies_hz;
-  Eigen::VectorXd relative_residuals;  ///< ||K phi - omega^2 M phi|| / ||K phi||
+  /// ||K phi - omega^2 M phi|| / ||K phi||: below 1e-8 for the normal modes; the static correction modes
+  /// are not eigenvectors and their residuals are what they are.
+  Eigen::VectorXd relative_residuals;
   Eigen::MatrixXd vectors;         ///< 3 n_n x n_m, M̄-orthonormal, node-interleaved
+  Eigen::Index normal_modes = 0;   ///< the first this many are eigenmodes, the rest static corrections
+  StaticCorrectionStats static_correction;
   double shift = 0.0;
   /// max_k ||K r_k|| / (||K||_1 ||r_k||) over the six M̄-orthonormal rigid-body fields r_k.
   double rigid_body_residual = 0.0;
@@ -46,11 +53,14 @@ struct FreeFreeModes {
 
 /// Computes the lowest elastic free-free modes of K̄ phi = omega^2 M̄ phi (M̄ = M_s ⊗ I3) by shift-invert
 /// on a CHOLMOD factorization of K̄ - sigma M̄ with sigma < 0, the six rigid-body modes deflated.
+/// With `static_loads` (3 n_n x s nodal force vectors, e.g. unit_load_vectors), the basis is extended by
+/// their residual static correction modes (inertia relief; static_correction.hpp) on the same factorization.
 /// Throws std::runtime_error when the body has more than six zero-energy modes (a mechanism or a
-/// disconnected mesh), when a mode's residual exceeds 1e-8, or when the solver fails.
+/// disconnected mesh), when a normal mode's residual exceeds 1e-8, or when a solver fails.
 [[nodiscard]] FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
                                             const SparseMatrix& scalar_mass_upper, const Material& material,
-                                            const FreeFreeOptions& options);
+                                            const FreeFreeOptions& options,
+                                            const Eigen::MatrixXd& static_loads = Eigen::MatrixXd());
 
 /// The automatic shift of FreeFreeOptions::shift for a body of this size and material.
 [[nodiscard]] double automatic_shift(const RowMatrixX3d& nodes, const Material& material);

@@ -52,6 +52,7 @@ struct InterfaceRequest {
   std::string name;
   Selector select;
   std::string coupling = "rbe3";  ///< "rbe2" or "rbe3"
+  std::string kind = "interface";  ///< how errors name it: "interface" or "load point"
 };
 
 /// The selected surface patch: the nodes of every boundary triangle whose three nodes the selector
@@ -63,9 +64,9 @@ struct SurfacePatch {
 };
 
 /// Applies `selector` to the surface nodes (`nodes` in the same frame as the selector) or to the CAD
-/// surfaces. Throws std::invalid_argument naming the interface if nothing, or no surface triangle, is
-/// selected, or a surface tag or group does not exist (the message lists the ones that do).
-[[nodiscard]] SurfacePatch select_surface_patch(const std::string& name, const Selector& selector,
+/// surfaces. Throws std::invalid_argument starting with `label` (e.g. "interface 'root'") if nothing, or no
+/// surface triangle, is selected, or a surface tag or group does not exist (the message lists the ones that do).
+[[nodiscard]] SurfacePatch select_surface_patch(const std::string& label, const Selector& selector,
                                                 const RowMatrixX3d& nodes, const RowMatrixX3i& surface_triangles,
                                                 const std::vector<CadSurface>& surfaces = {});
 

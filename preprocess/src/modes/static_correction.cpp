@@ -1,0 +1,180 @@
+#include "flexbody/preprocess/static_correction.hpp"
+
+#include "flexbody/preprocess/assembly.hpp"
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace flexbody::preprocess {
+namespace {
+
+// The conjugate-gradient iteration stops when its residual is below this fraction of the projected load.
+// The preconditioned spectrum lies in [λ_next / (λ_next − σ), 1), so this takes ~10 solves when |σ| is
+// below the first eigenvalue not in the basis; kMaxIterations leaves room for very slender parts.
+constexpr double kSolveTolerance = 1e-10;
+constexpr int kMaxIterations = 500;
+// A combination of M̄-normalised responses whose M̄-norm is below 1e-6 adds nothing the others and the known
+// fields do not already hold (the responses themselves are accurate to ~1e-10): Gram eigenvalue 1e-12.
+constexpr double kDependentGram = 1e-12;
+
+// x − W (Wᵀ M̄ x): the M̄-orthogonal projection onto the complement of the known fields.
+void project(const Eigen::MatrixXd& known, const Eigen::MatrixXd& m_known, Eigen::Ref<Eigen::VectorXd> x) {
+  if (known.cols() > 0) x -= known * (m_known.transpose() * x);
+}
+
+// x − M̄ W (Wᵀ x): the transposed projection, for forces.
+void project_force(const Eigen::MatrixXd& known, const Eigen::MatrixXd& m_known, Eigen::Ref<Eigen::VectorXd> x) {
+  if (known.cols() > 0) x -= m_known * (known.transpose() * x);
+}
+
+}  // namespace
+
+Eigen::MatrixXd unit_load_vectors(const RowMatrixX3d& nodes, const std::vector<LoadPoint>& points) {
+  Eigen::Index columns = 0;
+  for (const LoadPoint& p : points) {
+    int count = 0;
+    for (bool on : p.loads) count += on;
+    if (count == 0) throw std::invalid_argument(fmt::format("load point '{}': no unit load selected", p.name));
+    if (p.nodes.size() == 0 || p.nodes.size() != p.weights.size())
+      throw std::invalid_argument(fmt::format("load point '{}': no nodes, or not one weight per node", p.name));
+    columns += count;
+  }
+  Eigen::MatrixXd loads = Eigen::MatrixXd::Zero(3 * nodes.rows(), columns);
+  Eigen::Index column = 0;
+  for (const LoadPoint& p : points) {
+    Eigen::Matrix3d polar = Eigen::Matrix3d::Zero();  // J = Σ w_i (|d_i|² I − d_i d_iᵀ)
+    for (Eigen::Index a = 0; a < p.nodes.size(); ++a) {
+      const Eigen::Vector3d d = nodes.row(p.nodes(a)).transpose() - p.reference_point;
+      polar += p.weights(a) * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+    }
+    const bool moments = p.loads[3] || p.loads[4] || p.loads[5];
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> spectrum(polar);
+    if (moments && !(spectrum.eigenvalues()(0) > 1e-10 * spectrum.eigenvalues()(2)))
+      throw std::invalid_argument(fmt::format("load point '{}': its nodes lie on a line, so a moment about that line "
+                                              "cannot be distributed over them", p.name));
+    const Eigen::Matrix3d polar_inverse = moments ? Eigen::Matrix3d(polar.inverse()) : Eigen::Matrix3d::Zero();
+    for (int k = 0; k < 6; ++k) {
+      if (!p.loads[static_cast<std::size_t>(k)]) continue;
+      for (Eigen::Index a = 0; a < p.nodes.size(); ++a) {
+        const Eigen::Index i = p.nodes(a);
+        const Eigen::Vector3d d = nodes.row(i).transpose() - p.reference_point;
+        loads.block<3, 1>(3 * i, column) = k < 3 ? Eigen::Vector3d(p.weights(a) * Eigen::Vector3d::Unit(k))
+                                                 : Eigen::Vector3d(p.weights(a) * (polar_inverse.col(k - 3)).cross(d));
+      }
+      ++column;
+    }
+  }
+  return loads;
+}
+
+std::vector<std::string> unit_load_labels(const std::vector<LoadPoint>& points) {
+  std::vector<std::string> labels;
+  for (const LoadPoint& p : points)
+    for (std::size_t k = 0; k < 6; ++k)
+      if (p.loads[k]) labels.push_back(p.name + ":" + kUnitLoadNames[k]);
+  return labels;
+}
+
+StaticCorrectionModes static_correction_modes(CholmodShiftSolve& solve, const SparseMatrix& stiffness_upper,
+                                              const SparseMatrix& scalar_mass_upper, const Eigen::MatrixXd& known,
+                                              const Eigen::MatrixXd& loads) {
+  const Eigen::Index n = stiffness_upper.rows();
+  if (solve.rows() != n || scalar_mass_upper.rows() * 3 != n || known.rows() != n || loads.rows() != n)
+    throw std::invalid_argument("static correction: the factorization, K, M, the known fields and the loads differ in size");
+  if (!loads.allFinite()) throw std::invalid_argument("static correction: a load vector is not finite");
+  StaticCorrectionModes result;
+  const Eigen::Index s = loads.cols();
+  result.stats.loads = s;
+  result.vectors.resize(n, 0);
+  if (s == 0) return result;
+  Eigen::MatrixXd m_known(n, known.cols());
+  for (Eigen::Index c = 0; c < known.cols(); ++c) apply_vector_mass(scalar_mass_upper, known.col(c), m_known.col(c));
+
+  // 1. The residual static responses, by preconditioned conjugate gradients on PᵀK̄P u = Pᵀ f.
+  Eigen::MatrixXd responses = Eigen::MatrixXd::Zero(n, s);
+  Eigen::VectorXd b(n), r(n), z(n), p(n), q(n), u(n);
+  auto precondition = [&](const Eigen::VectorXd& in, Eigen::VectorXd& out) {
+    solve.perform_op(in.data(), out.data());
+    project(known, m_known, out);
+  };
+  for (Eigen::Index c = 0; c < s; ++c) {
+    b = loads.col(c);
+    project_force(known, m_known, b);
+    const double b_norm = b.norm();
+    if (!(b_norm > 1e-14 * loads.col(c).norm())) continue;  // wholly in the known fields: no response
+    u.setZero();
+    r = b;
+    precondition(r, z);
+    p = z;
+    double rz = r.dot(z);
+    int iteration = 0;
+    for (;;) {
+      if (iteration == kMaxIterations)
+        throw std::runtime_error(fmt::format("static correction: load {} did not converge in {} iterations (residual "
+                                             "{:.3g})", c + 1, kMaxIterations, r.norm() / b_norm));
+      ++iteration;
+      apply_symmetric(stiffness_upper, p, q);
+      project_force(known, m_known, q);
+      const double pq = p.dot(q);
+      if (!(pq > 0.0))
+        throw std::runtime_error(fmt::format("static correction: load {}: the stiffness is not positive on the "
+                                             "complement of the known fields (a zero-energy mode missing?)", c + 1));
+      const double alpha = rz / pq;
+      u += alpha * p;
+      r -= alpha * q;
+      if (r.norm() <= kSolveTolerance * b_norm) break;
+      precondition(r, z);
+      const double rz_next = r.dot(z);
+      p = z + (rz_next / rz) * p;
+      rz = rz_next;
+    }
+    result.stats.iterations += iteration;
+    apply_symmetric(stiffness_upper, u, q);
+    project_force(known, m_known, q);
+    result.stats.max_relative_residual = std::max(result.stats.max_relative_residual, (b - q).norm() / b_norm);
+    responses.col(c) = u;
+  }
+
+  // 2. M̄-orthonormalise the responses, dropping the directions they do not really span.
+  Eigen::MatrixXd m_responses(n, s);
+  for (Eigen::Index c = 0; c < s; ++c) {
+    apply_vector_mass(scalar_mass_upper, responses.col(c), m_responses.col(c));
+    const double norm = std::sqrt(std::max(responses.col(c).dot(m_responses.col(c)), 0.0));
+    if (norm > 0.0) {
+      responses.col(c) /= norm;
+      m_responses.col(c) /= norm;
+    }
+  }
+  const Eigen::MatrixXd gram = responses.transpose() * m_responses;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> directions(0.5 * (gram + gram.transpose()));
+  const Eigen::VectorXd& d = directions.eigenvalues();  // ascending
+  Eigen::Index kept = 0;
+  while (kept < s && d(s - 1 - kept) > kDependentGram * std::max(d(s - 1), 1.0)) ++kept;
+  result.stats.dropped = s - kept;
+  if (kept == 0) return result;
+  Eigen::MatrixXd t = responses * directions.eigenvectors().rightCols(kept) *
+                      d.tail(kept).cwiseSqrt().cwiseInverse().asDiagonal();
+  // Clean the round-off that step 1 left in the known directions, then orthonormalise exactly.
+  Eigen::MatrixXd m_t(n, kept), k_t(n, kept);
+  for (Eigen::Index c = 0; c < kept; ++c) {
+    project(known, m_known, t.col(c));
+    apply_vector_mass(scalar_mass_upper, t.col(c), m_t.col(c));
+  }
+  const Eigen::MatrixXd gram_t = t.transpose() * m_t;
+  const Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (gram_t + gram_t.transpose()));
+  if (llt.info() != Eigen::Success) throw std::runtime_error("static correction: the responses are dependent");
+  t = llt.matrixU().solve<Eigen::OnTheRight>(t);
+
+  // 3. Rayleigh-Ritz: diagonalise K̄ on the responses.
+  for (Eigen::Index c = 0; c < kept; ++c) apply_symmetric(stiffness_upper, t.col(c), k_t.col(c));
+  const Eigen::MatrixXd h = t.transpose() * k_t;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (h + h.transpose()));
+  result.vectors = t * ritz.eigenvectors();
+  result.eigenvalues = ritz.eigenvalues();
+  return result;
+}
+
+}  // namespace flexbody::preprocess

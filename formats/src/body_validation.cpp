@@ -61,9 +61,10 @@ void check_structure(const BodyData& body, const std::string& context) {
   if (modes.kind == "craig-bampton" && modes.static_correction_modes != 0)
     fail(context, "/modes/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
                       ", expected 0 for craig-bampton modes (the static responses are part of its basis)");
-  if (modes.static_correction_modes > 0 && modes.static_loads.empty())
+  if (modes.static_correction_modes > static_cast<Eigen::Index>(modes.static_loads.size()))
     fail(context, "/modes/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
-                      " but /modes/static_loads names no load");
+                      " but /modes/static_loads names " + std::to_string(modes.static_loads.size()) +
+                      " loads (at most one mode each)");
   for (std::size_t k = 0; k < modes.static_loads.size(); ++k)
     if (modes.static_loads[k].empty() || modes.static_loads[k].find(',') != std::string::npos)
       fail(context, "/modes/static_loads" + index(static_cast<Eigen::Index>(k)) + " is \"" + modes.static_loads[k] +

@@ -179,7 +179,7 @@ TEST(Validate, StaticCorrectionAndRecovery) {
   expect_invalid(body, "/modes/static_correction_modes is 9, expected 0 to n_m = 2");
   body = make_body();
   body.modes.static_loads.clear();
-  expect_invalid(body, "/modes/static_correction_modes is 1 but /modes/static_loads names no load");
+  expect_invalid(body, "/modes/static_correction_modes is 1 but /modes/static_loads names 0 loads (at most one mode each)");
   body = make_body();
   body.modes.kind = "craig-bampton";
   body.modes.fixed_interface_frequencies_hz = Eigen::VectorXd::Constant(1, 10.0);

@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -65,7 +66,11 @@ CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMat
       for (int c = 0; c < 3; ++c) dof_index[3 * i + c] = 3 * n_interior + c;
       ++n_interior;
     }
-  const int limit = static_cast<int>(3 * n_interior) - 8;  // the solvers need nev < ncv <= n
+  // The solvers need nev < ncv <= n, and the Lanczos basis (about 2 nev + 1 vectors) must fit in 4 GiB, as
+  // for free-free modes.
+  const double basis_bytes = 4.0 * (1ull << 30);
+  const int affordable = static_cast<int>(std::max<long>(1, (static_cast<long>(basis_bytes / (8.0 * 3.0 * static_cast<double>(n_interior))) - 1) / 2));
+  const int limit = std::min(static_cast<int>(3 * n_interior) - 8, affordable);
   if (options.fixed_interface_modes > limit || limit < 1)
     throw std::invalid_argument(fmt::format("craig-bampton: {} fixed-interface modes need more than the {} interior "
                                             "DOFs", options.fixed_interface_modes, 3 * n_interior));

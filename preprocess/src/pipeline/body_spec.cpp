@@ -269,8 +269,13 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
     std::string list;
     for (const LoadPointRequest& p : options.load_points) {
       list += (list.empty() ? "" : " ") + p.name + ":";
+      bool first = true;
       for (std::size_t k = 0; k < 6; ++k)
-        if (p.loads[k]) list += kUnitLoadNames[k];
+        if (p.loads[k]) {
+          if (!first) list += '+';
+          list += kUnitLoadNames[k];
+          first = false;
+        }
     }
     recorded.emplace_back("load_points", list);
   }

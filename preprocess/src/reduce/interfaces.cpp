@@ -198,7 +198,8 @@ std::vector<SelectedInterface> select_interfaces(const std::vector<InterfaceRequ
   std::set<std::string> names;
   for (const InterfaceRequest& request : requests) {
     if (request.name.empty() || request.name.find_first_of("/,") != std::string::npos || request.name == "order")
-      throw std::invalid_argument(fmt::format("interface name '{}' is not allowed (non-empty, no '/' or ',')", request.name));
+      throw std::invalid_argument(fmt::format("{} name '{}' is not allowed (non-empty, no '/' or ',')", request.kind,
+                                              request.name));
     const std::string label = fmt::format("{} '{}'", request.kind, request.name);
     if (!names.insert(request.name).second) throw std::invalid_argument(fmt::format("{} is defined twice", label));
     if (request.coupling != "rbe2" && request.coupling != "rbe3")

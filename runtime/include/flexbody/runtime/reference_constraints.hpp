@@ -1,0 +1,35 @@
+#pragma once
+// flexbody/runtime/reference_constraints.hpp: the reference conditions of an improved-GCMS body (Eq. 88).
+//
+// Rows 0-5, orthogonality (Eq. 79): a_iᵀ a_j − δ_ij for (i, j) = (0,0), (1,1), (2,2), (0,1), (0,2), (1,2), a_i the
+// columns of A. Rows 6-8, rotational Tisserand (Eq. 78): Σ_f g_f × ξ̄_f with ξ̄_f = Aᵀ ξ_f and g_f = G[1:4, 4 + f]
+// (BodyModel::tisserand). The translational Tisserand rows (Eq. 77) vanish identically because every field is
+// M-orthogonal to translations (G[0, 4:] = 0, checked by the reader), so they are not imposed. A rigid body
+// (n_f = 0) has the orthogonality rows only in effect: its Tisserand rows are identically zero and are dropped
+// by the caller.
+//
+// Derivatives are with respect to [a; ξ] (9 + 3 n_f), exact: the rows are quadratic (orthogonality) and bilinear
+// (Tisserand), so the λ-weighted Hessian is constant in q for fixed λ.
+
+#include <Eigen/Core>
+
+namespace flexbody::runtime {
+
+inline constexpr int kOrthogonalityRows = 6;
+inline constexpr int kTisserandRows = 3;
+
+using TisserandMatrix = Eigen::Matrix<double, 3, Eigen::Dynamic>;
+
+/// The 9 residuals (6 orthogonality, 3 Tisserand).
+[[nodiscard]] Eigen::Matrix<double, 9, 1> reference_residual(const TisserandMatrix& g, const Eigen::Matrix3d& a,
+                                                             const Eigen::VectorXd& xi);
+
+/// ∂Φ/∂[a; ξ] (9 x (9 + 3 n_f)).
+[[nodiscard]] Eigen::MatrixXd reference_jacobian(const TisserandMatrix& g, const Eigen::Matrix3d& a,
+                                                 const Eigen::VectorXd& xi);
+
+/// Σ_k λ_k ∂²Φ_k/∂[a; ξ]² ((9 + 3 n_f) square, symmetric).
+[[nodiscard]] Eigen::MatrixXd reference_hessian(const TisserandMatrix& g, const Eigen::Matrix3d& a,
+                                                const Eigen::VectorXd& xi, const Eigen::Matrix<double, 9, 1>& lambda);
+
+}  // namespace flexbody::runtime

@@ -1,0 +1,70 @@
+#include "flexbody/runtime/gcms_elastic.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace flexbody::runtime {
+namespace {
+
+void check_sizes(const Eigen::MatrixXd& k_hat, const Eigen::VectorXd& xi) {
+  if (k_hat.rows() != k_hat.cols() || k_hat.rows() % 3 != 0 || xi.size() != k_hat.rows())
+    throw std::invalid_argument("GCMS elastic forces: K_hat is " + std::to_string(k_hat.rows()) + " x " +
+                                std::to_string(k_hat.cols()) + " and xi has " + std::to_string(xi.size()) +
+                                " entries; expected 3 n_f square and 3 n_f");
+}
+
+// D = ∂ξ̄/∂a (3 n_f x 9): row 3f + j, column 3j + i holds ξ_f[i].
+Eigen::Matrix<double, Eigen::Dynamic, 9> rotation_derivative(const Eigen::VectorXd& xi) {
+  const Eigen::Index n_f = xi.size() / 3;
+  Eigen::Matrix<double, Eigen::Dynamic, 9> d = Eigen::Matrix<double, Eigen::Dynamic, 9>::Zero(3 * n_f, 9);
+  for (Eigen::Index f = 0; f < n_f; ++f)
+    for (int j = 0; j < 3; ++j) d.block<1, 3>(3 * f + j, 3 * j) = xi.segment<3>(3 * f).transpose();
+  return d;
+}
+
+}  // namespace
+
+Eigen::VectorXd body_frame_coordinates(const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+  Eigen::VectorXd xi_bar(xi.size());
+  for (Eigen::Index f = 0; f < xi.size() / 3; ++f) xi_bar.segment<3>(3 * f) = a.transpose() * xi.segment<3>(3 * f);
+  return xi_bar;
+}
+
+ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+  check_sizes(k_hat, xi);
+  const Eigen::Index n_f = xi.size() / 3;
+  const Eigen::VectorXd xi_bar = body_frame_coordinates(a, xi);
+  ElasticForces out;
+  out.h = k_hat * xi_bar;
+  out.energy = 0.5 * xi_bar.dot(out.h);
+  out.grad_xi.resize(xi.size());
+  Eigen::Matrix3d grad_a = Eigen::Matrix3d::Zero();
+  for (Eigen::Index f = 0; f < n_f; ++f) {
+    out.grad_xi.segment<3>(3 * f) = a * out.h.segment<3>(3 * f);                       // Eq. 87
+    grad_a += xi.segment<3>(3 * f) * out.h.segment<3>(3 * f).transpose();               // Eq. 86
+  }
+  out.grad_a = Eigen::Map<const Vector9d>(grad_a.data());
+  return out;
+}
+
+ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+  check_sizes(k_hat, xi);
+  const Eigen::Index n = xi.size(), n_f = n / 3;
+  const Eigen::Matrix<double, Eigen::Dynamic, 9> d = rotation_derivative(xi);
+  const Eigen::VectorXd h = k_hat * body_frame_coordinates(a, xi);
+  // K̂ Âᵀ: column block g of K̂ times Aᵀ.
+  Eigen::MatrixXd k_at(n, n);
+  for (Eigen::Index g = 0; g < n_f; ++g) k_at.middleCols<3>(3 * g) = k_hat.middleCols<3>(3 * g) * a.transpose();
+  ElasticTangent t;
+  const Eigen::Matrix<double, Eigen::Dynamic, 9> k_d = k_hat * d;
+  t.aa = d.transpose() * k_d;
+  t.a_xi = d.transpose() * k_at;
+  for (Eigen::Index f = 0; f < n_f; ++f)
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) t.a_xi(3 * j + i, 3 * f + i) += h(3 * f + j);
+  t.xi_xi.resize(n, n);
+  for (Eigen::Index f = 0; f < n_f; ++f) t.xi_xi.middleRows<3>(3 * f) = a * k_at.middleRows<3>(3 * f);
+  return t;
+}
+
+}  // namespace flexbody::runtime

@@ -1,0 +1,89 @@
+#include "flexbody/runtime/reference_constraints.hpp"
+
+#include <Eigen/Geometry>
+
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace flexbody::runtime {
+namespace {
+
+constexpr std::array<std::pair<int, int>, kOrthogonalityRows> kPairs = {
+    std::pair{0, 0}, std::pair{1, 1}, std::pair{2, 2}, std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}};
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d s;
+  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return s;
+}
+
+void check_sizes(const TisserandMatrix& g, const Eigen::VectorXd& xi) {
+  if (xi.size() != 3 * g.cols())
+    throw std::invalid_argument("reference constraints: xi has " + std::to_string(xi.size()) + " entries for " +
+                                std::to_string(g.cols()) + " fields (expected 3 n_f)");
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 9, 1> reference_residual(const TisserandMatrix& g, const Eigen::Matrix3d& a,
+                                               const Eigen::VectorXd& xi) {
+  check_sizes(g, xi);
+  Eigen::Matrix<double, 9, 1> phi;
+  for (int k = 0; k < kOrthogonalityRows; ++k) {
+    const auto [i, j] = kPairs[static_cast<std::size_t>(k)];
+    phi(k) = a.col(i).dot(a.col(j)) - (i == j ? 1.0 : 0.0);  // Eq. 79
+  }
+  Eigen::Vector3d tisserand = Eigen::Vector3d::Zero();
+  for (Eigen::Index f = 0; f < g.cols(); ++f) tisserand += g.col(f).cross(a.transpose() * xi.segment<3>(3 * f));  // Eq. 78
+  phi.tail<3>() = tisserand;
+  return phi;
+}
+
+Eigen::MatrixXd reference_jacobian(const TisserandMatrix& g, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+  check_sizes(g, xi);
+  const Eigen::Index n_f = g.cols();
+  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(9, 9 + 3 * n_f);
+  for (int k = 0; k < kOrthogonalityRows; ++k) {
+    const auto [i, j] = kPairs[static_cast<std::size_t>(k)];
+    jac.block<1, 3>(k, 3 * i) += a.col(j).transpose();
+    jac.block<1, 3>(k, 3 * j) += a.col(i).transpose();
+  }
+  for (Eigen::Index f = 0; f < n_f; ++f) {
+    const Eigen::Matrix3d gx = skew(g.col(f));
+    const Eigen::Vector3d x = xi.segment<3>(3 * f);
+    // ∂(g × Aᵀx)/∂A(i, j) = g × (e_j x_i): column 3j + i.
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) jac.block<3, 1>(6, 3 * j + i) += gx.col(j) * x(i);
+    jac.block<3, 3>(6, 9 + 3 * f) = gx * a.transpose();
+  }
+  return jac;
+}
+
+Eigen::MatrixXd reference_hessian(const TisserandMatrix& g, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+                                  const Eigen::Matrix<double, 9, 1>& lambda) {
+  check_sizes(g, xi);
+  const Eigen::Index n_f = g.cols(), n = 9 + 3 * n_f;
+  Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 0; k < kOrthogonalityRows; ++k) {
+    const auto [i, j] = kPairs[static_cast<std::size_t>(k)];
+    hessian.block<3, 3>(3 * i, 3 * j) += lambda(k) * Eigen::Matrix3d::Identity();
+    hessian.block<3, 3>(3 * j, 3 * i) += lambda(k) * Eigen::Matrix3d::Identity();
+  }
+  // λ · (g_f × Aᵀ x_f) = x_fᵀ A c_f with c_f = λ_T × g_f: the (A, x_f) cross derivative is
+  // ∂²/∂A(i, l) ∂x_f(i) = c_f(l).
+  const Eigen::Vector3d lambda_t = lambda.tail<3>();
+  for (Eigen::Index f = 0; f < n_f; ++f) {
+    const Eigen::Vector3d c = lambda_t.cross(g.col(f));
+    for (int l = 0; l < 3; ++l)
+      for (int i = 0; i < 3; ++i) {
+        hessian(3 * l + i, 9 + 3 * f + i) += c(l);
+        hessian(9 + 3 * f + i, 3 * l + i) += c(l);
+      }
+  }
+  (void)a;
+  return hessian;
+}
+
+}  // namespace flexbody::runtime

@@ -1,0 +1,72 @@
+// Loading a body: all modes, the first k (prefix slicing of every block), or rigid.
+#include "flexbody/runtime/body_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+namespace fr = flexbody::runtime;
+namespace ff = flexbody::format;
+
+namespace {
+
+// Three modes with 3, 2 and 1 fields (field_mode 0 0 0 1 1 2), one interface, one output region, on 4 nodes.
+ff::BodyData synthetic_body() {
+  ff::BodyData body;
+  body.mass.mass = 2.5;
+  body.mesh.nodes = ff::RowMatrixX3d::Random(4, 3);
+  body.modes.frequencies_hz = Eigen::Vector3d(10.0, 20.0, 30.0);
+  const Eigen::Index n_f = 6;
+  body.gcms.field_mode.resize(n_f);
+  body.gcms.field_mode << 0, 0, 0, 1, 1, 2;
+  body.gcms.fields = Eigen::MatrixXd::Random(4, n_f);
+  body.gcms.mass_matrix = Eigen::MatrixXd::Random(4 + n_f, 4 + n_f);
+  body.gcms.mass_matrix(0, 0) = 2.5;
+  body.gcms.stiffness = Eigen::MatrixXd::Random(3 * n_f, 3 * n_f);
+  ff::Interface face;
+  face.name = "bore";
+  face.y_row = Eigen::VectorXd::Random(4 + n_f);
+  face.rotation = Eigen::MatrixXd::Random(3, 3 * n_f);
+  body.interfaces.push_back(face);
+  ff::RecoveryRegion region;
+  region.name = "fillet";
+  region.nodes.resize(2);
+  region.nodes << 0, 3;
+  region.stress_modes = Eigen::MatrixXd::Random(12, 3 * n_f);
+  body.recovery.push_back(region);
+  return body;
+}
+
+}  // namespace
+
+TEST(BodyModel, FirstKModesAreTheLeadingBlocks) {
+  const ff::BodyData body = synthetic_body();
+  const Eigen::Index expected_fields[] = {0, 3, 5, 6};
+  for (Eigen::Index k = 0; k <= 3; ++k) {
+    SCOPED_TRACE(k);
+    const fr::BodyModel model = fr::make_body_model(body, k, "synthetic.fbh5");
+    const Eigen::Index n_f = expected_fields[k];
+    ASSERT_EQ(model.field_count(), n_f);
+    EXPECT_EQ(model.rigid(), k == 0);
+    EXPECT_EQ(model.coordinate_count(), 12 + 3 * n_f);
+    EXPECT_EQ(model.mass_matrix, body.gcms.mass_matrix.topLeftCorner(4 + n_f, 4 + n_f));
+    EXPECT_EQ(model.stiffness, body.gcms.stiffness.topLeftCorner(3 * n_f, 3 * n_f));
+    EXPECT_EQ(model.tisserand, body.gcms.mass_matrix.block(1, 4, 3, n_f));
+    EXPECT_EQ(model.interfaces[0].y_row, body.interfaces[0].y_row.head(4 + n_f));
+    EXPECT_EQ(model.interfaces[0].rotation, body.interfaces[0].rotation.leftCols(3 * n_f));
+    EXPECT_EQ(model.recovery[0].stress_modes, body.recovery[0].stress_modes.leftCols(3 * n_f));
+    EXPECT_EQ(model.fields, body.gcms.fields.leftCols(n_f));
+  }
+  EXPECT_EQ(fr::make_body_model(body, std::nullopt).field_count(), 6);
+}
+
+TEST(BodyModel, RefusesMoreModesThanTheFileHolds) {
+  const ff::BodyData body = synthetic_body();
+  try {
+    (void)fr::make_body_model(body, 4, "bar.fbh5");
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "bar.fbh5: 4 modes asked for, the file holds 3");
+  }
+  EXPECT_THROW((void)fr::make_body_model(body, -1), std::invalid_argument);
+}

@@ -42,10 +42,10 @@ constexpr Required kRequired[] = {
     {Item::dataset, "/mass/inertia_about_com"}, {Item::group, "/mesh"},
     {Item::dataset, "/mesh/nodes"},             {Item::dataset, "/mesh/tets"},
     {Item::dataset, "/mesh/surface_triangles"}, {Item::attribute, "/mesh/element_order"},
-    {Item::group, "/modes"},                    {Item::attribute, "/modes/kind"},
-    {Item::attribute, "/modes/eigensolver"},    {Item::attribute, "/modes/shift"},
-    {Item::dataset, "/modes/frequencies_hz"},   {Item::dataset, "/modes/relative_residuals"},
-    {Item::dataset, "/modes/upsilon"},          {Item::group, "/gcms"},
+    {Item::group, "/reduction"},                {Item::attribute, "/reduction/kind"},
+    {Item::attribute, "/reduction/eigensolver"},    {Item::attribute, "/reduction/shift"},
+    {Item::dataset, "/reduction/frequencies_hz"},   {Item::dataset, "/reduction/relative_residuals"},
+    {Item::dataset, "/reduction/upsilon"},          {Item::group, "/gcms"},
     {Item::dataset, "/gcms/fields"},            {Item::dataset, "/gcms/field_mode"},
     {Item::dataset, "/gcms/mode_coefficients"}, {Item::dataset, "/gcms/G"},
     {Item::dataset, "/gcms/K_hat"},             {Item::attribute, "/gcms/drop_tolerance"},
@@ -195,7 +195,7 @@ BodyMesh read_mesh(const Location& root) {
 }
 
 Modes read_modes(const Location& root) {
-  const Location group = detail::open_group(root, "modes");
+  const Location group = detail::open_group(root, "reduction");
   Modes modes;
   modes.kind = detail::read_string_attribute(group, "kind");
   modes.eigensolver = detail::read_string_attribute(group, "eigensolver");
@@ -203,13 +203,13 @@ Modes read_modes(const Location& root) {
   modes.frequencies_hz = to_vector(detail::read_double_vector(group, "frequencies_hz"));
   modes.relative_residuals = to_vector(detail::read_double_vector(group, "relative_residuals"));
   // Optional: absent means none (files written before Craig-Bampton existed).
-  if (detail::object_kind(root, "/modes/fixed_interface_frequencies_hz") != detail::ObjectKind::missing)
+  if (detail::object_kind(root, "/reduction/fixed_interface_frequencies_hz") != detail::ObjectKind::missing)
     modes.fixed_interface_frequencies_hz =
         to_vector(detail::read_double_vector(group, "fixed_interface_frequencies_hz"));
   // Optional: absent means no static correction (files written before load points existed).
-  if (detail::has_attribute(root, "/modes", "static_loads"))
+  if (detail::has_attribute(root, "/reduction", "static_loads"))
     modes.static_loads = names_in_order(detail::read_string_attribute(group, "static_loads"));
-  if (detail::has_attribute(root, "/modes", "static_correction_modes"))
+  if (detail::has_attribute(root, "/reduction", "static_correction_modes"))
     modes.static_correction_modes = detail::read_int_attribute(group, "static_correction_modes");
   modes.upsilon = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(group, "upsilon"));
   return modes;

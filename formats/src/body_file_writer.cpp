@@ -76,7 +76,7 @@ void write_mesh(const Location& root, const BodyMesh& mesh) {
 }
 
 void write_modes(const Location& root, const Modes& modes) {
-  const Location group = detail::create_group(root, "modes");
+  const Location group = detail::create_group(root, "reduction");
   detail::write_string_attribute(group, "kind", modes.kind);
   detail::write_string_attribute(group, "eigensolver", modes.eigensolver);
   detail::write_double_attribute(group, "shift", modes.shift);

@@ -43,11 +43,11 @@ void check_structure(const BodyData& body, const std::string& context) {
   const Modes& modes = body.modes;
   const Eigen::Index n_m = modes.count();
   if (modes.relative_residuals.size() != n_m) {
-    fail(context, "/modes/relative_residuals has " + std::to_string(modes.relative_residuals.size()) +
-                      " entries, expected " + std::to_string(n_m) + " (n_m, the length of /modes/frequencies_hz)");
+    fail(context, "/reduction/relative_residuals has " + std::to_string(modes.relative_residuals.size()) +
+                      " entries, expected " + std::to_string(n_m) + " (n_m, the length of /reduction/frequencies_hz)");
   }
   if (modes.upsilon.rows() != n_n || modes.upsilon.cols() != 3 * n_m) {
-    fail(context, "/modes/upsilon has shape " + std::to_string(modes.upsilon.rows()) + " x " +
+    fail(context, "/reduction/upsilon has shape " + std::to_string(modes.upsilon.rows()) + " x " +
                       std::to_string(modes.upsilon.cols()) + ", expected " + std::to_string(n_n) + " x " +
                       std::to_string(3 * n_m) + " (n_n x 3 n_m)");
   }
@@ -56,18 +56,18 @@ void check_structure(const BodyData& body, const std::string& context) {
   check_interfaces_structure(body, context);
   check_recovery_structure(body, context);
   if (modes.static_correction_modes < 0 || modes.static_correction_modes > n_m)
-    fail(context, "/modes/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
+    fail(context, "/reduction/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
                       ", expected 0 to n_m = " + std::to_string(n_m));
   if (modes.kind == "craig-bampton" && modes.static_correction_modes != 0)
-    fail(context, "/modes/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
+    fail(context, "/reduction/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
                       ", expected 0 for craig-bampton modes (the static responses are part of its basis)");
   if (modes.static_correction_modes > static_cast<Eigen::Index>(modes.static_loads.size()))
-    fail(context, "/modes/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
-                      " but /modes/static_loads names " + std::to_string(modes.static_loads.size()) +
+    fail(context, "/reduction/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
+                      " but /reduction/static_loads names " + std::to_string(modes.static_loads.size()) +
                       " loads (at most one mode each)");
   for (std::size_t k = 0; k < modes.static_loads.size(); ++k)
     if (modes.static_loads[k].empty() || modes.static_loads[k].find(',') != std::string::npos)
-      fail(context, "/modes/static_loads" + index(static_cast<Eigen::Index>(k)) + " is \"" + modes.static_loads[k] +
+      fail(context, "/reduction/static_loads" + index(static_cast<Eigen::Index>(k)) + " is \"" + modes.static_loads[k] +
                         "\"; labels are non-empty and have no ','");
 }
 
@@ -79,11 +79,11 @@ void check_finite(const BodyData& body, const std::string& context) {
   check_values(body.mass.center_of_mass_input, "/mass/center_of_mass_input", context);
   check_values(body.mass.inertia_about_com, "/mass/inertia_about_com", context);
   check_values(body.mesh.nodes, "/mesh/nodes", context);
-  check_value(body.modes.shift, "/modes/shift", context);
-  check_values(body.modes.frequencies_hz, "/modes/frequencies_hz", context);
-  check_values(body.modes.relative_residuals, "/modes/relative_residuals", context);
-  check_values(body.modes.fixed_interface_frequencies_hz, "/modes/fixed_interface_frequencies_hz", context);
-  check_values(body.modes.upsilon, "/modes/upsilon", context);
+  check_value(body.modes.shift, "/reduction/shift", context);
+  check_values(body.modes.frequencies_hz, "/reduction/frequencies_hz", context);
+  check_values(body.modes.relative_residuals, "/reduction/relative_residuals", context);
+  check_values(body.modes.fixed_interface_frequencies_hz, "/reduction/fixed_interface_frequencies_hz", context);
+  check_values(body.modes.upsilon, "/reduction/upsilon", context);
   check_gcms_finite(body, context);
   check_interfaces_finite(body, context);
   check_recovery_finite(body, context);
@@ -99,27 +99,27 @@ void check_ranges(const BodyData& body, const std::string& context) {
   }
   const Eigen::VectorXd& f = body.modes.frequencies_hz;
   for (Eigen::Index m = 0; m < f.size(); ++m) {
-    const std::string path = "/modes/frequencies_hz" + index(m);
+    const std::string path = "/reduction/frequencies_hz" + index(m);
     if (!(f[m] > 0.0)) {
       fail(context, path + " is " + number(f[m]) + " Hz, expected > 0 (rigid-body modes are not stored)");
     }
     if (m > 0 && f[m] < f[m - 1]) {
-      fail(context, path + " = " + number(f[m]) + " Hz is below /modes/frequencies_hz" + index(m - 1) + " = " +
+      fail(context, path + " = " + number(f[m]) + " Hz is below /reduction/frequencies_hz" + index(m - 1) + " = " +
                         number(f[m - 1]) + " Hz; frequencies must be ascending");
     }
   }
   if (body.modes.kind != "free-free" && body.modes.kind != "craig-bampton")
-    fail(context, "/modes/kind is \"" + body.modes.kind + "\", expected \"free-free\" or \"craig-bampton\"");
+    fail(context, "/reduction/kind is \"" + body.modes.kind + "\", expected \"free-free\" or \"craig-bampton\"");
   const Eigen::VectorXd& fixed = body.modes.fixed_interface_frequencies_hz;
   if (body.modes.kind == "free-free" && fixed.size() > 0)
-    fail(context, "/modes/fixed_interface_frequencies_hz has entries, but free-free modes have no fixed interfaces");
+    fail(context, "/reduction/fixed_interface_frequencies_hz has entries, but free-free modes have no fixed interfaces");
   for (Eigen::Index m = 0; m < fixed.size(); ++m)
     if (!(fixed[m] > 0.0) || (m > 0 && fixed[m] < fixed[m - 1]))
-      fail(context, "/modes/fixed_interface_frequencies_hz" + index(m) + " is " + number(fixed[m]) +
+      fail(context, "/reduction/fixed_interface_frequencies_hz" + index(m) + " is " + number(fixed[m]) +
                         " Hz, expected positive and ascending");
   const Eigen::VectorXd& r = body.modes.relative_residuals;
   for (Eigen::Index m = 0; m < r.size(); ++m) {
-    if (r[m] < 0.0) fail(context, "/modes/relative_residuals" + index(m) + " is " + number(r[m]) + ", expected >= 0");
+    if (r[m] < 0.0) fail(context, "/reduction/relative_residuals" + index(m) + " is " + number(r[m]) + ", expected >= 0");
   }
   check_gcms_ranges(body, context);
   check_interfaces_ranges(body, context);

@@ -65,9 +65,9 @@ class Location {
 
   [[nodiscard]] hid_t id() const noexcept { return handle_.id(); }
   [[nodiscard]] const std::string& file_label() const noexcept { return file_label_; }
-  /// HDF5 path of this object: "/" for the file, "/modes" for a group.
+  /// HDF5 path of this object: "/" for the file, "/reduction" for a group.
   [[nodiscard]] const std::string& path() const noexcept { return path_; }
-  /// Path of a member: "/modes" and "upsilon" give "/modes/upsilon"; "/" and "format" give "/format".
+  /// Path of a member: "/reduction" and "upsilon" give "/reduction/upsilon"; "/" and "format" give "/format".
   [[nodiscard]] std::string child(std::string_view name) const;
   /// Throws BodyFileError("<file>: <message>").
   [[noreturn]] void fail(const std::string& message) const;

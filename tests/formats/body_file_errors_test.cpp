@@ -71,7 +71,7 @@ TEST_F(ReadErrors, PlainHdf5WithoutFormat) {
 TEST_F(ReadErrors, FormatVersion1) {
   const auto path = good_file("v1.fbh5");
   set_int_attribute(path, "/", "format_version", 1);
-  expect_read_error(path, {"v1.fbh5: format_version 1 is not supported by this reader (supports 2); re-run "
+  expect_read_error(path, {"v1.fbh5: format_version 1 is not supported by this reader (supports 3); re-run "
                            "fbprep to write the current version"});
 }
 
@@ -83,8 +83,8 @@ TEST_F(ReadErrors, FormatVersionAsString) {
 
 TEST_F(ReadErrors, MissingUpsilon) {
   const auto path = good_file("no_upsilon.fbh5");
-  delete_link(path, "/modes/upsilon");
-  expect_read_error(path, {"no_upsilon.fbh5: missing dataset /modes/upsilon"});
+  delete_link(path, "/reduction/upsilon");
+  expect_read_error(path, {"no_upsilon.fbh5: missing dataset /reduction/upsilon"});
 }
 
 TEST_F(ReadErrors, MissingGroup) {
@@ -107,8 +107,8 @@ TEST_F(ReadErrors, MissingListedOption) {
 
 TEST_F(ReadErrors, WrongUpsilonShape) {
   const auto path = good_file("upsilon_shape.fbh5");
-  replace_double_dataset(path, "/modes/upsilon", 5, 9, std::vector<double>(45, 0.5));
-  expect_read_error(path, {"upsilon_shape.fbh5: /modes/upsilon has shape 5 x 9, expected 5 x 6 (n_n x 3 n_m)"});
+  replace_double_dataset(path, "/reduction/upsilon", 5, 9, std::vector<double>(45, 0.5));
+  expect_read_error(path, {"upsilon_shape.fbh5: /reduction/upsilon has shape 5 x 9, expected 5 x 6 (n_n x 3 n_m)"});
 }
 
 TEST_F(ReadErrors, WrongNodeColumns) {
@@ -125,8 +125,8 @@ TEST_F(ReadErrors, WrongInertiaShape) {
 
 TEST_F(ReadErrors, ResidualsOfWrongLength) {
   const auto path = good_file("residuals.fbh5");
-  replace_double_dataset(path, "/modes/relative_residuals", 3, 1, {0.0, 0.0, 0.0});
-  expect_read_error(path, {"residuals.fbh5: /modes/relative_residuals has shape 3 x 1, expected a 1-D dataset"});
+  replace_double_dataset(path, "/reduction/relative_residuals", 3, 1, {0.0, 0.0, 0.0});
+  expect_read_error(path, {"residuals.fbh5: /reduction/relative_residuals has shape 3 x 1, expected a 1-D dataset"});
 }
 
 TEST_F(ReadErrors, TetIndexOutOfRange) {
@@ -153,8 +153,8 @@ TEST_F(ReadErrors, InfinityInUpsilon) {
   const auto path = good_file("inf.fbh5");
   std::vector<double> upsilon(30, 0.5);
   upsilon[4 * 6 + 5] = -std::numeric_limits<double>::infinity();
-  replace_double_dataset(path, "/modes/upsilon", 5, 6, upsilon);
-  expect_read_error(path, {"inf.fbh5: /modes/upsilon[4][5] is -inf, expected a finite number"});
+  replace_double_dataset(path, "/reduction/upsilon", 5, 6, upsilon);
+  expect_read_error(path, {"inf.fbh5: /reduction/upsilon[4][5] is -inf, expected a finite number"});
 }
 
 TEST_F(ReadErrors, UnitOtherThanSi) {
@@ -232,7 +232,7 @@ TEST_F(ReadErrors, InterfaceWithoutWeights) {
 TEST_F(ReadErrors, FixedInterfaceFrequenciesAreOptional) {
   // Written by every fbprep since Craig-Bampton; absent in earlier version-2 files, which stay readable.
   const auto path = good_file("no_fixed.fbh5");
-  delete_link(path, "/modes/fixed_interface_frequencies_hz");
+  delete_link(path, "/reduction/fixed_interface_frequencies_hz");
   EXPECT_EQ(read_body_file(path).modes.fixed_interface_frequencies_hz.size(), 0);
 }
 

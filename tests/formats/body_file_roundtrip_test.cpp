@@ -116,7 +116,7 @@ TEST_F(RoundTrip, StoresUpsilonRowMajorInListFormat) {
   const auto path = dir() / "layout.fbh5";
   write_body_file(body, path);
 
-  const RawDataset upsilon = read_raw_dataset(path, "/modes/upsilon");
+  const RawDataset upsilon = read_raw_dataset(path, "/reduction/upsilon");
   ASSERT_EQ(upsilon.shape, (std::vector<unsigned long long>{5, 6}));
   // Element [i][3m+k]: component k of mode m at node i, stored row after row.
   for (Eigen::Index i = 0; i < 5; ++i) {
@@ -136,8 +136,8 @@ TEST_F(RoundTrip, StoresUpsilonRowMajorInListFormat) {
   EXPECT_EQ(read_raw_string_attribute(path, "/", "format"), "flexbody");
   EXPECT_EQ(read_raw_string_attribute(path, "/", "length_unit"), "m");
   EXPECT_EQ(read_raw_string_attribute(path, "/provenance/options", "order"), "unit,modes,mesh-size,note");
-  EXPECT_EQ(read_raw_string_attribute(path, "/modes/upsilon", "unit"), "kg^-1/2");
-  EXPECT_EQ(read_raw_string_attribute(path, "/modes/frequencies_hz", "unit"), "Hz");
+  EXPECT_EQ(read_raw_string_attribute(path, "/reduction/upsilon", "unit"), "kg^-1/2");
+  EXPECT_EQ(read_raw_string_attribute(path, "/reduction/frequencies_hz", "unit"), "Hz");
   EXPECT_EQ(read_raw_string_attribute(path, "/mass/inertia_about_com", "unit"), "kg m^2");
 }
 

@@ -49,11 +49,11 @@ TEST(Validate, ElementOrder) {
 TEST(Validate, ModeShapes) {
   BodyData body = make_body();
   body.modes.upsilon.conservativeResize(5, 5);
-  expect_invalid(body, "/modes/upsilon has shape 5 x 5, expected 5 x 6 (n_n x 3 n_m)");
+  expect_invalid(body, "/reduction/upsilon has shape 5 x 5, expected 5 x 6 (n_n x 3 n_m)");
   body = make_body();
   body.modes.relative_residuals.resize(3);
   body.modes.relative_residuals.setZero();
-  expect_invalid(body, "/modes/relative_residuals has 3 entries, expected 2");
+  expect_invalid(body, "/reduction/relative_residuals has 3 entries, expected 2");
 }
 
 TEST(Validate, NonFiniteValues) {
@@ -62,7 +62,7 @@ TEST(Validate, NonFiniteValues) {
   expect_invalid(body, "/mass/inertia_about_com[2][1] is inf, expected a finite number");
   body = make_body();
   body.modes.frequencies_hz[1] = std::numeric_limits<double>::quiet_NaN();
-  expect_invalid(body, "/modes/frequencies_hz[1] is nan, expected a finite number");
+  expect_invalid(body, "/reduction/frequencies_hz[1] is nan, expected a finite number");
   body = make_body();
   body.material.density = std::numeric_limits<double>::quiet_NaN();
   expect_invalid(body, "/material/density is nan, expected a finite number");
@@ -89,13 +89,13 @@ TEST(Validate, PhysicalRanges) {
 TEST(Validate, Frequencies) {
   BodyData body = make_body();
   body.modes.frequencies_hz[0] = 0.0;
-  expect_invalid(body, "/modes/frequencies_hz[0] is 0 Hz, expected > 0");
+  expect_invalid(body, "/reduction/frequencies_hz[0] is 0 Hz, expected > 0");
   body = make_body();
   body.modes.frequencies_hz << 12.0, 10.5;
-  expect_invalid(body, "/modes/frequencies_hz[1] = 10.5 Hz is below /modes/frequencies_hz[0] = 12 Hz");
+  expect_invalid(body, "/reduction/frequencies_hz[1] = 10.5 Hz is below /reduction/frequencies_hz[0] = 12 Hz");
   body = make_body();
   body.modes.relative_residuals[1] = -1e-3;
-  expect_invalid(body, "/modes/relative_residuals[1] is -0.001, expected >= 0");
+  expect_invalid(body, "/reduction/relative_residuals[1] is -0.001, expected >= 0");
 }
 
 TEST(Validate, OptionNames) {
@@ -176,14 +176,14 @@ TEST(Validate, Interfaces) {
 TEST(Validate, StaticCorrectionAndRecovery) {
   BodyData body = make_body();
   body.modes.static_correction_modes = 9;
-  expect_invalid(body, "/modes/static_correction_modes is 9, expected 0 to n_m = 2");
+  expect_invalid(body, "/reduction/static_correction_modes is 9, expected 0 to n_m = 2");
   body = make_body();
   body.modes.static_loads.clear();
-  expect_invalid(body, "/modes/static_correction_modes is 1 but /modes/static_loads names 0 loads (at most one mode each)");
+  expect_invalid(body, "/reduction/static_correction_modes is 1 but /reduction/static_loads names 0 loads (at most one mode each)");
   body = make_body();
   body.modes.kind = "craig-bampton";
   body.modes.fixed_interface_frequencies_hz = Eigen::VectorXd::Constant(1, 10.0);
-  expect_invalid(body, "/modes/static_correction_modes is 1, expected 0 for craig-bampton modes");
+  expect_invalid(body, "/reduction/static_correction_modes is 1, expected 0 for craig-bampton modes");
   body = make_body();
   body.recovery[0].nodes(1) = 7;
   expect_invalid(body, "/recovery/fillet/nodes[1] is 7 but the mesh has 5 nodes");

@@ -20,7 +20,7 @@ using RowMatrixX4i = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 4, Eigen::RowMa
 using RowMatrixX3i = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 /// The schema version this library writes, and the only one it reads.
-inline constexpr int kFormatVersion = 2;
+inline constexpr int kFormatVersion = 3;
 /// Value of the root attribute `format`.
 inline constexpr const char* kFormatName = "flexbody";
 

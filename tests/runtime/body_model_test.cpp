@@ -23,6 +23,7 @@ ff::BodyData synthetic_body() {
   body.gcms.mass_matrix = Eigen::MatrixXd::Random(4 + n_f, 4 + n_f);
   body.gcms.mass_matrix(0, 0) = 2.5;
   body.gcms.stiffness = Eigen::MatrixXd::Random(3 * n_f, 3 * n_f);
+  body.gcms.mode_coefficients = Eigen::MatrixXd::Random(n_f, 9);
   ff::Interface face;
   face.name = "bore";
   face.y_row = Eigen::VectorXd::Random(4 + n_f);
@@ -56,6 +57,8 @@ TEST(BodyModel, FirstKModesAreTheLeadingBlocks) {
     EXPECT_EQ(model.interfaces[0].rotation, body.interfaces[0].rotation.leftCols(3 * n_f));
     EXPECT_EQ(model.recovery[0].stress_modes, body.recovery[0].stress_modes.leftCols(3 * n_f));
     EXPECT_EQ(model.fields, body.gcms.fields.leftCols(n_f));
+    EXPECT_EQ(model.mode_coefficients, body.gcms.mode_coefficients.topLeftCorner(n_f, 3 * k));
+    EXPECT_EQ(model.frequencies_hz, body.modes.frequencies_hz.head(k));
   }
   EXPECT_EQ(fr::make_body_model(body, std::nullopt).field_count(), 6);
 }

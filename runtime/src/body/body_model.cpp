@@ -25,6 +25,8 @@ BodyModel make_body_model(const format::BodyData& body, std::optional<Eigen::Ind
   model.stiffness = body.gcms.stiffness.topLeftCorner(3 * n_f, 3 * n_f);
   model.tisserand = body.gcms.mass_matrix.block(1, 4, 3, n_f);
   model.fields = body.gcms.fields.leftCols(n_f);
+  model.mode_coefficients = body.gcms.mode_coefficients.topLeftCorner(n_f, 3 * k);
+  model.frequencies_hz = body.modes.frequencies_hz.head(k);
   model.nodes = body.mesh.nodes;
   for (format::Interface i : body.interfaces) {
     i.y_row.conservativeResize(4 + n_f);

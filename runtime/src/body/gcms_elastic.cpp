@@ -13,16 +13,15 @@ void check_sizes(const Eigen::MatrixXd& k_hat, const Eigen::VectorXd& xi) {
                                 " entries; expected 3 n_f square and 3 n_f");
 }
 
-// D = ∂ξ̄/∂a (3 n_f x 9): row 3f + j, column 3j + i holds ξ_f[i].
-Eigen::Matrix<double, Eigen::Dynamic, 9> rotation_derivative(const Eigen::VectorXd& xi) {
+}  // namespace
+
+Eigen::Matrix<double, Eigen::Dynamic, 9> body_frame_coordinates_derivative(const Eigen::VectorXd& xi) {
   const Eigen::Index n_f = xi.size() / 3;
   Eigen::Matrix<double, Eigen::Dynamic, 9> d = Eigen::Matrix<double, Eigen::Dynamic, 9>::Zero(3 * n_f, 9);
   for (Eigen::Index f = 0; f < n_f; ++f)
     for (int j = 0; j < 3; ++j) d.block<1, 3>(3 * f + j, 3 * j) = xi.segment<3>(3 * f).transpose();
   return d;
 }
-
-}  // namespace
 
 Eigen::VectorXd body_frame_coordinates(const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
   Eigen::VectorXd xi_bar(xi.size());
@@ -50,7 +49,7 @@ ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d
 ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
   check_sizes(k_hat, xi);
   const Eigen::Index n = xi.size(), n_f = n / 3;
-  const Eigen::Matrix<double, Eigen::Dynamic, 9> d = rotation_derivative(xi);
+  const Eigen::Matrix<double, Eigen::Dynamic, 9> d = body_frame_coordinates_derivative(xi);
   const Eigen::VectorXd h = k_hat * body_frame_coordinates(a, xi);
   // K̂ Âᵀ: column block g of K̂ times Aᵀ.
   Eigen::MatrixXd k_at(n, n);

@@ -30,6 +30,10 @@ struct BodyModel {
   std::vector<format::Interface> interfaces;      ///< y_row and rotation truncated to n_f
   std::vector<format::RecoveryRegion> recovery;   ///< stress modes truncated to 3 n_f columns
   Eigen::MatrixXd fields;                         ///< Ῡ' (n_n x n_f), for nodal displacements
+  /// C (n_f x 3 k): mode m's displacement is Σ_f,d C(f, 3m + d) Ῡ'_f e_d, so its modal coordinate in a state is
+  /// η_m = Σ_f,d C(f, 3m + d) ξ̄_f[d] (the modes are M-orthonormal), and a pure mode m has ξ̄_f = η C(f, 3m..3m+2).
+  Eigen::MatrixXd mode_coefficients;
+  Eigen::VectorXd frequencies_hz;                 ///< of the k modes kept
   format::RowMatrixX3d nodes;                     ///< X̄ (body frame) [m]
 
   [[nodiscard]] Eigen::Index field_count() const { return stiffness.rows() / 3; }

@@ -33,6 +33,9 @@ struct ElasticTangent {
 /// ξ̄ = Âᵀ ξ.
 [[nodiscard]] Eigen::VectorXd body_frame_coordinates(const Eigen::Matrix3d& a, const Eigen::VectorXd& xi);
 
+/// D = ∂ξ̄/∂a (3 n_f x 9): row 3f + j, column 3j + i holds ξ_f[i] (ξ̄ is linear in a for fixed ξ).
+[[nodiscard]] Eigen::Matrix<double, Eigen::Dynamic, 9> body_frame_coordinates_derivative(const Eigen::VectorXd& xi);
+
 /// U and its gradient for K̂ (3 n_f square, symmetric), A and ξ (3 n_f).
 [[nodiscard]] ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a,
                                            const Eigen::VectorXd& xi);

@@ -1,0 +1,52 @@
+#pragma once
+// flexbody/runtime/marker.hpp: markers, the points and frames where joints and forces act (FORMULATION.md
+// section 4). A marker's position is a row of Y: r = (yᵀ ⊗ I3) q_b = τ + A X̄_c + Σ_f y_f ξ_f, linear in q with a
+// constant Jacobian. Its frame is A (I + [θ̄]×) with the small rotation θ̄ = R ξ̄ of its node set (ξ̄ = Âᵀ ξ), so a
+// body-fixed direction d at the marker points along A (d + θ̄ × d) = A (d − [d]× R ξ̄).
+
+#include "flexbody/runtime/body_model.hpp"
+
+#include <Eigen/Core>
+
+#include <string>
+
+namespace flexbody::runtime {
+
+inline constexpr int kGround = -1;
+
+struct Marker {
+  int body = kGround;                   ///< index of the body in its System, or kGround
+  std::string name;                     ///< for messages: "bar/tip", "ground"
+  Eigen::VectorXd y;                    ///< 4 + n_f: the marker's row of Y
+  Eigen::MatrixXd rotation;             ///< 3 x 3 n_f (R); zero columns for a point on a rigid body or a node
+  Eigen::Vector3d ground_point = Eigen::Vector3d::Zero();  ///< the position of a ground marker [m]
+};
+
+/// A body file's interface (rbe2/rbe3) of body `body` in a System. Throws std::invalid_argument naming the
+/// interfaces there are if `name` is not one of them.
+[[nodiscard]] Marker interface_marker(const BodyModel& model, int body, const std::string& body_name,
+                                      const std::string& name);
+/// A point fixed in the body frame (X̄, metres from the centre of mass): the rigid part of the motion only.
+[[nodiscard]] Marker point_marker(const BodyModel& model, int body, const std::string& body_name,
+                                  const Eigen::Vector3d& point);
+/// One node of the mesh: its position follows the node's deformation; its frame is the body's.
+[[nodiscard]] Marker node_marker(const BodyModel& model, int body, const std::string& body_name, Eigen::Index node);
+/// A fixed point in space.
+[[nodiscard]] Marker ground_marker(const Eigen::Vector3d& point);
+
+/// The marker's position for the body coordinates q_b (12 + 3 n_f); a ground marker ignores q_b.
+[[nodiscard]] Eigen::Vector3d marker_position(const Marker& m, const Eigen::VectorXd& q_b);
+/// ∂r/∂q_b = yᵀ ⊗ I3 (3 x (12 + 3 n_f)), constant.
+[[nodiscard]] Eigen::MatrixXd marker_position_jacobian(const Marker& m);
+/// A body-fixed direction d (body frame) at the marker, in the global frame: A (d − [d]× R ξ̄).
+[[nodiscard]] Eigen::Vector3d marker_direction(const Marker& m, const Eigen::VectorXd& q_b, const Eigen::Vector3d& d);
+/// Its Jacobian (3 x (12 + 3 n_f)); zero columns for τ.
+[[nodiscard]] Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const Eigen::VectorXd& q_b,
+                                                        const Eigen::Vector3d& d);
+
+/// A = mat(a) of body coordinates q_b.
+[[nodiscard]] inline Eigen::Matrix3d orientation_of(const Eigen::VectorXd& q_b) {
+  return Eigen::Map<const Eigen::Matrix3d>(q_b.data() + 3);
+}
+
+}  // namespace flexbody::runtime

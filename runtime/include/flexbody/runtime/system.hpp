@@ -1,0 +1,96 @@
+#pragma once
+// flexbody/runtime/system.hpp: a multibody system of improved-GCMS bodies (flexible or rigid: one code path),
+// joints and forces, as the index-3 DAE the integrator solves (Zwölfer & Gerstmayr 2023, Eqs. 85-89):
+//
+//   M q̈ + ∂U/∂q + Φ_qᵀ λ = Q(t, q, q̇),   Φ(q, t) = 0,   M = diag(G_b ⊗ I3) constant.
+//
+// Coordinates are stacked body by body, q_b = [τ; a; ξ] (12 + 3 n_f). Constraint rows: per body its reference
+// conditions (6 orthogonality rows, and 3 rotational Tisserand rows if it is flexible), then every joint's rows.
+
+#include "flexbody/runtime/body_model.hpp"
+#include "flexbody/runtime/joint.hpp"
+#include "flexbody/runtime/marker.hpp"
+
+#include <Eigen/Core>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace flexbody::runtime {
+
+/// A body's initial state. ξ and ξ̇ are in the global frame (ξ_f = A ξ̄_f); empty means zero.
+struct BodyState {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();          ///< τ: the centre of mass [m]
+  Eigen::Matrix3d orientation = Eigen::Matrix3d::Identity();   ///< A
+  Eigen::VectorXd xi;                                          ///< 3 n_f
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();          ///< τ̇ [m/s]
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< ω [rad/s], global: Ȧ = [ω]× A
+  Eigen::VectorXd xi_dot;                                      ///< 3 n_f
+};
+
+/// A force [N] in the global frame at a marker, as a function of time.
+struct PointForce {
+  Marker marker;
+  std::function<Eigen::Vector3d(double)> force;
+};
+
+struct Energies {
+  double kinetic = 0.0, elastic = 0.0, gravity = 0.0;  ///< [J]; gravity = −Σ m g·r_cm (zero at the origin)
+  [[nodiscard]] double total() const { return kinetic + elastic + gravity; }
+};
+
+class System {
+ public:
+  /// Adds a body; returns its index. Throws std::invalid_argument for a state of the wrong size or a
+  /// non-orthogonal orientation.
+  int add_body(const std::string& name, BodyModel model, const BodyState& initial);
+  void add_joint(Joint joint);
+  void add_force(PointForce force);
+  void set_gravity(const Eigen::Vector3d& gravity) { gravity_ = gravity; }
+
+  [[nodiscard]] int body_count() const { return static_cast<int>(bodies_.size()); }
+  [[nodiscard]] const BodyModel& model(int body) const { return bodies_.at(static_cast<std::size_t>(body)).model; }
+  [[nodiscard]] const std::string& body_name(int body) const { return bodies_.at(static_cast<std::size_t>(body)).name; }
+  [[nodiscard]] int body_index(const std::string& name) const;  ///< throws std::invalid_argument if unknown
+  [[nodiscard]] Eigen::Index offset(int body) const { return bodies_.at(static_cast<std::size_t>(body)).offset; }
+  [[nodiscard]] const std::vector<Joint>& joints() const { return joints_; }
+
+  [[nodiscard]] Eigen::Index coordinate_count() const { return coordinates_; }
+  [[nodiscard]] Eigen::Index constraint_count() const;
+  [[nodiscard]] Eigen::VectorXd initial_coordinates() const;
+  [[nodiscard]] Eigen::VectorXd initial_velocities() const;
+  /// The coordinates of one body (a copy); empty for kGround.
+  [[nodiscard]] Eigen::VectorXd body_coordinates(const Eigen::VectorXd& q, int body) const;
+
+  /// M = diag(G_b ⊗ I3), dense.
+  [[nodiscard]] Eigen::MatrixXd mass_matrix() const;
+  /// Q − ∂U/∂q: gravity (G[:, 0] ⊗ g), point forces ((y ⊗ I3) F), minus the elastic forces (Eqs. 86-87).
+  [[nodiscard]] Eigen::VectorXd forces(double t, const Eigen::VectorXd& q) const;
+  /// ∂²U/∂q², dense (the applied forces here do not depend on q).
+  [[nodiscard]] Eigen::MatrixXd stiffness(const Eigen::VectorXd& q) const;
+  [[nodiscard]] Eigen::VectorXd constraints(double t, const Eigen::VectorXd& q) const;
+  [[nodiscard]] Eigen::MatrixXd constraint_jacobian(double t, const Eigen::VectorXd& q) const;
+  /// Σ_k λ_k ∂²Φ_k/∂q² of the reference conditions (exact); the joints' curvature terms are left out (they only
+  /// change the Newton iteration's convergence rate, not its solution).
+  [[nodiscard]] Eigen::MatrixXd constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const;
+  /// What constraint row k is: "body 'bar': orthogonality", "body 'bar': Tisserand", "joint 'pivot'".
+  [[nodiscard]] std::string constraint_name(Eigen::Index row) const;
+  [[nodiscard]] Energies energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
+
+ private:
+  struct Body {
+    std::string name;
+    BodyModel model;
+    BodyState initial;
+    Eigen::Index offset = 0;
+  };
+  [[nodiscard]] Eigen::Index reference_rows(const Body& b) const { return b.model.rigid() ? 6 : 9; }
+  std::vector<Body> bodies_;
+  std::vector<Joint> joints_;
+  std::vector<PointForce> forces_;
+  Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();
+  Eigen::Index coordinates_ = 0;
+};
+
+}  // namespace flexbody::runtime

@@ -1,0 +1,127 @@
+#include "flexbody/runtime/generalized_alpha.hpp"
+
+#include <Eigen/LU>
+
+#include <cmath>
+#include <sstream>
+
+namespace flexbody::runtime {
+namespace {
+
+// d/dt (Φ_q q̇ + Φ_t) at fixed q̇, by central differences along (q + s q̇, t + s): the acceleration-level
+// right-hand side of the consistent initial accelerations (a directional derivative, accurate to ~1e-10).
+Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
+  const double scale = std::max(1e-12, v.cwiseAbs().maxCoeff());
+  const double s = 1e-6 / scale;
+  auto phi_dot = [&](double shift) {
+    const Eigen::VectorXd qs = q + shift * v;
+    const double ts = t + shift, dt = 1e-6;
+    const Eigen::VectorXd phi_t = (system.constraints(ts + dt, qs) - system.constraints(ts - dt, qs)) / (2 * dt);
+    return Eigen::VectorXd(system.constraint_jacobian(ts, qs) * v + phi_t);
+  };
+  return (phi_dot(s) - phi_dot(-s)) / (2 * s);
+}
+
+}  // namespace
+
+GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaOptions& options, double t0)
+    : system_(system), options_(options), t_(t0) {
+  const double rho = options.rho_infinity;
+  if (!(rho >= 0.0 && rho <= 1.0)) throw std::invalid_argument("generalized-alpha: rho_inf must lie in [0, 1]");
+  if (!(options.step > 0.0) || !std::isfinite(options.step))
+    throw std::invalid_argument("generalized-alpha: the step must be positive");
+  alpha_m_ = (2.0 * rho - 1.0) / (rho + 1.0);
+  alpha_f_ = rho / (rho + 1.0);
+  gamma_ = 0.5 + alpha_f_ - alpha_m_;
+  beta_ = 0.25 * (gamma_ + 0.5) * (gamma_ + 0.5);
+  q_ = system.initial_coordinates();
+  v_ = system.initial_velocities();
+  mass_ = system.mass_matrix();
+  const Eigen::Index n = q_.size(), m = system.constraint_count();
+  const Eigen::VectorXd phi = system.constraints(t_, q_);
+  for (Eigen::Index k = 0; k < m; ++k)
+    if (std::abs(phi(k)) > 1e-8)
+      throw std::invalid_argument("initial state violates " + system.constraint_name(k) + " by " + std::to_string(phi(k)));
+  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
+  const Eigen::MatrixXd jac = system.constraint_jacobian(t_, q_);
+  kkt.topLeftCorner(n, n) = mass_;
+  kkt.topRightCorner(n, m) = jac.transpose();
+  kkt.bottomLeftCorner(m, n) = jac;
+  Eigen::VectorXd rhs(n + m);
+  rhs << system.forces(t_, q_), -constraint_curvature(system, t_, q_, v_);
+  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(kkt);
+  const Eigen::VectorXd x = lu.solve(rhs);
+  if (!x.allFinite() || (kkt * x - rhs).norm() > 1e-8 * std::max(1.0, rhs.norm()))
+    throw std::invalid_argument("initial accelerations: the constraints are redundant or contradictory "
+                                "(the matrix [M J^T; J 0] is singular)");
+  qdd_ = x.head(n);
+  lambda_ = x.tail(m);
+  a_ = qdd_;
+}
+
+void GeneralizedAlpha::step() {
+  const double h = options_.step;
+  const Eigen::Index n = q_.size(), m = lambda_.size();
+  const double t1 = t_ + h;
+  const double beta_prime = (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_));
+  const double gamma_prime = gamma_ / (beta_ * h);
+  // Predictor: q̈_{n+1} = q̈_n.
+  Eigen::VectorXd qdd = qdd_;
+  Eigen::VectorXd a = (alpha_f_ * qdd_ - alpha_m_ * a_ + (1.0 - alpha_f_) * qdd) / (1.0 - alpha_m_);
+  Eigen::VectorXd v = v_ + h * (1.0 - gamma_) * a_ + h * gamma_ * a;
+  Eigen::VectorXd q = q_ + h * v_ + h * h * (0.5 - beta_) * a_ + h * h * beta_ * a;
+  Eigen::VectorXd mu = lambda_ / beta_prime;  // the scaled multipliers
+  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
+  Eigen::VectorXd residual(n + m);
+  const double q_scale = 1.0 + q.cwiseAbs().maxCoeff();
+  for (iterations_ = 1;; ++iterations_) {
+    const Eigen::MatrixXd jac = system_.constraint_jacobian(t1, q);
+    const Eigen::VectorXd phi = system_.constraints(t1, q);
+    const Eigen::VectorXd inertia = mass_ * qdd;
+    residual.head(n) = (inertia - system_.forces(t1, q)) / beta_prime + jac.transpose() * mu;
+    residual.tail(m) = phi;
+    kkt.topLeftCorner(n, n) =
+        mass_ + (system_.stiffness(q) + system_.constraint_hessian(q, beta_prime * mu)) / beta_prime;
+    kkt.topRightCorner(n, m) = jac.transpose();
+    kkt.bottomLeftCorner(m, n) = jac;
+    const Eigen::VectorXd dx = Eigen::PartialPivLU<Eigen::MatrixXd>(kkt).solve(-residual);
+    if (!dx.allFinite()) {
+      std::ostringstream why;
+      Eigen::Index worst = 0;
+      if (m > 0) phi.cwiseAbs().maxCoeff(&worst);
+      why << "t = " << t1 << " s: the Newton matrix is singular or the state is not finite (largest constraint "
+          << "residual in " << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")";
+      throw StepFailure(why.str());
+    }
+    q += dx.head(n);
+    v += gamma_prime * dx.head(n);
+    qdd += beta_prime * dx.head(n);
+    mu += dx.tail(m);
+    const double force_scale = 1.0 + inertia.cwiseAbs().maxCoeff() / beta_prime;
+    const bool converged = dx.head(n).cwiseAbs().maxCoeff() <= options_.tolerance * q_scale &&
+                           residual.head(n).cwiseAbs().maxCoeff() <= 1e3 * options_.tolerance * force_scale;
+    if (converged) break;
+    if (iterations_ >= options_.max_iterations) {
+      Eigen::Index worst = 0;
+      const Eigen::VectorXd now = system_.constraints(t1, q);
+      if (m > 0) now.cwiseAbs().maxCoeff(&worst);
+      std::ostringstream why;
+      why << "t = " << t1 << " s: Newton did not converge in " << options_.max_iterations
+          << " iterations (last correction " << dx.head(n).cwiseAbs().maxCoeff() << "; largest constraint residual "
+          << (m > 0 ? now.cwiseAbs().maxCoeff() : 0.0) << " in "
+          << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")";
+      throw StepFailure(why.str());
+    }
+  }
+  if (!q.allFinite() || !v.allFinite() || !qdd.allFinite()) throw StepFailure("t = " + std::to_string(t1) + " s: non-finite state");
+  a = (alpha_f_ * qdd_ - alpha_m_ * a_ + (1.0 - alpha_f_) * qdd) / (1.0 - alpha_m_);
+  q_ = q;
+  v_ = v;
+  qdd_ = qdd;
+  a_ = a;
+  lambda_ = beta_prime * mu;
+  t_ = t1;
+  total_iterations_ += iterations_;
+}
+
+}  // namespace flexbody::runtime

@@ -1,0 +1,225 @@
+#include "flexbody/runtime/system.hpp"
+
+#include "flexbody/runtime/gcms_elastic.hpp"
+#include "flexbody/runtime/reference_constraints.hpp"
+
+#include <Eigen/Geometry>
+
+#include <stdexcept>
+
+namespace flexbody::runtime {
+namespace {
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d s;
+  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return s;
+}
+
+// Adds (y ⊗ I3) F to the body's block of f.
+void add_marker_force(Eigen::Ref<Eigen::VectorXd> f_b, const Marker& m, const Eigen::Vector3d& force) {
+  for (Eigen::Index k = 0; k < m.y.size(); ++k) f_b.segment<3>(3 * k) += m.y(k) * force;
+}
+
+}  // namespace
+
+int System::add_body(const std::string& name, BodyModel model, const BodyState& initial) {
+  for (const Body& b : bodies_)
+    if (b.name == name) throw std::invalid_argument("body '" + name + "' is defined twice");
+  const Eigen::Index n_xi = 3 * model.field_count();
+  BodyState state = initial;
+  if (state.xi.size() == 0) state.xi = Eigen::VectorXd::Zero(n_xi);
+  if (state.xi_dot.size() == 0) state.xi_dot = Eigen::VectorXd::Zero(n_xi);
+  if (state.xi.size() != n_xi || state.xi_dot.size() != n_xi)
+    throw std::invalid_argument("body '" + name + "': xi and xi_dot need 3 n_f = " + std::to_string(n_xi) + " entries");
+  if ((state.orientation.transpose() * state.orientation - Eigen::Matrix3d::Identity()).norm() > 1e-12 ||
+      state.orientation.determinant() < 0.0)
+    throw std::invalid_argument("body '" + name + "': the initial orientation is not a rotation (A^T A = I, det A = 1)");
+  bodies_.push_back({name, std::move(model), state, coordinates_});
+  coordinates_ += bodies_.back().model.coordinate_count();
+  return static_cast<int>(bodies_.size()) - 1;
+}
+
+void System::add_joint(Joint joint) {
+  for (const Joint& j : joints_)
+    if (j.name == joint.name) throw std::invalid_argument("joint '" + joint.name + "' is defined twice");
+  joints_.push_back(std::move(joint));
+}
+
+void System::add_force(PointForce force) {
+  if (force.marker.body < 0 || force.marker.body >= body_count())
+    throw std::invalid_argument("point force at " + force.marker.name + ": not a marker on a body of this system");
+  if (!force.force) throw std::invalid_argument("point force at " + force.marker.name + ": no force function");
+  forces_.push_back(std::move(force));
+}
+
+int System::body_index(const std::string& name) const {
+  for (std::size_t b = 0; b < bodies_.size(); ++b)
+    if (bodies_[b].name == name) return static_cast<int>(b);
+  throw std::invalid_argument("no body '" + name + "'");
+}
+
+Eigen::Index System::constraint_count() const {
+  Eigen::Index rows = 0;
+  for (const Body& b : bodies_) rows += reference_rows(b);
+  for (const Joint& j : joints_) rows += j.rows();
+  return rows;
+}
+
+Eigen::VectorXd System::initial_coordinates() const {
+  Eigen::VectorXd q(coordinates_);
+  for (const Body& b : bodies_) {
+    q.segment<3>(b.offset) = b.initial.position;
+    q.segment<9>(b.offset + 3) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(b.initial.orientation.data());
+    q.segment(b.offset + 12, b.initial.xi.size()) = b.initial.xi;
+  }
+  return q;
+}
+
+Eigen::VectorXd System::initial_velocities() const {
+  Eigen::VectorXd v(coordinates_);
+  for (const Body& b : bodies_) {
+    v.segment<3>(b.offset) = b.initial.velocity;
+    const Eigen::Matrix3d a_dot = skew(b.initial.angular_velocity) * b.initial.orientation;
+    v.segment<9>(b.offset + 3) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(a_dot.data());
+    v.segment(b.offset + 12, b.initial.xi_dot.size()) = b.initial.xi_dot;
+  }
+  return v;
+}
+
+Eigen::VectorXd System::body_coordinates(const Eigen::VectorXd& q, int body) const {
+  if (body == kGround) return {};
+  const Body& b = bodies_.at(static_cast<std::size_t>(body));
+  return q.segment(b.offset, b.model.coordinate_count());
+}
+
+Eigen::MatrixXd System::mass_matrix() const {
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(coordinates_, coordinates_);
+  for (const Body& b : bodies_) {
+    const Eigen::MatrixXd& g = b.model.mass_matrix;  // M_b = G ⊗ I3 (Eq. 66)
+    for (Eigen::Index r = 0; r < g.rows(); ++r)
+      for (Eigen::Index c = 0; c < g.cols(); ++c) m.block<3, 3>(b.offset + 3 * r, b.offset + 3 * c).diagonal().setConstant(g(r, c));
+  }
+  return m;
+}
+
+Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q) const {
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(coordinates_);
+  for (const Body& b : bodies_) {
+    const Eigen::Index n = b.model.coordinate_count();
+    auto f_b = f.segment(b.offset, n);
+    const Eigen::MatrixXd& g = b.model.mass_matrix;  // gravity: (G[:, 0] ⊗ I3) g
+    for (Eigen::Index k = 0; k < g.rows(); ++k) f_b.segment<3>(3 * k) += g(k, 0) * gravity_;
+    if (!b.model.rigid()) {
+      const Eigen::VectorXd q_b = q.segment(b.offset, n);
+      const ElasticForces elastic = elastic_forces(b.model.stiffness, orientation_of(q_b), q_b.tail(n - 12));
+      f_b.segment<9>(3) -= elastic.grad_a;   // Eq. 86
+      f_b.tail(n - 12) -= elastic.grad_xi;   // Eq. 87
+    }
+  }
+  for (const PointForce& p : forces_) {
+    const Body& b = bodies_.at(static_cast<std::size_t>(p.marker.body));
+    add_marker_force(f.segment(b.offset, b.model.coordinate_count()), p.marker, p.force(t));
+  }
+  return f;
+}
+
+Eigen::MatrixXd System::stiffness(const Eigen::VectorXd& q) const {
+  Eigen::MatrixXd k = Eigen::MatrixXd::Zero(coordinates_, coordinates_);
+  for (const Body& b : bodies_) {
+    if (b.model.rigid()) continue;
+    const Eigen::Index n = b.model.coordinate_count(), n_xi = n - 12;
+    const Eigen::VectorXd q_b = q.segment(b.offset, n);
+    const ElasticTangent t = elastic_tangent(b.model.stiffness, orientation_of(q_b), q_b.tail(n_xi));
+    k.block<9, 9>(b.offset + 3, b.offset + 3) = t.aa;
+    k.block(b.offset + 3, b.offset + 12, 9, n_xi) = t.a_xi;
+    k.block(b.offset + 12, b.offset + 3, n_xi, 9) = t.a_xi.transpose();
+    k.block(b.offset + 12, b.offset + 12, n_xi, n_xi) = t.xi_xi;
+  }
+  return k;
+}
+
+Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
+  Eigen::VectorXd phi(constraint_count());
+  Eigen::Index row = 0;
+  for (const Body& b : bodies_) {
+    const Eigen::Index n = b.model.coordinate_count();
+    const Eigen::VectorXd q_b = q.segment(b.offset, n);
+    const Eigen::Matrix<double, 9, 1> ref = reference_residual(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12));
+    phi.segment(row, reference_rows(b)) = ref.head(reference_rows(b));
+    row += reference_rows(b);
+  }
+  for (const Joint& j : joints_) {
+    const JointEvaluation e =
+        evaluate_joint(j, t, body_coordinates(q, j.first.body), body_coordinates(q, j.second.body));
+    phi.segment(row, j.rows()) = e.residual;
+    row += j.rows();
+  }
+  return phi;
+}
+
+Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) const {
+  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(constraint_count(), coordinates_);
+  Eigen::Index row = 0;
+  for (const Body& b : bodies_) {
+    const Eigen::Index n = b.model.coordinate_count();
+    const Eigen::VectorXd q_b = q.segment(b.offset, n);
+    const Eigen::MatrixXd ref = reference_jacobian(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12));
+    jac.block(row, b.offset + 3, reference_rows(b), n - 3) = ref.topRows(reference_rows(b));
+    row += reference_rows(b);
+  }
+  for (const Joint& j : joints_) {
+    const JointEvaluation e =
+        evaluate_joint(j, t, body_coordinates(q, j.first.body), body_coordinates(q, j.second.body));
+    if (j.first.body != kGround) jac.block(row, offset(j.first.body), j.rows(), e.jacobian_first.cols()) += e.jacobian_first;
+    if (j.second.body != kGround)
+      jac.block(row, offset(j.second.body), j.rows(), e.jacobian_second.cols()) += e.jacobian_second;
+    row += j.rows();
+  }
+  return jac;
+}
+
+Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const {
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(coordinates_, coordinates_);
+  Eigen::Index row = 0;
+  for (const Body& b : bodies_) {
+    const Eigen::Index n = b.model.coordinate_count();
+    const Eigen::VectorXd q_b = q.segment(b.offset, n);
+    Eigen::Matrix<double, 9, 1> l = Eigen::Matrix<double, 9, 1>::Zero();
+    l.head(reference_rows(b)) = lambda.segment(row, reference_rows(b));
+    h.block(b.offset + 3, b.offset + 3, n - 3, n - 3) =
+        reference_hessian(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12), l);
+    row += reference_rows(b);
+  }
+  return h;
+}
+
+std::string System::constraint_name(Eigen::Index row) const {
+  for (const Body& b : bodies_) {
+    if (row < 6) return "body '" + b.name + "': orthogonality of A (Eq. 79)";
+    if (row < reference_rows(b)) return "body '" + b.name + "': rotational Tisserand condition (Eq. 78)";
+    row -= reference_rows(b);
+  }
+  for (const Joint& j : joints_) {
+    if (row < j.rows()) return "joint '" + j.name + "'";
+    row -= j.rows();
+  }
+  return "constraint " + std::to_string(row);
+}
+
+Energies System::energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
+  Energies e;
+  for (const Body& b : bodies_) {
+    const Eigen::Index n = b.model.coordinate_count();
+    const Eigen::MatrixXd& g = b.model.mass_matrix;
+    const Eigen::VectorXd q_b = q.segment(b.offset, n), v_b = v.segment(b.offset, n);
+    // T = ½ v_bᵀ (G ⊗ I3) v_b = ½ Σ_rc G_rc v_r · v_c with v_r the 3-blocks.
+    const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> blocks(v_b.data(), 3, n / 3);
+    e.kinetic += 0.5 * (blocks.transpose() * blocks).cwiseProduct(g).sum();
+    for (Eigen::Index k = 0; k < g.rows(); ++k) e.gravity -= g(k, 0) * gravity_.dot(q_b.segment<3>(3 * k));
+    if (!b.model.rigid()) e.elastic += elastic_forces(b.model.stiffness, orientation_of(q_b), q_b.tail(n - 12)).energy;
+  }
+  return e;
+}
+
+}  // namespace flexbody::runtime

@@ -2,11 +2,7 @@
 # found here by header and library (ARPACK through its arpack.pc) and wrapped in imported targets.
 find_package(PkgConfig REQUIRED)
 find_package(OpenMP REQUIRED COMPONENTS CXX)
-find_package(CLI11 REQUIRED CONFIG)
-find_package(fmt REQUIRED CONFIG)
-find_package(nlohmann_json 3 REQUIRED CONFIG)
 find_package(OpenSSL REQUIRED COMPONENTS Crypto)
-find_package(yaml-cpp REQUIRED CONFIG)  # Debian 12: 0.7, target yaml-cpp (no namespace)
 
 # Spectra 1.0 (header only; Debian installs no config file for it).
 find_path(SPECTRA_INCLUDE_DIR Spectra/SymGEigsShiftSolver.h REQUIRED)

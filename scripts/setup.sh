@@ -14,7 +14,7 @@ packages=(
   libspectra-dev         # Spectra: the second eigensolver backend
   libopenblas0-pthread   # optimized BLAS: CHOLMOD is ~10x slower on Debian's reference BLAS
   libcli11-dev           # fbprep's command line
-  libyaml-cpp-dev        # body specs (fbprep body.yaml) and, later, fbsim scenes
+  libyaml-cpp-dev        # body specs (fbprep body.yaml) and fbsim scenes
   libfmt-dev             # formatting of reports and messages
   nlohmann-json3-dev     # --json output
   libssl-dev             # SHA-256 of the source file (provenance in the body file)

@@ -18,11 +18,23 @@ std::string slurp(const std::filesystem::path& path) {
 
 void write_text(const std::filesystem::path& path, const std::string& text) { std::ofstream(path) << text; }
 
-CliRun run_fbprep(const std::filesystem::path& dir, const std::string& arguments) {
-  const std::string command = fmt::format("cd '{}' && '{}' {} > stdout.txt 2> stderr.txt", dir.string(),
-                                          FLEXBODY_FBPREP, arguments);
+namespace {
+
+CliRun run_tool(const std::filesystem::path& dir, const char* executable, const std::string& arguments) {
+  const std::string command =
+      fmt::format("cd '{}' && '{}' {} > stdout.txt 2> stderr.txt", dir.string(), executable, arguments);
   const int status = std::system(command.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir / "stdout.txt"), slurp(dir / "stderr.txt")};
+}
+
+}  // namespace
+
+CliRun run_fbprep(const std::filesystem::path& dir, const std::string& arguments) {
+  return run_tool(dir, FLEXBODY_FBPREP, arguments);
+}
+
+CliRun run_fbsim(const std::filesystem::path& dir, const std::string& arguments) {
+  return run_tool(dir, FLEXBODY_FBSIM, arguments);
 }
 
 }  // namespace flexbody::test

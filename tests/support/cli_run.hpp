@@ -1,5 +1,5 @@
 #pragma once
-// Running fbprep as a user does, from the tests: exit code, stdout and stderr.
+// Running fbprep and fbsim as a user does, from the tests: exit code, stdout and stderr.
 
 #include <filesystem>
 #include <string>
@@ -14,6 +14,8 @@ struct CliRun {
 /// Runs `fbprep ARGUMENTS` (a shell word list) in `dir`; stdout and stderr go to dir/stdout.txt and
 /// dir/stderr.txt, which are read back.
 [[nodiscard]] CliRun run_fbprep(const std::filesystem::path& dir, const std::string& arguments);
+/// The same for `fbsim ARGUMENTS`.
+[[nodiscard]] CliRun run_fbsim(const std::filesystem::path& dir, const std::string& arguments);
 
 /// The whole content of a text file.
 [[nodiscard]] std::string slurp(const std::filesystem::path& path);

@@ -25,7 +25,7 @@ Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen
 }  // namespace
 
 GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaOptions& options, double t0)
-    : system_(system), options_(options), t_(t0) {
+    : system_(system), options_(options), t0_(t0), t_(t0) {
   const double rho = options.rho_infinity;
   if (!(rho >= 0.0 && rho <= 1.0)) throw std::invalid_argument("generalized-alpha: rho_inf must lie in [0, 1]");
   if (!(options.step > 0.0) || !std::isfinite(options.step))
@@ -62,7 +62,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
 void GeneralizedAlpha::step() {
   const double h = options_.step;
   const Eigen::Index n = q_.size(), m = lambda_.size();
-  const double t1 = t_ + h;
+  const double t1 = t0_ + static_cast<double>(steps_ + 1) * h;
   const double beta_prime = (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_));
   const double gamma_prime = gamma_ / (beta_ * h);
   // Predictor: q̈_{n+1} = q̈_n.
@@ -121,6 +121,7 @@ void GeneralizedAlpha::step() {
   a_ = a;
   lambda_ = beta_prime * mu;
   t_ = t1;
+  ++steps_;
   total_iterations_ += iterations_;
 }
 

@@ -207,6 +207,18 @@ std::string System::constraint_name(Eigen::Index row) const {
   return "constraint " + std::to_string(row);
 }
 
+Eigen::Index System::reference_row(int body) const {
+  Eigen::Index row = 0;
+  for (int b = 0; b < body; ++b) row += reference_rows(bodies_.at(static_cast<std::size_t>(b)));
+  return row;
+}
+
+Eigen::Index System::joint_row(std::size_t joint) const {
+  Eigen::Index row = reference_row(body_count());
+  for (std::size_t j = 0; j < joint; ++j) row += joints_.at(j).rows();
+  return row;
+}
+
 Energies System::energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   Energies e;
   for (const Body& b : bodies_) {

@@ -57,7 +57,8 @@ class GeneralizedAlpha {
   const System& system_;
   GeneralizedAlphaOptions options_;
   double alpha_m_ = 0.0, alpha_f_ = 0.0, beta_ = 0.0, gamma_ = 0.0;
-  double t_ = 0.0;
+  double t0_ = 0.0, t_ = 0.0;
+  long steps_ = 0;  ///< t = t0 + steps h: no accumulated rounding in the time
   Eigen::VectorXd q_, v_, qdd_, a_, lambda_;
   Eigen::MatrixXd mass_;
   int iterations_ = 0;

@@ -76,6 +76,10 @@ class System {
   [[nodiscard]] Eigen::MatrixXd constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const;
   /// What constraint row k is: "body 'bar': orthogonality", "body 'bar': Tisserand", "joint 'pivot'".
   [[nodiscard]] std::string constraint_name(Eigen::Index row) const;
+  /// The first constraint row of joint j (its rows follow in the order of joint.hpp).
+  [[nodiscard]] Eigen::Index joint_row(std::size_t joint) const;
+  /// The first constraint row of body b's reference conditions (6 orthogonality, then 3 Tisserand if flexible).
+  [[nodiscard]] Eigen::Index reference_row(int body) const;
   [[nodiscard]] Energies energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
 
  private:

@@ -1,0 +1,146 @@
+#include "run.hpp"
+
+#include "flexbody/runtime/reference_constraints.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <ctime>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+
+namespace flexbody::fbsim {
+namespace {
+
+// One CSV file per output; values with 17 significant digits (round-trip exact).
+class CsvFile {
+ public:
+  CsvFile(const std::filesystem::path& path, const std::vector<std::string>& columns) : out_(path) {
+    if (!out_) throw std::runtime_error(path.string() + ": cannot write");
+    out_ << "t [s]";
+    for (const std::string& c : columns) out_ << ',' << c;
+    out_ << '\n';
+  }
+  void row(double t, const Eigen::VectorXd& values) {
+    out_ << fmt::format("{:.17g}", t);
+    for (Eigen::Index k = 0; k < values.size(); ++k) out_ << fmt::format(",{:.17g}", values(k));
+    out_ << '\n';
+  }
+
+ private:
+  std::ofstream out_;
+};
+
+std::vector<std::string> columns_of(const Scene& scene, const Sensor& s) {
+  std::vector<std::string> columns;
+  for (const std::string& q : s.quantities) {
+    if (q == "position") columns.insert(columns.end(), {"x [m]", "y [m]", "z [m]"});
+    if (q == "velocity") columns.insert(columns.end(), {"vx [m/s]", "vy [m/s]", "vz [m/s]"});
+    if (q == "reaction_force") columns.insert(columns.end(), {"fx [N]", "fy [N]", "fz [N]"});
+    if (q == "modal_coordinates")
+      for (Eigen::Index m = 0; m < scene.system.model(s.body).modes; ++m)
+        columns.push_back(fmt::format("eta_{} [kg^1/2 m]", m + 1));
+  }
+  return columns;
+}
+
+Eigen::VectorXd values_of(const Scene& scene, const Sensor& s, const runtime::GeneralizedAlpha& integrator) {
+  const runtime::System& system = scene.system;
+  std::vector<double> values;
+  auto push = [&values](const Eigen::VectorXd& v) { values.insert(values.end(), v.data(), v.data() + v.size()); };
+  for (const std::string& q : s.quantities) {
+    if (q == "position")
+      push(runtime::marker_position(s.marker, system.body_coordinates(integrator.coordinates(), s.marker.body)));
+    if (q == "velocity")  // ṙ = (yᵀ ⊗ I3) q̇_b: the position is linear in q
+      push(runtime::marker_position_jacobian(s.marker) * system.body_coordinates(integrator.velocities(), s.marker.body));
+    if (q == "reaction_force")  // the force of the joint on marker 1: −λ of its position rows
+      push(-integrator.multipliers().segment<3>(system.joint_row(s.joint)));
+    if (q == "modal_coordinates") {
+      const runtime::BodyModel& model = system.model(s.body);
+      const Eigen::VectorXd q_b = system.body_coordinates(integrator.coordinates(), s.body);
+      const Eigen::Matrix3d a = runtime::orientation_of(q_b);
+      Eigen::VectorXd eta = Eigen::VectorXd::Zero(model.modes);
+      for (Eigen::Index m = 0; m < model.modes; ++m)
+        for (Eigen::Index f = 0; f < model.field_count(); ++f)
+          eta(m) += model.mode_coefficients.block<1, 3>(f, 3 * m).dot(a.transpose() * q_b.segment<3>(12 + 3 * f));
+      push(eta);
+    }
+  }
+  return Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+}
+
+// Monitors: energies, the largest ‖AᵀA − I‖_F, the largest Tisserand and joint residuals, Newton iterations.
+Eigen::VectorXd monitor_values(const Scene& scene, const runtime::GeneralizedAlpha& integrator) {
+  const runtime::System& system = scene.system;
+  const runtime::Energies e = system.energies(integrator.coordinates(), integrator.velocities());
+  const Eigen::VectorXd phi = system.constraints(integrator.time(), integrator.coordinates());
+  double orthogonality = 0.0, tisserand = 0.0;
+  for (int b = 0; b < system.body_count(); ++b) {
+    const Eigen::Matrix3d a = runtime::orientation_of(system.body_coordinates(integrator.coordinates(), b));
+    orthogonality = std::max(orthogonality, (a.transpose() * a - Eigen::Matrix3d::Identity()).norm());
+    if (!system.model(b).rigid())
+      tisserand = std::max(tisserand, phi.segment<3>(system.reference_row(b) + 6).cwiseAbs().maxCoeff());
+  }
+  const Eigen::Index first_joint_row = system.joint_row(0);
+  const double joints = phi.size() > first_joint_row ? phi.tail(phi.size() - first_joint_row).cwiseAbs().maxCoeff() : 0.0;
+  Eigen::VectorXd v(8);
+  v << e.kinetic, e.elastic, e.gravity, e.total(), orthogonality, tisserand, joints,
+      static_cast<double>(integrator.last_iterations());
+  return v;
+}
+
+}  // namespace
+
+RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const std::function<void(double)>& progress) {
+  std::filesystem::create_directories(directory);
+  std::vector<std::unique_ptr<CsvFile>> files;
+  RunSummary summary;
+  for (const Sensor& s : scene.sensors) {
+    summary.files.push_back(directory / (s.name + ".csv"));
+    files.push_back(std::make_unique<CsvFile>(summary.files.back(), columns_of(scene, s)));
+  }
+  std::unique_ptr<CsvFile> monitors;
+  if (scene.monitors) {
+    summary.files.push_back(directory / "monitors.csv");
+    monitors = std::make_unique<CsvFile>(
+        summary.files.back(), std::vector<std::string>{"kinetic [J]", "elastic [J]", "gravity [J]", "total [J]",
+                                                        "max |A^T A - I|", "max |Tisserand| [kg^1/2 m^2]",
+                                                        "max |joint residual|", "Newton iterations"});
+  }
+  const std::clock_t cpu_start = std::clock();
+  runtime::GeneralizedAlpha integrator(scene.system, scene.integrator);
+  auto record = [&] {
+    for (std::size_t k = 0; k < files.size(); ++k) files[k]->row(integrator.time(), values_of(scene, scene.sensors[k], integrator));
+    if (monitors) monitors->row(integrator.time(), monitor_values(scene, integrator));
+  };
+  const runtime::Energies e0 = scene.system.energies(integrator.coordinates(), integrator.velocities());
+  summary.energy_initial = e0.total();
+  double kinetic_max = e0.kinetic;
+  record();
+  const long steps = std::lround(scene.end_time / scene.integrator.step);
+  try {
+    for (long k = 1; k <= steps; ++k) {
+      integrator.step();
+      ++summary.steps;
+      summary.newton_iterations += integrator.last_iterations();
+      summary.max_constraint_residual = std::max(
+          summary.max_constraint_residual,
+          scene.system.constraints(integrator.time(), integrator.coordinates()).cwiseAbs().maxCoeff());
+      const runtime::Energies e = scene.system.energies(integrator.coordinates(), integrator.velocities());
+      kinetic_max = std::max(kinetic_max, e.kinetic);
+      summary.energy_final = e.total();
+      if (k % scene.output_every == 0 || k == steps) record();
+      if (progress && k % 100 == 0) progress(integrator.time());
+    }
+  } catch (...) {
+    summary.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+    throw;
+  }
+  summary.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+  summary.energy_drift = std::abs(summary.energy_final - summary.energy_initial) /
+                         std::max({std::abs(summary.energy_initial), kinetic_max, 1e-300});
+  return summary;
+}
+
+}  // namespace flexbody::fbsim

@@ -1,0 +1,259 @@
+#include "scene.hpp"
+
+#include "flexbody/format/body_file.hpp"
+#include "flexbody/format/yaml_reader.hpp"
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+
+#include <cmath>
+#include <map>
+#include <numbers>
+
+namespace flexbody::fbsim {
+namespace {
+
+using Reader = format::YamlReader;
+
+struct LoadedBody {
+  int index = 0;
+  Eigen::Vector3d com_input = Eigen::Vector3d::Zero();  ///< the body file's centre of mass, input frame
+};
+
+// A marker on `body` from exactly one of interface (name), point (input-frame coordinates [m]), node (index).
+runtime::Marker read_marker(const Reader& r, const YAML::Node& map, const runtime::System& system, int body,
+                            const LoadedBody& loaded, const std::string& where) {
+  const runtime::BodyModel& model = system.model(body);
+  const std::string& name = system.body_name(body);
+  int given = 0;
+  for (const char* key : {"interface", "point", "node"}) given += map[key].IsDefined() ? 1 : 0;
+  if (given != 1) r.fail(map, fmt::format("{} needs exactly one of interface, point, node", where));
+  if (const YAML::Node p = map["point"])
+    return runtime::point_marker(model, body, name, r.vector3(p, where + " point") - loaded.com_input);
+  const YAML::Node key = map["interface"] ? map["interface"] : map["node"];
+  const std::string interface = map["interface"] ? r.text(key, where + " interface") : std::string();
+  const int node = map["node"] ? r.count(key, where + " node") : 0;
+  try {
+    return map["interface"] ? runtime::interface_marker(model, body, name, interface)
+                            : runtime::node_marker(model, body, name, node);
+  } catch (const std::invalid_argument& e) {  // an unknown interface or node, named with the body file's ones
+    r.fail(key, fmt::format("{}: {}", where, e.what()));
+  }
+}
+
+runtime::JointType joint_type(const Reader& r, const YAML::Node& node, const std::string& where) {
+  const std::string t = r.text(node, where + " type");
+  if (t == "spherical") return runtime::JointType::spherical;
+  if (t == "fixed") return runtime::JointType::fixed;
+  if (t == "revolute") return runtime::JointType::revolute;
+  if (t == "prismatic") return runtime::JointType::prismatic;
+  if (t == "driven-revolute") return runtime::JointType::driven_revolute;
+  r.fail(node, fmt::format("{}: type '{}' is unknown; use spherical, fixed, revolute, prismatic or driven-revolute", where, t));
+}
+
+// φ(t) of a driven revolute joint: speed Ω [rad/s] reached smoothly over `ramp` seconds (φ̇ = Ω (1 − cos πt/T) / 2).
+std::function<double(double)> ramped_angle(double speed, double ramp) {
+  return [speed, ramp](double t) {
+    if (ramp <= 0.0 || t >= ramp) return speed * (t - 0.5 * ramp);
+    return 0.5 * speed * (t - ramp / std::numbers::pi * std::sin(std::numbers::pi * t / ramp));
+  };
+}
+
+}  // namespace
+
+Scene read_scene(const std::filesystem::path& file) {
+  const Reader r(file.string());
+  const YAML::Node loaded_root = r.load("scene");
+  const YAML::Node& root = loaded_root;
+  r.expect_map(root, "the scene", {"bodies", "joints", "forces", "gravity", "integrator", "outputs", "monitors"});
+  Scene scene;
+  const std::filesystem::path base = file.parent_path();
+  std::map<std::string, LoadedBody> bodies;
+
+  const YAML::Node body_map = r.required(root, "bodies", "the scene");
+  if (!body_map.IsMap() || body_map.size() == 0) r.fail(body_map, "bodies must be a map of names to bodies");
+  for (auto it = body_map.begin(); it != body_map.end(); ++it) {
+    const std::string name = it->first.Scalar();
+    const std::string where = fmt::format("body '{}'", name);
+    if (bodies.count(name)) r.fail(it->first, fmt::format("{} is defined twice", where));
+    const YAML::Node b = it->second;
+    r.expect_map(b, where, {"file", "modes", "position", "rotation", "velocity", "angular_velocity"});
+    const std::string path_text = r.text(r.required(b, "file", where), where + " file");
+    const std::filesystem::path path =
+        std::filesystem::path(path_text).is_absolute() ? std::filesystem::path(path_text) : base / path_text;
+    format::BodyData data;
+    try {
+      data = format::read_body_file(path);
+    } catch (const std::exception& e) {
+      r.fail(b["file"], e.what());
+    }
+    std::optional<Eigen::Index> modes;
+    if (const YAML::Node m = b["modes"]) {
+      const std::string text = r.text(m, where + " modes");
+      if (text == "rigid") modes = 0;
+      else if (text != "all") modes = r.count(m, where + " modes");
+    }
+    runtime::BodyModel model;
+    try {
+      model = runtime::make_body_model(data, modes, path.filename().string());
+    } catch (const std::invalid_argument& e) {
+      r.fail(b["modes"], e.what());
+    }
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+    if (const YAML::Node rot = b["rotation"]) {
+      r.expect_map(rot, where + " rotation", {"axis", "angle_deg"});
+      const Eigen::Vector3d axis = r.vector3(r.required(rot, "axis", where + " rotation"), where + " rotation axis");
+      if (!(axis.norm() > 0)) r.fail(rot["axis"], fmt::format("{} rotation axis must be non-zero", where));
+      const double angle = r.number(r.required(rot, "angle_deg", where + " rotation"), where + " rotation angle_deg");
+      rotation = Eigen::AngleAxisd(angle * std::numbers::pi / 180.0, axis.normalized()).toRotationMatrix();
+    }
+    const Eigen::Vector3d origin = b["position"] ? r.vector3(b["position"], where + " position") : Eigen::Vector3d::Zero();
+    runtime::BodyState state;
+    state.orientation = rotation;
+    state.position = origin + rotation * data.mass.center_of_mass_input;  // the input frame's origin goes to `position`
+    if (b["velocity"]) state.velocity = r.vector3(b["velocity"], where + " velocity");
+    if (b["angular_velocity"]) state.angular_velocity = r.vector3(b["angular_velocity"], where + " angular_velocity");
+    const int index = scene.system.add_body(name, std::move(model), state);
+    bodies[name] = {index, data.mass.center_of_mass_input};
+  }
+
+  auto body_of = [&](const YAML::Node& node, const std::string& where) -> const LoadedBody& {
+    const std::string name = r.text(node, where + " body");
+    const auto found = bodies.find(name);
+    if (found == bodies.end()) r.fail(node, fmt::format("{}: no body '{}' in the scene", where, name));
+    return found->second;
+  };
+
+  const Eigen::VectorXd q0 = scene.system.initial_coordinates();
+  if (const YAML::Node joints = root["joints"]) {
+    if (!joints.IsMap()) r.fail(joints, "joints must be a map of names to joints");
+    for (auto it = joints.begin(); it != joints.end(); ++it) {
+      const std::string name = it->first.Scalar();
+      const std::string where = fmt::format("joint '{}'", name);
+      const YAML::Node j = it->second;
+      r.expect_map(j, where, {"type", "body", "interface", "point", "node", "to", "axis", "speed", "ramp"});
+      const runtime::JointType type = joint_type(r, r.required(j, "type", where), where);
+      const LoadedBody& first = body_of(r.required(j, "body", where), where);
+      runtime::Marker m1 = read_marker(r, j, scene.system, first.index, first, where);
+      const Eigen::VectorXd q1 = scene.system.body_coordinates(q0, first.index);
+      runtime::Marker m2 = runtime::ground_marker(runtime::marker_position(m1, q1));
+      Eigen::VectorXd q2;
+      if (const YAML::Node to = j["to"]) {
+        if (!(to.IsScalar() && to.Scalar() == "ground")) {
+          r.expect_map(to, where + " to", {"body", "interface", "point", "node"});
+          const LoadedBody& second = body_of(r.required(to, "body", where + " to"), where + " to");
+          m2 = read_marker(r, to, scene.system, second.index, second, where + " to");
+          q2 = scene.system.body_coordinates(q0, second.index);
+        }
+      }
+      const bool has_axis = type == runtime::JointType::revolute || type == runtime::JointType::prismatic ||
+                            type == runtime::JointType::driven_revolute;
+      Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+      if (has_axis) axis = r.vector3(r.required(j, "axis", where), where + " axis");
+      else if (j["axis"]) r.fail(j["axis"], fmt::format("{}: a {} joint has no axis", where, r.text(j["type"], "type")));
+      std::function<double(double)> angle;
+      if (type == runtime::JointType::driven_revolute) {
+        const double speed = r.number(r.required(j, "speed", where), where + " speed");
+        const double ramp = j["ramp"] ? r.positive(j["ramp"], where + " ramp") : 0.0;
+        angle = ramped_angle(speed, ramp);
+      } else if (j["speed"] || j["ramp"]) {
+        r.fail(j["speed"] ? j["speed"] : j["ramp"], fmt::format("{}: speed and ramp belong to driven-revolute joints", where));
+      }
+      try {
+        scene.system.add_joint(runtime::make_joint(name, type, m1, m2, axis, q1, q2, angle));
+      } catch (const std::invalid_argument& e) {
+        r.fail(j, e.what());
+      }
+    }
+  }
+
+  if (const YAML::Node forces = root["forces"]) {
+    if (!forces.IsMap()) r.fail(forces, "forces must be a map of names to forces");
+    for (auto it = forces.begin(); it != forces.end(); ++it) {
+      const std::string where = fmt::format("force '{}'", it->first.Scalar());
+      const YAML::Node f = it->second;
+      r.expect_map(f, where, {"body", "interface", "point", "node", "force"});
+      const LoadedBody& body = body_of(r.required(f, "body", where), where);
+      const Eigen::Vector3d value = r.vector3(r.required(f, "force", where), where + " force");
+      scene.system.add_force({read_marker(r, f, scene.system, body.index, body, where), [value](double) { return value; }});
+    }
+  }
+
+  if (const YAML::Node g = root["gravity"]) scene.system.set_gravity(r.vector3(g, "gravity"));
+
+  const YAML::Node integrator = r.required(root, "integrator", "the scene");
+  r.expect_map(integrator, "integrator", {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every"});
+  if (const YAML::Node t = integrator["type"]; t && r.text(t, "integrator type") != "generalized-alpha")
+    r.fail(t, fmt::format("integrator type '{}' is unknown; use generalized-alpha", t.Scalar()));
+  if (const YAML::Node rho = integrator["rho_inf"]) {
+    scene.integrator.rho_infinity = r.number(rho, "integrator rho_inf");
+    if (scene.integrator.rho_infinity < 0.0 || scene.integrator.rho_infinity > 1.0)
+      r.fail(rho, fmt::format("integrator rho_inf must lie in [0, 1], got {}", scene.integrator.rho_infinity));
+  }
+  scene.integrator.step = r.positive(r.required(integrator, "step", "integrator"), "integrator step");
+  scene.end_time = r.positive(r.required(integrator, "end", "integrator"), "integrator end");
+  if (scene.integrator.step > scene.end_time)
+    r.fail(integrator["step"], fmt::format("integrator step {} s is larger than the end time {} s",
+                                           scene.integrator.step, scene.end_time));
+  if (const YAML::Node tol = integrator["tolerance"]) scene.integrator.tolerance = r.positive(tol, "integrator tolerance");
+  if (const YAML::Node it = integrator["max_iterations"]) scene.integrator.max_iterations = r.count(it, "integrator max_iterations");
+  if (const YAML::Node every = integrator["output_every"]) {
+    scene.output_every = r.count(every, "integrator output_every");
+    if (scene.output_every < 1) r.fail(every, "integrator output_every must be at least 1");
+  }
+  if (const YAML::Node monitors = root["monitors"]) {
+    const std::string m = r.text(monitors, "monitors");
+    if (m != "true" && m != "false") r.fail(monitors, "monitors must be true or false");
+    scene.monitors = m == "true";
+  }
+
+  if (const YAML::Node outputs = root["outputs"]) {
+    if (!outputs.IsMap()) r.fail(outputs, "outputs must be a map of names to outputs");
+    for (auto it = outputs.begin(); it != outputs.end(); ++it) {
+      Sensor s;
+      s.name = it->first.Scalar();
+      const std::string where = fmt::format("output '{}'", s.name);
+      if (s.name.empty() || s.name.find_first_of("/\\") != std::string::npos || s.name == "monitors")
+        r.fail(it->first, fmt::format("{}: the name must be a plain file name (not 'monitors')", where));
+      const YAML::Node o = it->second;
+      r.expect_map(o, where, {"body", "interface", "point", "node", "joint", "quantities"});
+      const YAML::Node quantities = r.required(o, "quantities", where);
+      if (!quantities.IsSequence() || quantities.size() == 0) r.fail(quantities, fmt::format("{} quantities must be a list", where));
+      std::vector<std::string> allowed;
+      if (o["joint"]) {
+        s.kind = Sensor::Kind::joint;
+        const std::string joint = r.text(o["joint"], where + " joint");
+        const auto& joints = scene.system.joints();
+        std::size_t k = 0;
+        while (k < joints.size() && joints[k].name != joint) ++k;
+        if (k == joints.size()) r.fail(o["joint"], fmt::format("{}: no joint '{}' in the scene", where, joint));
+        s.joint = k;
+        if (joints[k].type == runtime::JointType::prismatic)
+          r.fail(o["joint"], fmt::format("{}: the reaction force of a prismatic joint is not available (it has no "
+                                         "position rows)", where));
+        allowed = {"reaction_force"};
+      } else {
+        const LoadedBody& body = body_of(r.required(o, "body", where), where);
+        s.body = body.index;
+        if (o["interface"] || o["point"] || o["node"]) {
+          s.kind = Sensor::Kind::marker;
+          s.marker = read_marker(r, o, scene.system, body.index, body, where);
+          allowed = {"position", "velocity"};
+        } else {
+          s.kind = Sensor::Kind::modal;
+          allowed = {"modal_coordinates"};
+        }
+      }
+      for (std::size_t k = 0; k < quantities.size(); ++k) {
+        const std::string q = r.text(quantities[k], where + " quantity");
+        if (std::find(allowed.begin(), allowed.end(), q) == allowed.end())
+          r.fail(quantities[k], fmt::format("{}: quantity '{}' is not available here; use {}", where, q, fmt::join(allowed, ", ")));
+        s.quantities.push_back(q);
+      }
+      scene.sensors.push_back(std::move(s));
+    }
+  }
+  return scene;
+}
+
+}  // namespace flexbody::fbsim

@@ -1,0 +1,37 @@
+#pragma once
+// scene.hpp: fbsim's scene file (YAML): bodies from body files, joints, forces, gravity, integrator settings and
+// outputs, read into a runtime System. Every error is one "<scene>:<line>: <problem>" line.
+
+#include "flexbody/runtime/generalized_alpha.hpp"
+#include "flexbody/runtime/system.hpp"
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace flexbody::fbsim {
+
+/// One output file: a marker's position or velocity, a joint's reaction force, a body's modal coordinates.
+struct Sensor {
+  enum class Kind { marker, joint, modal };
+  std::string name;
+  Kind kind = Kind::marker;
+  runtime::Marker marker;          ///< Kind::marker
+  std::size_t joint = 0;           ///< Kind::joint: index into System::joints()
+  int body = 0;                    ///< Kind::modal (and the marker's body)
+  std::vector<std::string> quantities;  ///< marker: position, velocity; joint: reaction_force; modal: modal_coordinates
+};
+
+struct Scene {
+  runtime::System system;
+  runtime::GeneralizedAlphaOptions integrator;
+  double end_time = 0.0;
+  int output_every = 1;        ///< write every n-th step
+  bool monitors = false;       ///< monitors.csv: energies, ‖AᵀA − I‖, constraint residuals, Newton iterations
+  std::vector<Sensor> sensors;
+};
+
+/// Reads and assembles a scene; body files are read relative to the scene's directory.
+[[nodiscard]] Scene read_scene(const std::filesystem::path& file);
+
+}  // namespace flexbody::fbsim

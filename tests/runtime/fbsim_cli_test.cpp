@@ -1,0 +1,106 @@
+// fbsim as a user runs it: the issue's scene on a bar made by fbprep, and bad scenes that must each give one
+// error line naming the scene line, exit code 2 and no crash.
+#include "cli_run.hpp"
+#include "test_meshes.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <sstream>
+
+using flexbody::test::CliRun;
+using flexbody::test::run_fbprep;
+using flexbody::test::run_fbsim;
+using flexbody::test::write_text;
+
+namespace {
+
+// A 1 x 0.05 x 0.05 m steel bar with rbe3 interfaces root (x = 0) and tip (x = 1), 8 modes.
+const std::filesystem::path& bar_folder() {
+  static const std::filesystem::path dir = [] {
+    const auto d = flexbody::test::scratch_dir();
+    write_text(d / "bar.geo", "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 0.05, 0.05};\n");
+    write_text(d / "bar.yaml", R"(input: bar.geo
+unit: m
+mesh: {size: 0.025}
+reduction: {modes: 8}
+interfaces:
+  root: {select: {plane: {point: [0, 0, 0], normal: [1, 0, 0]}}}
+  tip: {select: {plane: {point: [1, 0, 0], normal: [1, 0, 0]}}}
+)");
+    const CliRun prep = run_fbprep(d, "bar.yaml -o bar.fbh5 -q");
+    EXPECT_EQ(prep.exit_code, 0) << prep.err;
+    return d;
+  }();
+  return dir;
+}
+
+const char* kIssueScene = R"(bodies:
+  bar: {file: bar.fbh5, modes: 8}
+joints:
+  pivot: {type: revolute, body: bar, interface: root, to: ground, axis: [0, 0, 1]}
+gravity: [0, -9.81, 0]
+integrator: {type: generalized-alpha, rho_inf: 0.9, step: 1.0e-4, end: 2.0}
+outputs:
+  tip: {body: bar, interface: tip, quantities: [position]}
+)";
+
+void expect_scene_error(const std::string& scene, int line, const std::string& message) {
+  SCOPED_TRACE(scene);
+  const auto& dir = bar_folder();
+  write_text(dir / "bad.yaml", scene);
+  const CliRun run = run_fbsim(dir, "bad.yaml -o bad_out -q");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("fbsim: error: bad.yaml:" + std::to_string(line) + ": " + message), std::string::npos) << run.err;
+  EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
+}
+
+}  // namespace
+
+TEST(FbsimCli, TheIssuesPendulumSceneRuns) {
+  // The issue's scene, shortened to 0.05 s (500 steps) to keep the test quick; the shape is unchanged.
+  const auto& dir = bar_folder();
+  std::string scene = kIssueScene;
+  scene.replace(scene.find("end: 2.0"), 8, "end: 0.05");
+  write_text(dir / "scene.yaml", scene);
+  const CliRun run = run_fbsim(dir, "scene.yaml -o out --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto json = nlohmann::json::parse(run.out);
+  EXPECT_EQ(json["steps"], 500);
+  EXPECT_GE(json["newton_iterations"].get<int>(), 500);
+  // The joint holds to the Newton tolerance (its rows are O(1) lengths and directions).
+  EXPECT_LT(json["max_constraint_residual"].get<double>(), 1e-9);
+  std::ifstream tip(dir / "out" / "tip.csv");
+  std::string header, first, line, last;
+  std::getline(tip, header);
+  std::getline(tip, first);
+  while (std::getline(tip, line)) last = line;
+  EXPECT_EQ(header, "t [s],x [m],y [m],z [m]");
+  // The tip starts at the bar's end (x = 1, y and z at the face centre) and falls: after 0.05 s a rigid bar
+  // from horizontal has turned by about (3g / 2L) t² / 2 = 0.018 rad, so y has dropped by about 1.8 cm.
+  double t0, x0, y0, z0, t1, x1, y1, z1;
+  char c;
+  std::istringstream(first) >> t0 >> c >> x0 >> c >> y0 >> c >> z0;
+  std::istringstream(last) >> t1 >> c >> x1 >> c >> y1 >> c >> z1;
+  EXPECT_NEAR(x0, 1.0, 1e-9);
+  EXPECT_NEAR(t1, 0.05, 1e-12);
+  EXPECT_NEAR(y0 - y1, 0.0184, 0.002);
+}
+
+TEST(FbsimCli, BadScenesNameTheLine) {
+  const std::string head = "bodies:\n  bar: {file: bar.fbh5, modes: 2}\n";
+  const std::string tail = "integrator: {step: 1.0e-3, end: 0.01}\n";
+  expect_scene_error(head + "colour: red\n" + tail, 3, "unknown key 'colour' in the scene");
+  expect_scene_error(head + "joints:\n  pin: {type: revolute, body: wheel, interface: root, axis: [0, 0, 1]}\n" + tail, 4,
+                     "joint 'pin': no body 'wheel' in the scene");
+  expect_scene_error(head + "joints:\n  pin: {type: revolute, body: bar, interface: hub, axis: [0, 0, 1]}\n" + tail, 4,
+                     "joint 'pin': bar.fbh5: no interface 'hub' (interfaces: root, tip)");
+  expect_scene_error(head + "gravity: [0, .nan, 0]\n" + tail, 3, "gravity must be finite, got '.nan'");
+  expect_scene_error(head + "integrator: {step: 0.1, end: 0.01}\n", 3,
+                     "integrator step 0.1 s is larger than the end time 0.01 s");
+  expect_scene_error("bodies:\n  bar: {file: bar.fbh5, modes: 99}\n" + tail, 2, "bar.fbh5: 99 modes asked for, the file holds 8");
+  expect_scene_error(head + "outputs:\n  tip: {body: bar, interface: tip, quantities: [stress]}\n" + tail, 4,
+                     "output 'tip': quantity 'stress' is not available here; use position, velocity");
+  expect_scene_error("bodies:\n  bar: {file: missing.fbh5}\n" + tail, 2, "missing.fbh5");
+}

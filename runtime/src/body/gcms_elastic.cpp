@@ -46,7 +46,8 @@ ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d
   return out;
 }
 
-ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+                               bool with_xi_xi) {
   check_sizes(k_hat, xi);
   const Eigen::Index n = xi.size(), n_f = n / 3;
   const Eigen::Matrix<double, Eigen::Dynamic, 9> d = body_frame_coordinates_derivative(xi);
@@ -61,6 +62,7 @@ ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix
   for (Eigen::Index f = 0; f < n_f; ++f)
     for (int j = 0; j < 3; ++j)
       for (int i = 0; i < 3; ++i) t.a_xi(3 * j + i, 3 * f + i) += h(3 * f + j);
+  if (!with_xi_xi) return t;
   t.xi_xi.resize(n, n);
   for (Eigen::Index f = 0; f < n_f; ++f) t.xi_xi.middleRows<3>(3 * f) = a * k_at.middleRows<3>(3 * f);
   return t;

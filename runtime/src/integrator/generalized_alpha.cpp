@@ -1,5 +1,7 @@
 #include "flexbody/runtime/generalized_alpha.hpp"
 
+#include "newton_solvers.hpp"
+
 #include <Eigen/LU>
 
 #include <cmath>
@@ -57,7 +59,14 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   qdd_ = x.head(n);
   lambda_ = x.tail(m);
   a_ = qdd_;
+  const double beta_prime = (1.0 - alpha_m_) / (beta_ * options.step * options.step * (1.0 - alpha_f_));
+  if (options.newton_matrix == NewtonMatrix::dense)
+    solver_ = std::make_unique<detail::DenseNewton>(system, beta_prime);
+  else
+    solver_ = std::make_unique<detail::ConstantCoreNewton>(system, beta_prime);
 }
+
+GeneralizedAlpha::~GeneralizedAlpha() = default;
 
 void GeneralizedAlpha::step() {
   const double h = options_.step;
@@ -71,7 +80,6 @@ void GeneralizedAlpha::step() {
   Eigen::VectorXd v = v_ + h * (1.0 - gamma_) * a_ + h * gamma_ * a;
   Eigen::VectorXd q = q_ + h * v_ + h * h * (0.5 - beta_) * a_ + h * h * beta_ * a;
   Eigen::VectorXd mu = lambda_ / beta_prime;  // the scaled multipliers
-  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
   Eigen::VectorXd residual(n + m);
   const double q_scale = 1.0 + q.cwiseAbs().maxCoeff();
   for (iterations_ = 1;; ++iterations_) {
@@ -80,11 +88,7 @@ void GeneralizedAlpha::step() {
     const Eigen::VectorXd inertia = mass_ * qdd;
     residual.head(n) = (inertia - system_.forces(t1, q)) / beta_prime + jac.transpose() * mu;
     residual.tail(m) = phi;
-    kkt.topLeftCorner(n, n) =
-        mass_ + (system_.stiffness(q) + system_.constraint_hessian(q, beta_prime * mu)) / beta_prime;
-    kkt.topRightCorner(n, m) = jac.transpose();
-    kkt.bottomLeftCorner(m, n) = jac;
-    const Eigen::VectorXd dx = Eigen::PartialPivLU<Eigen::MatrixXd>(kkt).solve(-residual);
+    const Eigen::VectorXd dx = solver_->solve(t1, q, mu, residual.head(n), phi, jac);
     if (!dx.allFinite()) {
       std::ostringstream why;
       Eigen::Index worst = 0;

@@ -40,8 +40,9 @@ struct ElasticTangent {
 [[nodiscard]] ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a,
                                            const Eigen::VectorXd& xi);
 
-/// The Hessian of U (the elastic tangent stiffness).
+/// The Hessian of U (the elastic tangent stiffness). Without `with_xi_xi` the ξξ block (Â K̂ Âᵀ, which the
+/// constant-core Newton solve never forms) is left empty.
 [[nodiscard]] ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a,
-                                             const Eigen::VectorXd& xi);
+                                             const Eigen::VectorXd& xi, bool with_xi_xi = true);
 
 }  // namespace flexbody::runtime

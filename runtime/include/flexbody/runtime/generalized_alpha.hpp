@@ -15,12 +15,22 @@
 
 #include <Eigen/Core>
 
+#include <memory>
 #include <stdexcept>
 #include <string>
 
 namespace flexbody::runtime {
 
+/// How each Newton iteration's linear system is solved.
+enum class NewtonMatrix {
+  /// Eliminate each flexible body's ξ block with the factor of C = G_ff ⊗ I3 + K̂/β', constant for the step
+  /// size (FORMULATION.md section 5): O((3 n_f)²) per right-hand side instead of O(n³).
+  constant_core,
+  dense,  ///< the whole matrix, LU per iteration: the reference the constant core is tested against
+};
+
 struct GeneralizedAlphaOptions {
+  NewtonMatrix newton_matrix = NewtonMatrix::constant_core;
   double rho_infinity = 0.9;  ///< spectral radius at infinite frequency, [0, 1]
   double step = 1e-3;         ///< h [s]
   int max_iterations = 25;    ///< Newton iterations per step before the step fails
@@ -36,8 +46,15 @@ class StepFailure : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+namespace detail {
+class NewtonSolver;
+}
+
 class GeneralizedAlpha {
  public:
+  ~GeneralizedAlpha();
+  GeneralizedAlpha(const GeneralizedAlpha&) = delete;
+  GeneralizedAlpha& operator=(const GeneralizedAlpha&) = delete;
   /// Starts at t0 from the system's initial coordinates and velocities, with consistent accelerations and
   /// multipliers ([M Φ_qᵀ; Φ_q 0] [q̈; λ] = [Q; −d/dt(Φ_q q̇ + Φ_t)]).
   GeneralizedAlpha(const System& system, const GeneralizedAlphaOptions& options, double t0 = 0.0);
@@ -61,6 +78,7 @@ class GeneralizedAlpha {
   long steps_ = 0;  ///< t = t0 + steps h: no accumulated rounding in the time
   Eigen::VectorXd q_, v_, qdd_, a_, lambda_;
   Eigen::MatrixXd mass_;
+  std::unique_ptr<detail::NewtonSolver> solver_;
   int iterations_ = 0;
   long total_iterations_ = 0;
 };

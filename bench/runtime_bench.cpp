@@ -1,0 +1,171 @@
+// runtime_bench: cost per time step of the improved-GCMS runtime against the number of modes, with the
+// constant-core Newton solve (FORMULATION.md section 5) and with the dense Newton matrix, and for a chain of
+// flexible bodies. Prints a table and writes CSV for bench/runtime_plot.py.
+//
+//   runtime_bench OUTPUT.csv [WORK_DIR]
+//
+// The body is a 1 x 0.05 x 0.03 m steel bar meshed by fbprep (gmsh, 8 mm elements) with 80 free-free modes;
+// each model takes its first n_m. A step is one generalized-α step (ρ∞ = 0.9) of a free body oscillating in
+// its first mode plus a slow spin, h = 1/50 of the first period.
+#include "flexbody/format/body_file.hpp"
+#include "flexbody/preprocess/fbprep_pipeline.hpp"
+#include "flexbody/runtime/gcms_elastic.hpp"
+#include "flexbody/runtime/generalized_alpha.hpp"
+#include "flexbody/runtime/reference_constraints.hpp"
+#include "flexbody/runtime/system.hpp"
+
+#include <Eigen/Cholesky>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+namespace fr = flexbody::runtime;
+namespace fp = flexbody::preprocess;
+
+namespace {
+
+struct Timing {
+  double microseconds_per_step = 0.0;
+  double iterations_per_step = 0.0;
+};
+
+Timing time_steps(const fr::System& system, fr::NewtonMatrix matrix, double step, int steps) {
+  fr::GeneralizedAlphaOptions options;
+  options.newton_matrix = matrix;
+  options.step = step;
+  fr::GeneralizedAlpha integrator(system, options);
+  for (int i = 0; i < 5; ++i) integrator.step();  // warm-up (allocations, caches)
+  const long before = integrator.total_iterations();
+  const auto start = std::chrono::steady_clock::now();
+  for (int i = 0; i < steps; ++i) integrator.step();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return {1e6 * seconds / steps, static_cast<double>(integrator.total_iterations() - before) / steps};
+}
+
+fr::BodyState vibrating(const fr::BodyModel& model) {
+  fr::BodyState state;
+  state.angular_velocity = Eigen::Vector3d(0.0, 0.0, 1.0);
+  state.xi = Eigen::VectorXd::Zero(3 * model.field_count());
+  for (Eigen::Index f = 0; f < model.field_count(); ++f)
+    state.xi.segment<3>(3 * f) = 1e-3 * model.mode_coefficients.block<1, 3>(f, 0).transpose();
+  return state;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: runtime_bench OUTPUT.csv [WORK_DIR]\n");
+    return 2;
+  }
+  const std::filesystem::path work = argc > 2 ? argv[2] : std::filesystem::temp_directory_path() / "flexbody_runtime_bench";
+  std::filesystem::create_directories(work);
+  std::ofstream(work / "bar.geo") << "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 0.05, 0.03};\n";
+  fp::PrepOptions prep;
+  prep.input = work / "bar.geo";
+  prep.output = work / "bar.fbh5";
+  prep.mesh.unit = fp::LengthUnit::metre;
+  prep.mesh.mesh_size = 0.008;
+  prep.modes.modes = 80;
+  prep.output_regions = std::vector<fp::OutputRegionRequest>{};
+  const fp::PrepSummary summary = fp::run_fbprep(prep);
+  const flexbody::format::BodyData body = flexbody::format::read_body_file(prep.output);
+  std::printf("body: %ld nodes, %ld DOFs, 80 modes (%.1f .. %.1f Hz)\n\n", static_cast<long>(summary.nodes),
+              static_cast<long>(summary.dofs), body.modes.frequencies_hz(0), body.modes.frequencies_hz(79));
+
+  std::ofstream csv(argv[1]);
+  csv << "scene,modes,fields,coordinates,newton,us_per_step,iterations_per_step\n";
+  std::printf("%-8s %5s %6s %6s  %14s %8s  %14s %8s\n", "scene", "n_m", "n_f", "n_q", "core us/step", "it/step",
+              "dense us/step", "it/step");
+  const double step = 1.0 / body.modes.frequencies_hz(0) / 50.0;
+  for (int n_m : {5, 10, 20, 40, 80}) {
+    const fr::BodyModel model = fr::make_body_model(body, n_m, "bar");
+    fr::System system;
+    system.add_body("bar", model, vibrating(model));
+    const int steps = n_m <= 20 ? 2000 : (n_m <= 40 ? 400 : 100);
+    const Timing core = time_steps(system, fr::NewtonMatrix::constant_core, step, steps);
+    const Timing dense = time_steps(system, fr::NewtonMatrix::dense, step, n_m <= 20 ? steps : steps / 4);
+    std::printf("%-8s %5d %6ld %6ld  %14.1f %8.2f  %14.1f %8.2f\n", "free", n_m, static_cast<long>(model.field_count()),
+                static_cast<long>(model.coordinate_count()), core.microseconds_per_step, core.iterations_per_step,
+                dense.microseconds_per_step, dense.iterations_per_step);
+    for (const auto& [name, t] : {std::pair{"constant_core", core}, std::pair{"dense", dense}})
+      csv << "free," << n_m << ',' << model.field_count() << ',' << model.coordinate_count() << ',' << name << ','
+          << t.microseconds_per_step << ',' << t.iterations_per_step << '\n';
+  }
+
+  // Where a 20-mode step's time goes: the kernels of one Newton iteration, timed alone.
+  {
+    const fr::BodyModel model = fr::make_body_model(body, 20, "bar");
+    const fr::BodyState state = vibrating(model);
+    const Eigen::Index n = 3 * model.field_count();
+    const Eigen::LLT<Eigen::MatrixXd> core(Eigen::MatrixXd::Identity(n, n) + model.stiffness * 1e-8);
+    const Eigen::MatrixXd rhs = Eigen::MatrixXd::Random(n, 22);
+    auto per_call = [](int reps, auto&& f) {
+      const auto start = std::chrono::steady_clock::now();
+      double sink = 0.0;
+      for (int i = 0; i < reps; ++i) sink += f();
+      const double us = 1e6 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / reps;
+      return sink == 12345.678 ? -us : us;  // keeps the work from being optimized away
+    };
+    const Eigen::Matrix3d a = state.orientation;
+    std::printf("\n20 modes (3 n_f = %ld), one Newton iteration's kernels [us per call]:\n", static_cast<long>(n));
+    std::printf("  elastic forces (K_hat xi_bar)          %8.1f\n",
+                per_call(2000, [&] { return fr::elastic_forces(model.stiffness, a, state.xi).energy; }));
+    std::printf("  elastic tangent without the xi-xi block %8.1f\n", per_call(500, [&] {
+                  return fr::elastic_tangent(model.stiffness, a, state.xi, false).aa(0, 0);
+                }));
+    std::printf("  core solve, 22 right-hand sides        %8.1f\n",
+                per_call(500, [&] { return core.solve(rhs)(0, 0); }));
+    Eigen::Matrix<double, 9, 1> lambda = Eigen::Matrix<double, 9, 1>::Ones();
+    std::printf("  reference Hessian ((9 + 3 n_f)^2 dense) %8.1f\n",
+                per_call(500, [&] { return fr::reference_hessian(model.tisserand, a, state.xi, lambda)(0, 0); }));
+  }
+
+  // A chain of four flexible bars (10 modes each) hanging from a revolute joint and linked by revolute joints at
+  // their end nodes, released from horizontal under gravity.
+  {
+    const fr::BodyModel model = fr::make_body_model(body, 10, "bar");
+    fr::System system;
+    // The corners (x_min, y_min, z_min) and (x_max, y_min, z_min) of the bar: gmsh puts nodes at the box's vertices.
+    const Eigen::RowVector3d low = model.nodes.colwise().minCoeff(), high = model.nodes.colwise().maxCoeff();
+    Eigen::Index left = 0, right = 0;
+    (model.nodes.rowwise() - low).rowwise().norm().minCoeff(&left);
+    (model.nodes.rowwise() - Eigen::RowVector3d(high.x(), low.y(), low.z())).rowwise().norm().minCoeff(&right);
+    const double length = model.nodes(right, 0) - model.nodes(left, 0);
+    for (int k = 0; k < 4; ++k) {
+      fr::BodyState state;
+      state.position = Eigen::Vector3d(k * length, 0, 0) - model.nodes.row(left).transpose();
+      std::string name = "bar";  // appended: GCC 12 warns falsely on "literal" + std::string&&
+      name += std::to_string(k);
+      system.add_body(name, model, state);
+    }
+    const Eigen::VectorXd q0 = system.initial_coordinates();
+    for (int k = 0; k < 4; ++k) {
+      const fr::Marker here = fr::node_marker(model, k, "bar", left);
+      const Eigen::VectorXd qk = system.body_coordinates(q0, k);
+      if (k == 0) {
+        system.add_joint(fr::make_joint("j0", fr::JointType::revolute, here, fr::ground_marker(fr::marker_position(here, qk)),
+                                        Eigen::Vector3d::UnitZ(), qk, Eigen::VectorXd()));
+      } else {
+        // The previous bar's right corner and this bar's left corner coincide (the same mesh, shifted by its length).
+        const fr::Marker there = fr::node_marker(model, k - 1, "bar", right);
+        std::string name = "j";
+        name += std::to_string(k);
+        system.add_joint(fr::make_joint(name, fr::JointType::revolute, here, there,
+                                        Eigen::Vector3d::UnitZ(), qk, system.body_coordinates(q0, k - 1)));
+      }
+    }
+    system.set_gravity(Eigen::Vector3d(0, -9.81, 0));
+    const Timing core = time_steps(system, fr::NewtonMatrix::constant_core, 1e-4, 500);
+    const Timing dense = time_steps(system, fr::NewtonMatrix::dense, 1e-4, 200);
+    std::printf("%-8s %5d %6ld %6ld  %14.1f %8.2f  %14.1f %8.2f\n", "chain4", 10, static_cast<long>(model.field_count()),
+                static_cast<long>(system.coordinate_count()), core.microseconds_per_step, core.iterations_per_step,
+                dense.microseconds_per_step, dense.iterations_per_step);
+    for (const auto& [name, t] : {std::pair{"constant_core", core}, std::pair{"dense", dense}})
+      csv << "chain4," << 10 << ',' << model.field_count() << ',' << system.coordinate_count() << ',' << name << ','
+          << t.microseconds_per_step << ',' << t.iterations_per_step << '\n';
+  }
+  return 0;
+}

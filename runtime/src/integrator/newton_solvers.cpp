@@ -1,0 +1,136 @@
+#include "newton_solvers.hpp"
+
+#include "flexbody/runtime/gcms_elastic.hpp"
+#include "flexbody/runtime/reference_constraints.hpp"
+
+#include <Eigen/LU>
+
+#include <stdexcept>
+
+namespace flexbody::runtime::detail {
+namespace {
+
+// y = Â x for x of length 3 n_f (block diagonal A).
+Eigen::MatrixXd rotate(const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) {
+  Eigen::MatrixXd y(x.rows(), x.cols());
+  for (Eigen::Index f = 0; f < x.rows() / 3; ++f) y.middleRows<3>(3 * f) = a * x.middleRows<3>(3 * f);
+  return y;
+}
+
+}  // namespace
+
+DenseNewton::DenseNewton(const System& system, double beta_prime)
+    : system_(system), beta_prime_(beta_prime), mass_(system.mass_matrix()) {}
+
+Eigen::VectorXd DenseNewton::solve(double, const Eigen::VectorXd& q, const Eigen::VectorXd& mu,
+                                   const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
+                                   const Eigen::MatrixXd& jacobian) {
+  const Eigen::Index n = q.size(), m = phi.size();
+  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
+  kkt.topLeftCorner(n, n) = mass_ + (system_.stiffness(q) + system_.constraint_hessian(q, beta_prime_ * mu)) / beta_prime_;
+  kkt.topRightCorner(n, m) = jacobian.transpose();
+  kkt.bottomLeftCorner(m, n) = jacobian;
+  Eigen::VectorXd rhs(n + m);
+  rhs << -residual, -phi;
+  return Eigen::PartialPivLU<Eigen::MatrixXd>(kkt).solve(rhs);
+}
+
+ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime)
+    : system_(system), beta_prime_(beta_prime) {
+  for (int b = 0; b < system.body_count(); ++b) {
+    const BodyModel& model = system.model(b);
+    const Eigen::Index n_f = model.field_count();
+    Eigen::MatrixXd core = model.stiffness / beta_prime;  // C = G_ff ⊗ I3 + K̂ / β' (FORMULATION.md section 5)
+    for (Eigen::Index f = 0; f < n_f; ++f)
+      for (Eigen::Index g = 0; g < n_f; ++g) core.block<3, 3>(3 * f, 3 * g).diagonal().array() += model.mass_matrix(4 + f, 4 + g);
+    cores_.emplace_back(core);
+    if (n_f > 0 && cores_.back().info() != Eigen::Success)
+      throw std::runtime_error("body '" + system.body_name(b) + "': the constant Newton core G_ff x I3 + K_hat/beta' is "
+                               "not positive definite");
+  }
+}
+
+Eigen::VectorXd ConstantCoreNewton::solve(double, const Eigen::VectorXd& q, const Eigen::VectorXd& mu,
+                                          const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
+                                          const Eigen::MatrixXd& jacobian) {
+  const int n_b = system_.body_count();
+  const Eigen::Index m = phi.size(), n_r = 12 * n_b;
+  // The reduced system in [Δq_r (12 per body); Δμ].
+  Eigen::MatrixXd reduced = Eigen::MatrixXd::Zero(n_r + m, n_r + m);
+  Eigen::VectorXd rhs(n_r + m);
+  rhs.tail(m) = -phi;
+  // Per flexible body, S_ff⁻¹ [S_fr, J_fᵀ, r_f] for the back-substitution.
+  std::vector<Eigen::MatrixXd> eliminated(static_cast<std::size_t>(n_b));
+  std::vector<std::vector<Eigen::Index>> active_rows(static_cast<std::size_t>(n_b));
+  for (int b = 0; b < n_b; ++b) {
+    const BodyModel& model = system_.model(b);
+    const Eigen::Index o = system_.offset(b), n_xi = 3 * model.field_count(), n_f = model.field_count();
+    const Eigen::VectorXd q_b = q.segment(o, 12 + n_xi);
+    const Eigen::Matrix3d a = orientation_of(q_b);
+    const Eigen::VectorXd xi = q_b.tail(n_xi);
+    const Eigen::MatrixXd& g = model.mass_matrix;
+    // S_rr = G[0:4, 0:4] ⊗ I3 + (K_aa + H_aa) / β';  S_rf = G[0:4, 4:] ⊗ I3 + (K_aξ + H_aξ) / β'.
+    Eigen::MatrixXd s_rr = Eigen::MatrixXd::Zero(12, 12), s_rf = Eigen::MatrixXd::Zero(12, n_xi);
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) s_rr.block<3, 3>(3 * r, 3 * c).diagonal().setConstant(g(r, c));
+      for (Eigen::Index f = 0; f < n_f; ++f) s_rf.block<3, 3>(3 * r, 3 * f).diagonal().setConstant(g(r, 4 + f));
+    }
+    const Eigen::Index ref_rows = model.rigid() ? 6 : 9;
+    Eigen::Matrix<double, 9, 1> lambda = Eigen::Matrix<double, 9, 1>::Zero();
+    lambda.head(ref_rows) = beta_prime_ * mu.segment(system_.reference_row(b), ref_rows);
+    const Eigen::MatrixXd h = reference_hessian(model.tisserand, a, xi, lambda);  // over [a; ξ]
+    s_rr.bottomRightCorner<9, 9>() += h.topLeftCorner<9, 9>() / beta_prime_;
+    if (n_xi > 0) {
+      const ElasticTangent t = elastic_tangent(model.stiffness, a, xi, /*with_xi_xi=*/false);
+      s_rr.bottomRightCorner<9, 9>() += t.aa / beta_prime_;
+      s_rf.bottomRows<9>() += (t.a_xi + h.topRightCorner(9, n_xi)) / beta_prime_;
+    }
+    reduced.block(12 * b, 12 * b, 12, 12) = s_rr;
+    reduced.block(12 * b, n_r, 12, m) = jacobian.middleCols(o, 12).transpose();
+    reduced.block(n_r, 12 * b, m, 12) = jacobian.middleCols(o, 12);
+    rhs.segment(12 * b, 12) = -residual.segment(o, 12);
+    if (n_xi == 0) continue;
+    // Eliminate ξ: S_ff⁻¹ x = Â C⁻¹ Âᵀ x, for S_fr, the constraint rows that involve this body's ξ (its own
+    // reference rows and its joints: the others are zero there) and r_f.
+    const Eigen::MatrixXd j_all = jacobian.middleCols(o + 12, n_xi);
+    std::vector<Eigen::Index> rows;
+    for (Eigen::Index k = 0; k < m; ++k)
+      if (j_all.row(k).cwiseAbs().maxCoeff() > 0.0) rows.push_back(k);
+    const auto k_rows = static_cast<Eigen::Index>(rows.size());
+    const Eigen::MatrixXd j_f = j_all(rows, Eigen::all);
+    Eigen::MatrixXd columns(n_xi, 12 + k_rows + 1);
+    columns << s_rf.transpose(), j_f.transpose(), residual.segment(o + 12, n_xi);
+    Eigen::MatrixXd y = rotate(a, cores_[static_cast<std::size_t>(b)].solve(rotate(a.transpose(), columns)));
+    reduced.block(12 * b, 12 * b, 12, 12) -= s_rf * y.leftCols(12);
+    const Eigen::MatrixXd s_rf_y = s_rf * y.middleCols(12, k_rows), j_y = j_f * y.leftCols(12);
+    const Eigen::MatrixXd j_yj = j_f * y.middleCols(12, k_rows);
+    for (Eigen::Index i = 0; i < k_rows; ++i) {
+      reduced.col(n_r + rows[i]).segment(12 * b, 12) -= s_rf_y.col(i);
+      reduced.row(n_r + rows[i]).segment(12 * b, 12) -= j_y.row(i);
+      for (Eigen::Index l = 0; l < k_rows; ++l) reduced(n_r + rows[i], n_r + rows[l]) -= j_yj(i, l);
+    }
+    rhs.segment(12 * b, 12) += s_rf * y.col(12 + k_rows);
+    const Eigen::VectorXd j_yr = j_f * y.col(12 + k_rows);
+    for (Eigen::Index i = 0; i < k_rows; ++i) rhs(n_r + rows[i]) += j_yr(i);
+    eliminated[static_cast<std::size_t>(b)] = std::move(y);
+    active_rows[static_cast<std::size_t>(b)] = std::move(rows);
+  }
+  const Eigen::VectorXd x = Eigen::PartialPivLU<Eigen::MatrixXd>(reduced).solve(rhs);
+  // Back-substitute: Δq_f = −S_ff⁻¹ (r_f + S_fr Δq_r + J_fᵀ Δμ).
+  Eigen::VectorXd out(q.size() + m);
+  out.tail(m) = x.tail(m);
+  for (int b = 0; b < n_b; ++b) {
+    const Eigen::Index o = system_.offset(b), n_xi = 3 * system_.model(b).field_count();
+    out.segment(o, 12) = x.segment(12 * b, 12);
+    if (n_xi == 0) continue;
+    const Eigen::MatrixXd& y = eliminated[static_cast<std::size_t>(b)];
+    const std::vector<Eigen::Index>& rows = active_rows[static_cast<std::size_t>(b)];
+    const auto k_rows = static_cast<Eigen::Index>(rows.size());
+    const Eigen::VectorXd mu_rows = x.tail(m)(rows);
+    out.segment(o + 12, n_xi) =
+        -(y.col(12 + k_rows) + y.leftCols(12) * x.segment(12 * b, 12) + y.middleCols(12, k_rows) * mu_rows);
+  }
+  return out;
+}
+
+}  // namespace flexbody::runtime::detail

@@ -2,6 +2,7 @@
 
 #include "flexbody/format/body_file.hpp"
 #include "flexbody/format/yaml_reader.hpp"
+#include "flexbody/runtime/damping.hpp"
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
@@ -77,7 +78,7 @@ Scene read_scene(const std::filesystem::path& file) {
     const std::string where = fmt::format("body '{}'", name);
     if (bodies.count(name)) r.fail(it->first, fmt::format("{} is defined twice", where));
     const YAML::Node b = it->second;
-    r.expect_map(b, where, {"file", "modes", "position", "rotation", "velocity", "angular_velocity"});
+    r.expect_map(b, where, {"file", "modes", "position", "rotation", "velocity", "angular_velocity", "damping"});
     const std::string path_text = r.text(r.required(b, "file", where), where + " file");
     const std::filesystem::path path =
         std::filesystem::path(path_text).is_absolute() ? std::filesystem::path(path_text) : base / path_text;
@@ -98,6 +99,33 @@ Scene read_scene(const std::filesystem::path& file) {
       model = runtime::make_body_model(data, modes, path.filename().string());
     } catch (const std::invalid_argument& e) {
       r.fail(b["modes"], e.what());
+    }
+    if (const YAML::Node damping = b["damping"]) {  // modal: ζ (all modes) or [ζ_1, ...]; rayleigh: {alpha, beta}
+      r.expect_map(damping, where + " damping", {"modal", "rayleigh"});
+      std::optional<Eigen::VectorXd> ratios;
+      if (const YAML::Node modal = damping["modal"]) {
+        ratios = Eigen::VectorXd(model.modes);
+        if (modal.IsSequence()) {
+          if (static_cast<Eigen::Index>(modal.size()) != model.modes)
+            r.fail(modal, fmt::format("{} damping modal lists {} ratios for {} modes", where, modal.size(), model.modes));
+          for (std::size_t k = 0; k < modal.size(); ++k)
+            (*ratios)(static_cast<Eigen::Index>(k)) = r.number(modal[k], where + " damping modal");
+        } else {
+          ratios->setConstant(r.number(modal, where + " damping modal"));
+        }
+      }
+      double alpha = 0.0, beta = 0.0;
+      if (const YAML::Node rayleigh = damping["rayleigh"]) {
+        r.expect_map(rayleigh, where + " damping rayleigh", {"alpha", "beta"});
+        if (rayleigh["alpha"]) alpha = r.number(rayleigh["alpha"], where + " damping alpha");
+        if (rayleigh["beta"]) beta = r.number(rayleigh["beta"], where + " damping beta");
+      }
+      try {
+        model.damping = runtime::rayleigh_damping(model, alpha, beta);
+        if (ratios) model.damping += runtime::modal_damping(model, *ratios);
+      } catch (const std::invalid_argument& e) {  // a ratio outside [0, 1], a negative alpha or beta
+        r.fail(damping, fmt::format("{} damping: {}", where, e.what()));
+      }
     }
     Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
     if (const YAML::Node rot = b["rotation"]) {

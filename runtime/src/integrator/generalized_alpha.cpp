@@ -50,7 +50,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   kkt.topRightCorner(n, m) = jac.transpose();
   kkt.bottomLeftCorner(m, n) = jac;
   Eigen::VectorXd rhs(n + m);
-  rhs << system.forces(t_, q_), -constraint_curvature(system, t_, q_, v_);
+  rhs << system.forces(t_, q_, v_), -constraint_curvature(system, t_, q_, v_);
   const Eigen::PartialPivLU<Eigen::MatrixXd> lu(kkt);
   const Eigen::VectorXd x = lu.solve(rhs);
   if (!x.allFinite() || (kkt * x - rhs).norm() > 1e-8 * std::max(1.0, rhs.norm()))
@@ -60,10 +60,11 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   lambda_ = x.tail(m);
   a_ = qdd_;
   const double beta_prime = (1.0 - alpha_m_) / (beta_ * options.step * options.step * (1.0 - alpha_f_));
+  const double gamma_prime = gamma_ / (beta_ * options.step);
   if (options.newton_matrix == NewtonMatrix::dense)
-    solver_ = std::make_unique<detail::DenseNewton>(system, beta_prime);
+    solver_ = std::make_unique<detail::DenseNewton>(system, beta_prime, gamma_prime);
   else
-    solver_ = std::make_unique<detail::ConstantCoreNewton>(system, beta_prime);
+    solver_ = std::make_unique<detail::ConstantCoreNewton>(system, beta_prime, gamma_prime);
 }
 
 GeneralizedAlpha::~GeneralizedAlpha() = default;
@@ -86,7 +87,7 @@ void GeneralizedAlpha::step() {
     const Eigen::MatrixXd jac = system_.constraint_jacobian(t1, q);
     const Eigen::VectorXd phi = system_.constraints(t1, q);
     const Eigen::VectorXd inertia = mass_ * qdd;
-    residual.head(n) = (inertia - system_.forces(t1, q)) / beta_prime + jac.transpose() * mu;
+    residual.head(n) = (inertia - system_.forces(t1, q, v)) / beta_prime + jac.transpose() * mu;
     residual.tail(m) = phi;
     const Eigen::VectorXd dx = solver_->solve(t1, q, mu, residual.head(n), phi, jac);
     if (!dx.allFinite()) {

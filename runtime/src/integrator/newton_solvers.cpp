@@ -19,8 +19,8 @@ Eigen::MatrixXd rotate(const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) {
 
 }  // namespace
 
-DenseNewton::DenseNewton(const System& system, double beta_prime)
-    : system_(system), beta_prime_(beta_prime), mass_(system.mass_matrix()) {}
+DenseNewton::DenseNewton(const System& system, double beta_prime, double gamma_prime)
+    : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime), mass_(system.mass_matrix()) {}
 
 Eigen::VectorXd DenseNewton::solve(double, const Eigen::VectorXd& q, const Eigen::VectorXd& mu,
                                    const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
@@ -28,6 +28,15 @@ Eigen::VectorXd DenseNewton::solve(double, const Eigen::VectorXd& q, const Eigen
   const Eigen::Index n = q.size(), m = phi.size();
   Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
   kkt.topLeftCorner(n, n) = mass_ + (system_.stiffness(q) + system_.constraint_hessian(q, beta_prime_ * mu)) / beta_prime_;
+  for (int b = 0; b < system_.body_count(); ++b) {  // the damping's ξξ block Â D̂ Âᵀ, times γ'
+    const BodyModel& model = system_.model(b);
+    if (model.damping.size() == 0) continue;
+    const Eigen::Index o = system_.offset(b) + 12, n_f = model.field_count();
+    const Eigen::Matrix3d a = orientation_of(system_.body_coordinates(q, b));
+    for (Eigen::Index f = 0; f < n_f; ++f)
+      for (Eigen::Index g = 0; g < n_f; ++g)
+        kkt.block<3, 3>(o + 3 * f, o + 3 * g) += gamma_prime_ / beta_prime_ * a * model.damping.block<3, 3>(3 * f, 3 * g) * a.transpose();
+  }
   kkt.topRightCorner(n, m) = jacobian.transpose();
   kkt.bottomLeftCorner(m, n) = jacobian;
   Eigen::VectorXd rhs(n + m);
@@ -35,12 +44,14 @@ Eigen::VectorXd DenseNewton::solve(double, const Eigen::VectorXd& q, const Eigen
   return Eigen::PartialPivLU<Eigen::MatrixXd>(kkt).solve(rhs);
 }
 
-ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime)
+ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime)
     : system_(system), beta_prime_(beta_prime) {
   for (int b = 0; b < system.body_count(); ++b) {
     const BodyModel& model = system.model(b);
     const Eigen::Index n_f = model.field_count();
-    Eigen::MatrixXd core = model.stiffness / beta_prime;  // C = G_ff ⊗ I3 + K̂ / β' (FORMULATION.md section 5)
+    // C = G_ff ⊗ I3 + (K̂ + γ' D̂) / β' (FORMULATION.md section 5).
+    Eigen::MatrixXd core = model.stiffness / beta_prime;
+    if (model.damping.size() > 0) core += gamma_prime / beta_prime * model.damping;
     for (Eigen::Index f = 0; f < n_f; ++f)
       for (Eigen::Index g = 0; g < n_f; ++g) core.block<3, 3>(3 * f, 3 * g).diagonal().array() += model.mass_matrix(4 + f, 4 + g);
     cores_.emplace_back(core);

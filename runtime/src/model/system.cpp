@@ -103,7 +103,7 @@ Eigen::MatrixXd System::mass_matrix() const {
   return m;
 }
 
-Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q) const {
+Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   Eigen::VectorXd f = Eigen::VectorXd::Zero(coordinates_);
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
@@ -115,6 +115,17 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q) const {
       const ElasticForces elastic = elastic_forces(b.model.stiffness, orientation_of(q_b), q_b.tail(n - 12));
       f_b.segment<9>(3) -= elastic.grad_a;   // Eq. 86
       f_b.tail(n - 12) -= elastic.grad_xi;   // Eq. 87
+      if (b.model.damping.size() > 0) {      // R = ½ ξ̄̇ᵀ D̂ ξ̄̇, ξ̄̇_f = Ȧᵀ ξ_f + Aᵀ ξ̇_f
+        const Eigen::VectorXd v_b = v.segment(b.offset, n);
+        const Eigen::VectorXd xi = q_b.tail(n - 12), xi_dot = v_b.tail(n - 12);
+        const Eigen::Matrix3d a = orientation_of(q_b), a_dot = orientation_of(v_b);
+        Eigen::VectorXd rate(n - 12);
+        for (Eigen::Index i = 0; i < (n - 12) / 3; ++i)
+          rate.segment<3>(3 * i) = a_dot.transpose() * xi.segment<3>(3 * i) + a.transpose() * xi_dot.segment<3>(3 * i);
+        const Eigen::VectorXd damping_force = b.model.damping * rate;
+        f_b.segment<9>(3) -= body_frame_coordinates_derivative(xi).transpose() * damping_force;
+        for (Eigen::Index i = 0; i < (n - 12) / 3; ++i) f_b.segment<3>(12 + 3 * i) -= a * damping_force.segment<3>(3 * i);
+      }
     }
   }
   for (const PointForce& p : forces_) {

@@ -34,6 +34,8 @@ struct BodyModel {
   /// η_m = Σ_f,d C(f, 3m + d) ξ̄_f[d] (the modes are M-orthonormal), and a pure mode m has ξ̄_f = η C(f, 3m..3m+2).
   Eigen::MatrixXd mode_coefficients;
   Eigen::VectorXd frequencies_hz;                 ///< of the k modes kept
+  /// D̂ (3 n_f square) [1/s] on the body-frame field velocities (damping.hpp); empty: undamped.
+  Eigen::MatrixXd damping;
   format::RowMatrixX3d nodes;                     ///< X̄ (body frame) [m]
 
   [[nodiscard]] Eigen::Index field_count() const { return stiffness.rows() / 3; }

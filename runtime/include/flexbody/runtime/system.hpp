@@ -65,8 +65,9 @@ class System {
 
   /// M = diag(G_b ⊗ I3), dense.
   [[nodiscard]] Eigen::MatrixXd mass_matrix() const;
-  /// Q − ∂U/∂q: gravity (G[:, 0] ⊗ g), point forces ((y ⊗ I3) F), minus the elastic forces (Eqs. 86-87).
-  [[nodiscard]] Eigen::VectorXd forces(double t, const Eigen::VectorXd& q) const;
+  /// Q − ∂U/∂q − ∂R/∂q̇: gravity (G[:, 0] ⊗ g), point forces ((y ⊗ I3) F), minus the elastic forces (Eqs. 86-87)
+  /// and the bodies' structural damping (damping.hpp).
+  [[nodiscard]] Eigen::VectorXd forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
   /// ∂²U/∂q², dense (the applied forces here do not depend on q).
   [[nodiscard]] Eigen::MatrixXd stiffness(const Eigen::VectorXd& q) const;
   [[nodiscard]] Eigen::VectorXd constraints(double t, const Eigen::VectorXd& q) const;

@@ -210,7 +210,8 @@ Scene read_scene(const std::filesystem::path& file) {
   if (const YAML::Node g = root["gravity"]) scene.system.set_gravity(r.vector3(g, "gravity"));
 
   const YAML::Node integrator = r.required(root, "integrator", "the scene");
-  r.expect_map(integrator, "integrator", {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every"});
+  r.expect_map(integrator, "integrator",
+               {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every", "deformation_limit"});
   if (const YAML::Node t = integrator["type"]; t && r.text(t, "integrator type") != "generalized-alpha")
     r.fail(t, fmt::format("integrator type '{}' is unknown; use generalized-alpha", t.Scalar()));
   if (const YAML::Node rho = integrator["rho_inf"]) {
@@ -224,6 +225,11 @@ Scene read_scene(const std::filesystem::path& file) {
     r.fail(integrator["step"], fmt::format("integrator step {} s is larger than the end time {} s",
                                            scene.integrator.step, scene.end_time));
   if (const YAML::Node tol = integrator["tolerance"]) scene.integrator.tolerance = r.positive(tol, "integrator tolerance");
+  if (const YAML::Node limit = integrator["deformation_limit"]) {
+    scene.integrator.deformation_limit = r.number(limit, "integrator deformation_limit");
+    if (scene.integrator.deformation_limit < 0.0)
+      r.fail(limit, "integrator deformation_limit must be >= 0 (0: no check)");
+  }
   if (const YAML::Node it = integrator["max_iterations"]) scene.integrator.max_iterations = r.count(it, "integrator max_iterations");
   if (const YAML::Node every = integrator["output_every"]) {
     scene.output_every = r.count(every, "integrator output_every");

@@ -26,6 +26,31 @@ Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen
 
 }  // namespace
 
+void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) const {
+  if (!(options_.deformation_limit > 0.0)) return;
+  for (int b = 0; b < system_.body_count(); ++b) {
+    const BodyModel& model = system_.model(b);
+    if (model.rigid()) continue;
+    // ∫|ū|² dm = ξ̄ᵀ (G_ff ⊗ I3) ξ̄, and |ξ̄| = |ξ| for orthogonal A: the RMS displacement without rotating.
+    const Eigen::VectorXd q_b = system_.body_coordinates(q, b);
+    const Eigen::VectorXd xi = q_b.tail(q_b.size() - 12);
+    double squared = 0.0;
+    const Eigen::MatrixXd& g = model.mass_matrix;
+    for (Eigen::Index f = 0; f < model.field_count(); ++f)
+      for (Eigen::Index h = 0; h < model.field_count(); ++h) squared += g(4 + f, 4 + h) * xi.segment<3>(3 * f).dot(xi.segment<3>(3 * h));
+    const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
+    const double size = (model.nodes.colwise().maxCoeff() - model.nodes.colwise().minCoeff()).norm();
+    if (rms > options_.deformation_limit * size) {
+      std::ostringstream why;
+      why << "t = " << t << " s: body '" << system_.body_name(b) << "' left the small-deformation range of its linear "
+          << "model: RMS elastic displacement " << rms << " m = " << 100.0 * rms / size << " % of its size (limit "
+          << 100.0 * options_.deformation_limit << " %). The improved GCMS has no geometric stiffening (FORMULATION.md "
+          << "section 8): a spin above the first bending frequency, or a load beyond linear elasticity";
+      throw StepFailure(why.str());
+    }
+  }
+}
+
 GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaOptions& options, double t0)
     : system_(system), options_(options), t0_(t0), t_(t0) {
   const double rho = options.rho_infinity;
@@ -119,6 +144,7 @@ void GeneralizedAlpha::step() {
     }
   }
   if (!q.allFinite() || !v.allFinite() || !qdd.allFinite()) throw StepFailure("t = " + std::to_string(t1) + " s: non-finite state");
+  check_deformation(t1, q);
   a = (alpha_f_ * qdd_ - alpha_m_ * a_ + (1.0 - alpha_f_) * qdd) / (1.0 - alpha_m_);
   q_ = q;
   v_ = v;

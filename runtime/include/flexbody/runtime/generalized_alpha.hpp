@@ -37,6 +37,10 @@ struct GeneralizedAlphaOptions {
   /// Newton stops when the correction is below this relative to the coordinates (1 + |q|∞) and the scaled
   /// residual below it relative to (1 + |M q̈|∞/β') of the step.
   double tolerance = 1e-10;
+  /// A linear model holds for small deformations only (FORMULATION.md section 8: no geometric stiffening). A step
+  /// after which a flexible body's RMS elastic displacement ‖ξ̄‖/√m exceeds this fraction of its size (the
+  /// bounding-box diagonal) stops the run with a StepFailure that says so; 0 disables the check.
+  double deformation_limit = 0.02;
 };
 
 /// A step whose Newton iteration did not converge, or that produced a non-finite value. what() says which body
@@ -71,6 +75,8 @@ class GeneralizedAlpha {
   [[nodiscard]] long total_iterations() const { return total_iterations_; }
 
  private:
+  void check_deformation(double t, const Eigen::VectorXd& q) const;
+
   const System& system_;
   GeneralizedAlphaOptions options_;
   double alpha_m_ = 0.0, alpha_f_ = 0.0, beta_ = 0.0, gamma_ = 0.0;

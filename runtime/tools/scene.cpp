@@ -66,7 +66,8 @@ Scene read_scene(const std::filesystem::path& file) {
   const Reader r(file.string());
   const YAML::Node loaded_root = r.load("scene");
   const YAML::Node& root = loaded_root;
-  r.expect_map(root, "the scene", {"bodies", "joints", "forces", "gravity", "integrator", "outputs", "monitors"});
+  r.expect_map(root, "the scene",
+               {"bodies", "joints", "forces", "springs", "gravity", "integrator", "outputs", "monitors"});
   Scene scene;
   const std::filesystem::path base = file.parent_path();
   std::map<std::string, LoadedBody> bodies;
@@ -200,10 +201,62 @@ Scene read_scene(const std::filesystem::path& file) {
     for (auto it = forces.begin(); it != forces.end(); ++it) {
       const std::string where = fmt::format("force '{}'", it->first.Scalar());
       const YAML::Node f = it->second;
-      r.expect_map(f, where, {"body", "interface", "point", "node", "force"});
+      r.expect_map(f, where, {"body", "interface", "point", "node", "force", "torque", "ramp", "frequency"});
       const LoadedBody& body = body_of(r.required(f, "body", where), where);
-      const Eigen::Vector3d value = r.vector3(r.required(f, "force", where), where + " force");
-      scene.system.add_force({read_marker(r, f, scene.system, body.index, body, where), [value](double) { return value; }});
+      if (!f["force"] && !f["torque"]) r.fail(f, fmt::format("{} needs force or torque (or both)", where));
+      // Time shape: a linear ramp from 0 over `ramp` seconds, times sin(2π f t) with `frequency` f.
+      const double ramp = f["ramp"] ? r.positive(f["ramp"], where + " ramp") : 0.0;
+      const double frequency = f["frequency"] ? r.positive(f["frequency"], where + " frequency") : 0.0;
+      auto shape = [ramp, frequency](double t) {
+        const double rise = ramp > 0.0 ? std::min(1.0, t / ramp) : 1.0;
+        return frequency > 0.0 ? rise * std::sin(2.0 * std::numbers::pi * frequency * t) : rise;
+      };
+      const runtime::Marker marker = read_marker(r, f, scene.system, body.index, body, where);
+      if (const YAML::Node force = f["force"]) {
+        const Eigen::Vector3d value = r.vector3(force, where + " force");
+        scene.system.add_force({marker, [value, shape](double t) { return Eigen::Vector3d(shape(t) * value); }});
+      }
+      if (const YAML::Node torque = f["torque"]) {
+        const Eigen::Vector3d value = r.vector3(torque, where + " torque");
+        scene.system.add_torque({marker, [value, shape](double t) { return Eigen::Vector3d(shape(t) * value); }});
+      }
+    }
+  }
+
+  if (const YAML::Node springs = root["springs"]) {
+    if (!springs.IsMap()) r.fail(springs, "springs must be a map of names to spring-dampers");
+    for (auto it = springs.begin(); it != springs.end(); ++it) {
+      const std::string where = fmt::format("spring '{}'", it->first.Scalar());
+      const YAML::Node sp = it->second;
+      r.expect_map(sp, where, {"from", "to", "stiffness", "damping", "length"});
+      auto endpoint = [&](const char* key) {
+        const YAML::Node e = r.required(sp, key, where);
+        const std::string end = fmt::format("{} {}", where, key);
+        if (e.IsMap() && e["ground"]) {
+          r.expect_map(e, end, {"ground"});
+          return runtime::ground_marker(r.vector3(e["ground"], end + " ground"));
+        }
+        r.expect_map(e, end, {"body", "interface", "point", "node"});
+        const LoadedBody& body = body_of(r.required(e, "body", end), end);
+        return read_marker(r, e, scene.system, body.index, body, end);
+      };
+      runtime::SpringDamper spring;
+      spring.name = it->first.Scalar();
+      spring.first = endpoint("from");
+      spring.second = endpoint("to");
+      spring.stiffness = r.number(r.required(sp, "stiffness", where), where + " stiffness");
+      if (sp["damping"]) spring.damping = r.number(sp["damping"], where + " damping");
+      if (sp["length"]) {
+        spring.rest_length = r.number(sp["length"], where + " length");
+      } else {  // default: the initial distance (no preload)
+        spring.rest_length = (runtime::marker_position(spring.second, scene.system.body_coordinates(q0, spring.second.body)) -
+                              runtime::marker_position(spring.first, scene.system.body_coordinates(q0, spring.first.body))).norm();
+      }
+      try {
+        scene.system.add_spring(std::move(spring));
+      } catch (const std::invalid_argument& e) {
+        r.fail(sp, e.what());
+      }
     }
   }
 

@@ -103,4 +103,7 @@ TEST(FbsimCli, BadScenesNameTheLine) {
   expect_scene_error(head + "outputs:\n  tip: {body: bar, interface: tip, quantities: [stress]}\n" + tail, 4,
                      "output 'tip': quantity 'stress' is not available here; use position, velocity");
   expect_scene_error("bodies:\n  bar: {file: missing.fbh5}\n" + tail, 2, "missing.fbh5");
+  expect_scene_error(head + "springs:\n  s: {from: {body: bar, interface: tip}, to: {ground: [1, 0, 0]}, stiffness: -1}\n" +
+                         tail, 4, "spring 's': stiffness, damping and length must be >= 0");
+  expect_scene_error(head + "forces:\n  f: {body: bar, interface: tip}\n" + tail, 4, "force 'f' needs force or torque");
 }

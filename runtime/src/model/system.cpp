@@ -53,6 +53,21 @@ void System::add_force(PointForce force) {
   forces_.push_back(std::move(force));
 }
 
+void System::add_torque(PointTorque torque) {
+  if (torque.marker.body < 0 || torque.marker.body >= body_count())
+    throw std::invalid_argument("torque at " + torque.marker.name + ": not a marker on a body of this system");
+  if (!torque.torque) throw std::invalid_argument("torque at " + torque.marker.name + ": no torque function");
+  torques_.push_back(std::move(torque));
+}
+
+void System::add_spring(SpringDamper spring) {
+  for (const Marker* m : {&spring.first, &spring.second})
+    if (m->body >= body_count()) throw std::invalid_argument("spring '" + spring.name + "': marker " + m->name + " is not in this system");
+  if (!(spring.stiffness >= 0.0) || !(spring.damping >= 0.0) || !(spring.rest_length >= 0.0))
+    throw std::invalid_argument("spring '" + spring.name + "': stiffness, damping and length must be >= 0");
+  springs_.push_back(std::move(spring));
+}
+
 int System::body_index(const std::string& name) const {
   for (std::size_t b = 0; b < bodies_.size(); ++b)
     if (bodies_[b].name == name) return static_cast<int>(b);
@@ -131,6 +146,33 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
   for (const PointForce& p : forces_) {
     const Body& b = bodies_.at(static_cast<std::size_t>(p.marker.body));
     add_marker_force(f.segment(b.offset, b.model.coordinate_count()), p.marker, p.force(t));
+  }
+  for (const PointTorque& p : torques_) {
+    const Body& b = bodies_.at(static_cast<std::size_t>(p.marker.body));
+    const Eigen::Index n = b.model.coordinate_count();
+    const Eigen::Vector3d torque = p.torque(t);
+    const Eigen::Matrix3d a = orientation_of(q.segment(b.offset, n));
+    const Eigen::Matrix3d q_a = 0.5 * skew(torque) * a;  // tr(Q_Aᵀ [δθ]× A) = T·δθ for orthogonal A
+    f.segment<9>(b.offset + 3) += Eigen::Map<const Eigen::Matrix<double, 9, 1>>(q_a.data());
+    if (n > 12) {  // δθ = A R Âᵀ δξ through the marker's small rotation: Q_ξf = A R_fᵀ Aᵀ T
+      const Eigen::VectorXd q_bar = p.marker.rotation.transpose() * (a.transpose() * torque);
+      for (Eigen::Index i = 0; i < (n - 12) / 3; ++i) f.segment<3>(b.offset + 12 + 3 * i) += a * q_bar.segment<3>(3 * i);
+    }
+  }
+  for (const SpringDamper& s : springs_) {
+    const Eigen::VectorXd q1 = body_coordinates(q, s.first.body), q2 = body_coordinates(q, s.second.body);
+    const Eigen::VectorXd v1 = body_coordinates(v, s.first.body), v2 = body_coordinates(v, s.second.body);
+    const Eigen::Vector3d d = marker_position(s.second, q2) - marker_position(s.first, q1);
+    const double length = d.norm();
+    if (!(length > 0.0)) continue;  // coincident markers: no direction, no force
+    const Eigen::Vector3d e = d / length;
+    const Eigen::Vector3d rate = (s.second.body == kGround ? Eigen::Vector3d::Zero() : Eigen::Vector3d(marker_position_jacobian(s.second) * v2)) -
+                                 (s.first.body == kGround ? Eigen::Vector3d::Zero() : Eigen::Vector3d(marker_position_jacobian(s.first) * v1));
+    const double tension = s.stiffness * (length - s.rest_length) + s.damping * e.dot(rate);
+    if (s.first.body != kGround)
+      add_marker_force(f.segment(offset(s.first.body), model(s.first.body).coordinate_count()), s.first, tension * e);
+    if (s.second.body != kGround)
+      add_marker_force(f.segment(offset(s.second.body), model(s.second.body).coordinate_count()), s.second, -tension * e);
   }
   return f;
 }
@@ -241,6 +283,11 @@ Energies System::energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) co
     e.kinetic += 0.5 * (blocks.transpose() * blocks).cwiseProduct(g).sum();
     for (Eigen::Index k = 0; k < g.rows(); ++k) e.gravity -= g(k, 0) * gravity_.dot(q_b.segment<3>(3 * k));
     if (!b.model.rigid()) e.elastic += elastic_forces(b.model.stiffness, orientation_of(q_b), q_b.tail(n - 12)).energy;
+  }
+  for (const SpringDamper& s : springs_) {
+    const double stretch = (marker_position(s.second, body_coordinates(q, s.second.body)) -
+                            marker_position(s.first, body_coordinates(q, s.first.body))).norm() - s.rest_length;
+    e.springs += 0.5 * s.stiffness * stretch * stretch;
   }
   return e;
 }

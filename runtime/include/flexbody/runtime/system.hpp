@@ -35,9 +35,28 @@ struct PointForce {
   std::function<Eigen::Vector3d(double)> force;
 };
 
+/// A torque [N m] in the global frame at a marker, as a function of time. It does work on the body's rotation and,
+/// through the marker's small rotation θ̄ = R ξ̄, on its deformation: Q_A = ½ [T]× A, Q_ξ = Â Rᵀ Aᵀ T.
+struct PointTorque {
+  Marker marker;
+  std::function<Eigen::Vector3d(double)> torque;
+};
+
+/// A linear spring-damper between two markers (either may be on ground): the force F = k (ℓ − ℓ0) + c ℓ̇ pulls
+/// them together along the line between them. Its contribution to the Newton matrix is left out (it changes the
+/// convergence rate, not the solution).
+struct SpringDamper {
+  std::string name;
+  Marker first, second;
+  double stiffness = 0.0;    ///< k [N/m]
+  double damping = 0.0;      ///< c [N s/m]
+  double rest_length = 0.0;  ///< ℓ0 [m]
+};
+
 struct Energies {
   double kinetic = 0.0, elastic = 0.0, gravity = 0.0;  ///< [J]; gravity = −Σ m g·r_cm (zero at the origin)
-  [[nodiscard]] double total() const { return kinetic + elastic + gravity; }
+  double springs = 0.0;                                ///< ½ k (ℓ − ℓ0)² of the spring-dampers [J]
+  [[nodiscard]] double total() const { return kinetic + elastic + gravity + springs; }
 };
 
 class System {
@@ -47,6 +66,8 @@ class System {
   int add_body(const std::string& name, BodyModel model, const BodyState& initial);
   void add_joint(Joint joint);
   void add_force(PointForce force);
+  void add_torque(PointTorque torque);
+  void add_spring(SpringDamper spring);
   void set_gravity(const Eigen::Vector3d& gravity) { gravity_ = gravity; }
 
   [[nodiscard]] int body_count() const { return static_cast<int>(bodies_.size()); }
@@ -65,8 +86,8 @@ class System {
 
   /// M = diag(G_b ⊗ I3), dense.
   [[nodiscard]] Eigen::MatrixXd mass_matrix() const;
-  /// Q − ∂U/∂q − ∂R/∂q̇: gravity (G[:, 0] ⊗ g), point forces ((y ⊗ I3) F), minus the elastic forces (Eqs. 86-87)
-  /// and the bodies' structural damping (damping.hpp).
+  /// Q − ∂U/∂q − ∂R/∂q̇: gravity (G[:, 0] ⊗ g), point forces ((y ⊗ I3) F), torques, spring-dampers, minus the
+  /// elastic forces (Eqs. 86-87) and the bodies' structural damping (damping.hpp).
   [[nodiscard]] Eigen::VectorXd forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
   /// ∂²U/∂q², dense (the applied forces here do not depend on q).
   [[nodiscard]] Eigen::MatrixXd stiffness(const Eigen::VectorXd& q) const;
@@ -94,6 +115,8 @@ class System {
   std::vector<Body> bodies_;
   std::vector<Joint> joints_;
   std::vector<PointForce> forces_;
+  std::vector<PointTorque> torques_;
+  std::vector<SpringDamper> springs_;
   Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();
   Eigen::Index coordinates_ = 0;
 };

@@ -59,6 +59,8 @@ int main(int argc, char** argv) {
     if (terminal) std::cerr << '\n';
     return fail(fmt::format("{}: {} (outputs up to the last completed step are in {})", scene_path.string(), e.what(),
                             directory.string()), kFailed);
+  } catch (const std::invalid_argument& e) {  // the assembled scene is inconsistent (before any step or file)
+    return fail(fmt::format("{}: {}", scene_path.string(), e.what()), kBadInput);
   } catch (const std::exception& e) {
     return fail(fmt::format("{}: {}", scene_path.string(), e.what()), kFailed);
   }

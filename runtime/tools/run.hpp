@@ -14,7 +14,8 @@ struct RunSummary {
   long newton_iterations = 0;
   double cpu_seconds = 0.0;
   double energy_initial = 0.0, energy_final = 0.0;
-  /// |E_end − E_0| / max(|E_0|, largest kinetic energy): meaningful for conservative scenes.
+  /// max_t |E(t) − E_0| / max_t (kinetic + elastic + spring energy): meaningful for conservative scenes (no
+  /// applied forces, torques or damping, whose work it does not count).
   double energy_drift = 0.0;
   double max_constraint_residual = 0.0;  ///< max over the steps of |Φ|∞
   std::vector<std::filesystem::path> files;

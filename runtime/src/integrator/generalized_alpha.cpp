@@ -13,8 +13,7 @@ namespace {
 // d/dt (Φ_q q̇ + Φ_t) at fixed q̇, by central differences along (q + s q̇, t + s): the acceleration-level
 // right-hand side of the consistent initial accelerations (a directional derivative, accurate to ~1e-10).
 Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
-  const double scale = std::max(1e-12, v.cwiseAbs().maxCoeff());
-  const double s = 1e-6 / scale;
+  const double s = 1e-6 / std::max(1.0, v.cwiseAbs().maxCoeff());
   auto phi_dot = [&](double shift) {
     const Eigen::VectorXd qs = q + shift * v;
     const double ts = t + shift, dt = 1e-6;
@@ -57,6 +56,9 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   if (!(rho >= 0.0 && rho <= 1.0)) throw std::invalid_argument("generalized-alpha: rho_inf must lie in [0, 1]");
   if (!(options.step > 0.0) || !std::isfinite(options.step))
     throw std::invalid_argument("generalized-alpha: the step must be positive");
+  if (options.max_iterations < 1 || !(options.tolerance > 0.0) || !(options.deformation_limit >= 0.0))
+    throw std::invalid_argument("generalized-alpha: max_iterations >= 1, tolerance > 0 and deformation_limit >= 0 "
+                                "are required");
   alpha_m_ = (2.0 * rho - 1.0) / (rho + 1.0);
   alpha_f_ = rho / (rho + 1.0);
   gamma_ = 0.5 + alpha_f_ - alpha_m_;
@@ -74,9 +76,20 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   kkt.topLeftCorner(n, n) = mass_;
   kkt.topRightCorner(n, m) = jac.transpose();
   kkt.bottomLeftCorner(m, n) = jac;
+  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(kkt);
+  // Consistent velocities: the M-nearest v with Φ_q v + Φ_t = 0 (a driven joint that starts moving, or initial
+  // velocities that fight a joint, would otherwise give a velocity jump and a spike in the multipliers).
+  {
+    const double dt = 1e-6;
+    const Eigen::VectorXd phi_t = (system.constraints(t_ + dt, q_) - system.constraints(t_ - dt, q_)) / (2 * dt);
+    if ((jac * v_ + phi_t).cwiseAbs().maxCoeff() > 1e-12 * std::max(1.0, v_.cwiseAbs().maxCoeff())) {
+      Eigen::VectorXd rhs(n + m);
+      rhs << mass_ * v_, -phi_t;
+      v_ = lu.solve(rhs).head(n);
+    }
+  }
   Eigen::VectorXd rhs(n + m);
   rhs << system.forces(t_, q_, v_), -constraint_curvature(system, t_, q_, v_);
-  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(kkt);
   const Eigen::VectorXd x = lu.solve(rhs);
   if (!x.allFinite() || (kkt * x - rhs).norm() > 1e-8 * std::max(1.0, rhs.norm()))
     throw std::invalid_argument("initial accelerations: the constraints are redundant or contradictory "
@@ -132,6 +145,7 @@ void GeneralizedAlpha::step() {
                            residual.head(n).cwiseAbs().maxCoeff() <= 1e3 * options_.tolerance * force_scale;
     if (converged) break;
     if (iterations_ >= options_.max_iterations) {
+      check_deformation(t1, q);  // a diverging linear model: say so rather than "did not converge" 
       Eigen::Index worst = 0;
       const Eigen::VectorXd now = system_.constraints(t1, q);
       if (m > 0) now.cwiseAbs().maxCoeff(&worst);

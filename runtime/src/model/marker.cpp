@@ -78,6 +78,7 @@ Eigen::Vector3d marker_direction(const Marker& m, const Eigen::VectorXd& q_b, co
 }
 
 Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const Eigen::VectorXd& q_b, const Eigen::Vector3d& d) {
+  if (m.body == kGround) return Eigen::MatrixXd(3, 0);
   check_coordinates(m, q_b);
   const Eigen::Index n = q_b.size(), n_xi = n - 12;
   const Eigen::Matrix3d a = orientation_of(q_b);

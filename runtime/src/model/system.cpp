@@ -23,6 +23,16 @@ void add_marker_force(Eigen::Ref<Eigen::VectorXd> f_b, const Marker& m, const Ei
 
 }  // namespace
 
+void System::check_marker(const Marker& m, const std::string& what) const {
+  if (m.body == kGround) return;
+  if (m.body < 0 || m.body >= body_count())
+    throw std::invalid_argument(what + ": marker " + m.name + " is not on a body of this system");
+  const BodyModel& model = bodies_[static_cast<std::size_t>(m.body)].model;
+  if (m.y.size() != 4 + model.field_count() || m.rotation.cols() != 3 * model.field_count())
+    throw std::invalid_argument(what + ": marker " + m.name + " was made for another number of modes of body '" +
+                                bodies_[static_cast<std::size_t>(m.body)].name + "'");
+}
+
 int System::add_body(const std::string& name, BodyModel model, const BodyState& initial) {
   for (const Body& b : bodies_)
     if (b.name == name) throw std::invalid_argument("body '" + name + "' is defined twice");
@@ -32,6 +42,9 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
   if (state.xi_dot.size() == 0) state.xi_dot = Eigen::VectorXd::Zero(n_xi);
   if (state.xi.size() != n_xi || state.xi_dot.size() != n_xi)
     throw std::invalid_argument("body '" + name + "': xi and xi_dot need 3 n_f = " + std::to_string(n_xi) + " entries");
+  const Eigen::MatrixXd& d = model.damping;
+  if (d.size() > 0 && (d.rows() != n_xi || d.cols() != n_xi))
+    throw std::invalid_argument("body '" + name + "': the damping matrix must be 3 n_f square (" + std::to_string(n_xi) + ")");
   if ((state.orientation.transpose() * state.orientation - Eigen::Matrix3d::Identity()).norm() > 1e-12 ||
       state.orientation.determinant() < 0.0)
     throw std::invalid_argument("body '" + name + "': the initial orientation is not a rotation (A^T A = I, det A = 1)");
@@ -41,6 +54,8 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
 }
 
 void System::add_joint(Joint joint) {
+  check_marker(joint.first, "joint '" + joint.name + "'");
+  check_marker(joint.second, "joint '" + joint.name + "'");
   for (const Joint& j : joints_)
     if (j.name == joint.name) throw std::invalid_argument("joint '" + joint.name + "' is defined twice");
   joints_.push_back(std::move(joint));
@@ -50,6 +65,7 @@ void System::add_force(PointForce force) {
   if (force.marker.body < 0 || force.marker.body >= body_count())
     throw std::invalid_argument("point force at " + force.marker.name + ": not a marker on a body of this system");
   if (!force.force) throw std::invalid_argument("point force at " + force.marker.name + ": no force function");
+  check_marker(force.marker, "point force");
   forces_.push_back(std::move(force));
 }
 
@@ -57,12 +73,16 @@ void System::add_torque(PointTorque torque) {
   if (torque.marker.body < 0 || torque.marker.body >= body_count())
     throw std::invalid_argument("torque at " + torque.marker.name + ": not a marker on a body of this system");
   if (!torque.torque) throw std::invalid_argument("torque at " + torque.marker.name + ": no torque function");
+  check_marker(torque.marker, "torque");
   torques_.push_back(std::move(torque));
 }
 
 void System::add_spring(SpringDamper spring) {
   for (const Marker* m : {&spring.first, &spring.second})
-    if (m->body >= body_count()) throw std::invalid_argument("spring '" + spring.name + "': marker " + m->name + " is not in this system");
+    if (m->body < kGround || m->body >= body_count())
+      throw std::invalid_argument("spring '" + spring.name + "': marker " + m->name + " is not in this system");
+  check_marker(spring.first, "spring '" + spring.name + "'");
+  check_marker(spring.second, "spring '" + spring.name + "'");
   if (!(spring.stiffness >= 0.0) || !(spring.damping >= 0.0) || !(spring.rest_length >= 0.0))
     throw std::invalid_argument("spring '" + spring.name + "': stiffness, damping and length must be >= 0");
   springs_.push_back(std::move(spring));
@@ -155,8 +175,10 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
     const Eigen::Matrix3d q_a = 0.5 * skew(torque) * a;  // tr(Q_Aᵀ [δθ]× A) = T·δθ for orthogonal A
     f.segment<9>(b.offset + 3) += Eigen::Map<const Eigen::Matrix<double, 9, 1>>(q_a.data());
     if (n > 12) {  // δθ = A R Âᵀ δξ through the marker's small rotation: Q_ξf = A R_fᵀ Aᵀ T
+      // (and through ξ̄ = Âᵀ ξ also on A: Q_a += Dᵀ Rᵀ Aᵀ T).
       const Eigen::VectorXd q_bar = p.marker.rotation.transpose() * (a.transpose() * torque);
       for (Eigen::Index i = 0; i < (n - 12) / 3; ++i) f.segment<3>(b.offset + 12 + 3 * i) += a * q_bar.segment<3>(3 * i);
+      f.segment<9>(b.offset + 3) += body_frame_coordinates_derivative(q.segment(b.offset + 12, n - 12)).transpose() * q_bar;
     }
   }
   for (const SpringDamper& s : springs_) {

@@ -112,6 +112,7 @@ class System {
     Eigen::Index offset = 0;
   };
   [[nodiscard]] Eigen::Index reference_rows(const Body& b) const { return b.model.rigid() ? 6 : 9; }
+  void check_marker(const Marker& m, const std::string& what) const;
   std::vector<Body> bodies_;
   std::vector<Joint> joints_;
   std::vector<PointForce> forces_;

@@ -29,19 +29,33 @@ namespace {
 struct Timing {
   double microseconds_per_step = 0.0;
   double iterations_per_step = 0.0;
+  double factorizations_per_step = 0.0;
 };
 
-Timing time_steps(const fr::System& system, fr::NewtonMatrix matrix, double step, int steps) {
+// The three Newton variants: the constant core with the matrix kept across steps (the default), the constant
+// core rebuilt every iteration, the dense matrix rebuilt every iteration.
+struct Variant {
+  const char* name;
+  fr::NewtonMatrix matrix;
+  bool reuse;
+};
+constexpr Variant kVariants[] = {{"core_kept", fr::NewtonMatrix::constant_core, true},
+                                 {"core_every_iteration", fr::NewtonMatrix::constant_core, false},
+                                 {"dense_every_iteration", fr::NewtonMatrix::dense, false}};
+
+Timing time_steps(const fr::System& system, const Variant& variant, double step, int steps) {
   fr::GeneralizedAlphaOptions options;
-  options.newton_matrix = matrix;
+  options.newton_matrix = variant.matrix;
+  options.reuse_newton_matrix = variant.reuse;
   options.step = step;
   fr::GeneralizedAlpha integrator(system, options);
   for (int i = 0; i < 5; ++i) integrator.step();  // warm-up (allocations, caches)
-  const long before = integrator.total_iterations();
+  const long before = integrator.total_iterations(), factors = integrator.factorizations();
   const auto start = std::chrono::steady_clock::now();
   for (int i = 0; i < steps; ++i) integrator.step();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return {1e6 * seconds / steps, static_cast<double>(integrator.total_iterations() - before) / steps};
+  return {1e6 * seconds / steps, static_cast<double>(integrator.total_iterations() - before) / steps,
+          static_cast<double>(integrator.factorizations() - factors) / steps};
 }
 
 fr::BodyState vibrating(const fr::BodyModel& model) {
@@ -76,23 +90,27 @@ int main(int argc, char** argv) {
               static_cast<long>(summary.dofs), body.modes.frequencies_hz(0), body.modes.frequencies_hz(79));
 
   std::ofstream csv(argv[1]);
-  csv << "scene,modes,fields,coordinates,newton,us_per_step,iterations_per_step\n";
-  std::printf("%-8s %5s %6s %6s  %14s %8s  %14s %8s\n", "scene", "n_m", "n_f", "n_q", "core us/step", "it/step",
-              "dense us/step", "it/step");
+  csv << "scene,modes,fields,coordinates,newton,us_per_step,iterations_per_step,factorizations_per_step\n";
+  std::printf("%-8s %5s %6s %6s  %22s %22s %22s\n", "scene", "n_m", "n_f", "n_q", "core, kept [us (it)]",
+              "core, fresh [us (it)]", "dense, fresh [us (it)]");
+  auto report = [&](const char* scene, int n_m, Eigen::Index n_f, Eigen::Index n_q, const fr::System& system,
+                    double step, int steps) {
+    std::printf("%-8s %5d %6ld %6ld ", scene, n_m, static_cast<long>(n_f), static_cast<long>(n_q));
+    for (const Variant& variant : kVariants) {
+      const bool slow = variant.matrix == fr::NewtonMatrix::dense || !variant.reuse;
+      const Timing t = time_steps(system, variant, step, slow && n_m > 20 ? std::max(20, steps / 4) : steps);
+      std::printf("  %12.1f (%4.2f, %4.2f)", t.microseconds_per_step, t.iterations_per_step, t.factorizations_per_step);
+      csv << scene << ',' << n_m << ',' << n_f << ',' << n_q << ',' << variant.name << ',' << t.microseconds_per_step
+          << ',' << t.iterations_per_step << ',' << t.factorizations_per_step << '\n';
+    }
+    std::printf("\n");
+  };
   const double step = 1.0 / body.modes.frequencies_hz(0) / 50.0;
   for (int n_m : {5, 10, 20, 40, 80}) {
     const fr::BodyModel model = fr::make_body_model(body, n_m, "bar");
     fr::System system;
     system.add_body("bar", model, vibrating(model));
-    const int steps = n_m <= 20 ? 2000 : (n_m <= 40 ? 400 : 100);
-    const Timing core = time_steps(system, fr::NewtonMatrix::constant_core, step, steps);
-    const Timing dense = time_steps(system, fr::NewtonMatrix::dense, step, n_m <= 20 ? steps : steps / 4);
-    std::printf("%-8s %5d %6ld %6ld  %14.1f %8.2f  %14.1f %8.2f\n", "free", n_m, static_cast<long>(model.field_count()),
-                static_cast<long>(model.coordinate_count()), core.microseconds_per_step, core.iterations_per_step,
-                dense.microseconds_per_step, dense.iterations_per_step);
-    for (const auto& [name, t] : {std::pair{"constant_core", core}, std::pair{"dense", dense}})
-      csv << "free," << n_m << ',' << model.field_count() << ',' << model.coordinate_count() << ',' << name << ','
-          << t.microseconds_per_step << ',' << t.iterations_per_step << '\n';
+    report("free", n_m, model.field_count(), model.coordinate_count(), system, step, n_m <= 20 ? 2000 : 400);
   }
 
   // Where a 20-mode step's time goes: the kernels of one Newton iteration, timed alone.
@@ -158,14 +176,7 @@ int main(int argc, char** argv) {
       }
     }
     system.set_gravity(Eigen::Vector3d(0, -9.81, 0));
-    const Timing core = time_steps(system, fr::NewtonMatrix::constant_core, 1e-4, 500);
-    const Timing dense = time_steps(system, fr::NewtonMatrix::dense, 1e-4, 200);
-    std::printf("%-8s %5d %6ld %6ld  %14.1f %8.2f  %14.1f %8.2f\n", "chain4", 10, static_cast<long>(model.field_count()),
-                static_cast<long>(system.coordinate_count()), core.microseconds_per_step, core.iterations_per_step,
-                dense.microseconds_per_step, dense.iterations_per_step);
-    for (const auto& [name, t] : {std::pair{"constant_core", core}, std::pair{"dense", dense}})
-      csv << "chain4," << 10 << ',' << model.field_count() << ',' << system.coordinate_count() << ',' << name << ','
-          << t.microseconds_per_step << ',' << t.iterations_per_step << '\n';
+    report("chain4", 10, model.field_count(), system.coordinate_count(), system, 1e-4, 500);
   }
   return 0;
 }

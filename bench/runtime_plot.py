@@ -16,11 +16,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 def main(source, target):
     rows = [r for r in csv.DictReader(open(source)) if r["scene"] == "free"]
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    for newton, style in (("constant_core", "o-"), ("dense", "s--")):
+    labels = {"core_kept": "constant core, matrix kept (default)", "core_every_iteration": "constant core, rebuilt",
+              "dense_every_iteration": "dense matrix, rebuilt"}
+    for newton, style in (("core_kept", "o-"), ("core_every_iteration", "^-"), ("dense_every_iteration", "s--")):
         pts = sorted((int(r["modes"]), float(r["us_per_step"])) for r in rows if r["newton"] == newton)
-        ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, label=newton.replace("_", " ") + " Newton")
-    core = sorted((int(r["modes"]), float(r["us_per_step"])) for r in rows if r["newton"] == "constant_core")
-    dense = sorted((int(r["modes"]), float(r["us_per_step"])) for r in rows if r["newton"] == "dense")
+        ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, label=labels[newton])
+    core = sorted((int(r["modes"]), float(r["us_per_step"])) for r in rows if r["newton"] == "core_kept")
+    dense = sorted((int(r["modes"]), float(r["us_per_step"])) for r in rows if r["newton"] == "dense_every_iteration")
     n0, c0 = core[1]
     ns = [p[0] for p in core]
     ax.loglog(ns, [c0 * (n / n0) ** 2 for n in ns], ":", color="grey", label="∝ n_m²")

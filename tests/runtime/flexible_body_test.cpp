@@ -91,6 +91,9 @@ TEST(FlexibleBody, OscillatesAtItsModeFrequencyAndConservesMomentum) {
     fr::GeneralizedAlphaOptions options;
     options.rho_infinity = 1.0;
     options.step = period / 800;
+    // The discrete equations conserve momentum exactly; Newton must then converge to round-off, not to the default
+    // 1e-10 (whose remainder, with a kept Newton matrix, shows up as 1e-9 of the momentum scale).
+    options.tolerance = 1e-14;
     fr::GeneralizedAlpha integrator(system, options);
     // Zero crossings of η(t) over 4 periods: 8 crossings, T = (last − first) / 3.5.
     std::vector<double> crossings;
@@ -170,8 +173,7 @@ TEST(FlexibleBody, HalvingTheStepDividesTheErrorByFour) {
 TEST(FlexibleBody, ConstantCoreAndDenseNewtonGiveTheSameMotion) {
   // A flexible pendulum (pinned at a corner node about z, gravity, released from horizontal): the constant-core
   // elimination (C = G_ff ⊗ I3 + K̂/β' factorized once) solves the same Newton equations as the dense matrix
-  // except for Â(G_ff ⊗ I3)Âᵀ vs G_ff ⊗ I3, equal while AᵀA = I; both converge to 1e-10, so the motions agree
-  // to ~1e-9 of the coordinates after 300 steps.
+  // except for Â(G_ff ⊗ I3)Âᵀ vs G_ff ⊗ I3, equal while AᵀA = I (both keep their matrix across steps).
   const fr::BodyModel model = fr::make_body_model(beam(), std::nullopt, "beam");
   auto run = [&](fr::NewtonMatrix matrix) {
     fr::System system;
@@ -192,8 +194,9 @@ TEST(FlexibleBody, ConstantCoreAndDenseNewtonGiveTheSameMotion) {
   };
   const auto [dense, dense_iterations] = run(fr::NewtonMatrix::dense);
   const auto [core, core_iterations] = run(fr::NewtonMatrix::constant_core);
-  EXPECT_LT((dense - core).cwiseAbs().maxCoeff(), 1e-9 * dense.cwiseAbs().maxCoeff());
-  EXPECT_LE(core_iterations, dense_iterations + 30);  // the same quadratic convergence, up to the tolerance test
+  // Both stop at corrections of 1e-10 of the coordinates; over 300 steps the difference stays within 1e-8.
+  EXPECT_LT((dense - core).cwiseAbs().maxCoeff(), 1e-8 * dense.cwiseAbs().maxCoeff());
+  EXPECT_LE(core_iterations, dense_iterations * 21 / 20);  // the same convergence, within 5 %
 }
 
 TEST(FlexibleBody, ModalAndRayleighDampingGiveTheirLogarithmicDecrement) {

@@ -5,6 +5,7 @@
 #include <Eigen/LU>
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace flexbody::runtime {
@@ -113,49 +114,70 @@ void GeneralizedAlpha::step() {
   const double t1 = t0_ + static_cast<double>(steps_ + 1) * h;
   const double beta_prime = (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_));
   const double gamma_prime = gamma_ / (beta_ * h);
-  // Predictor: q̈_{n+1} = q̈_n.
-  Eigen::VectorXd qdd = qdd_;
-  Eigen::VectorXd a = (alpha_f_ * qdd_ - alpha_m_ * a_ + (1.0 - alpha_f_) * qdd) / (1.0 - alpha_m_);
-  Eigen::VectorXd v = v_ + h * (1.0 - gamma_) * a_ + h * gamma_ * a;
-  Eigen::VectorXd q = q_ + h * v_ + h * h * (0.5 - beta_) * a_ + h * h * beta_ * a;
-  Eigen::VectorXd mu = lambda_ / beta_prime;  // the scaled multipliers
+  Eigen::VectorXd qdd, a, v, q, mu;
   Eigen::VectorXd residual(n + m);
-  const double q_scale = 1.0 + q.cwiseAbs().maxCoeff();
-  for (iterations_ = 1;; ++iterations_) {
-    const Eigen::MatrixXd jac = system_.constraint_jacobian(t1, q);
-    const Eigen::VectorXd phi = system_.constraints(t1, q);
-    const Eigen::VectorXd inertia = mass_ * qdd;
-    residual.head(n) = (inertia - system_.forces(t1, q, v)) / beta_prime + jac.transpose() * mu;
-    residual.tail(m) = phi;
-    const Eigen::VectorXd dx = solver_->solve(t1, q, mu, residual.head(n), phi, jac);
-    if (!dx.allFinite()) {
-      std::ostringstream why;
-      Eigen::Index worst = 0;
-      if (m > 0) phi.cwiseAbs().maxCoeff(&worst);
-      why << "t = " << t1 << " s: the Newton matrix is singular or the state is not finite (largest constraint "
-          << "residual in " << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")";
-      throw StepFailure(why.str());
+  // A Newton matrix kept from earlier iterations and steps (modified Newton) is refreshed when the corrections
+  // stop shrinking fast (ratio > 1/4); a step that does not converge with a kept matrix is retried with a fresh one.
+  bool fresh_this_step = false;
+  for (int attempt = 0;; ++attempt) {
+    // Predictor: q̈_{n+1} = q̈_n.
+    qdd = qdd_;
+    a = (alpha_f_ * qdd_ - alpha_m_ * a_ + (1.0 - alpha_f_) * qdd) / (1.0 - alpha_m_);
+    v = v_ + h * (1.0 - gamma_) * a_ + h * gamma_ * a;
+    q = q_ + h * v_ + h * h * (0.5 - beta_) * a_ + h * h * beta_ * a;
+    mu = lambda_ / beta_prime;  // the scaled multipliers
+    const double q_scale = 1.0 + q.cwiseAbs().maxCoeff();
+    double previous_correction = std::numeric_limits<double>::infinity();
+    bool converged = false;
+    for (iterations_ = 1; iterations_ <= options_.max_iterations; ++iterations_) {
+      const Eigen::MatrixXd jac = system_.constraint_jacobian(t1, q);
+      const Eigen::VectorXd phi = system_.constraints(t1, q);
+      const Eigen::VectorXd inertia = mass_ * qdd;
+      residual.head(n) = (inertia - system_.forces(t1, q, v)) / beta_prime + jac.transpose() * mu;
+      residual.tail(m) = phi;
+      if (refresh_ || !options_.reuse_newton_matrix) {
+        solver_->factor(q, mu, jac);
+        refresh_ = false;
+        fresh_this_step = true;
+        ++factorizations_;
+      }
+      const Eigen::VectorXd dx = solver_->solve(q, residual.head(n), phi);
+      if (!dx.allFinite()) {
+        std::ostringstream why;
+        Eigen::Index worst = 0;
+        if (m > 0) phi.cwiseAbs().maxCoeff(&worst);
+        why << "t = " << t1 << " s: the Newton matrix is singular or the state is not finite (largest constraint "
+            << "residual in " << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")";
+        throw StepFailure(why.str());
+      }
+      q += dx.head(n);
+      v += gamma_prime * dx.head(n);
+      qdd += beta_prime * dx.head(n);
+      mu += dx.tail(m);
+      const double correction = dx.head(n).cwiseAbs().maxCoeff();
+      const double force_scale = 1.0 + inertia.cwiseAbs().maxCoeff() / beta_prime;
+      if (correction <= options_.tolerance * q_scale &&
+          residual.head(n).cwiseAbs().maxCoeff() <= 1e3 * options_.tolerance * force_scale) {
+        converged = true;
+        break;
+      }
+      if (correction > 0.25 * previous_correction) refresh_ = true;
+      previous_correction = correction;
     }
-    q += dx.head(n);
-    v += gamma_prime * dx.head(n);
-    qdd += beta_prime * dx.head(n);
-    mu += dx.tail(m);
-    const double force_scale = 1.0 + inertia.cwiseAbs().maxCoeff() / beta_prime;
-    const bool converged = dx.head(n).cwiseAbs().maxCoeff() <= options_.tolerance * q_scale &&
-                           residual.head(n).cwiseAbs().maxCoeff() <= 1e3 * options_.tolerance * force_scale;
     if (converged) break;
-    if (iterations_ >= options_.max_iterations) {
-      check_deformation(t1, q);  // a diverging linear model: say so rather than "did not converge" 
-      Eigen::Index worst = 0;
-      const Eigen::VectorXd now = system_.constraints(t1, q);
-      if (m > 0) now.cwiseAbs().maxCoeff(&worst);
-      std::ostringstream why;
-      why << "t = " << t1 << " s: Newton did not converge in " << options_.max_iterations
-          << " iterations (last correction " << dx.head(n).cwiseAbs().maxCoeff() << "; largest constraint residual "
-          << (m > 0 ? now.cwiseAbs().maxCoeff() : 0.0) << " in "
-          << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")";
-      throw StepFailure(why.str());
+    if (attempt == 0 && !fresh_this_step) {  // the kept matrix was too old: once more with a fresh one
+      refresh_ = true;
+      continue;
     }
+    check_deformation(t1, q);  // a diverging linear model: say so rather than "did not converge"
+    Eigen::Index worst = 0;
+    const Eigen::VectorXd now = system_.constraints(t1, q);
+    if (m > 0) now.cwiseAbs().maxCoeff(&worst);
+    std::ostringstream why;
+    why << "t = " << t1 << " s: Newton did not converge in " << options_.max_iterations
+        << " iterations (largest constraint residual " << (m > 0 ? now.cwiseAbs().maxCoeff() : 0.0) << " in "
+        << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")";
+    throw StepFailure(why.str());
   }
   if (!q.allFinite() || !v.allFinite() || !qdd.allFinite()) throw StepFailure("t = " + std::to_string(t1) + " s: non-finite state");
   check_deformation(t1, q);

@@ -3,8 +3,6 @@
 #include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
 
-#include <Eigen/LU>
-
 #include <stdexcept>
 
 namespace flexbody::runtime::detail {
@@ -22,10 +20,8 @@ Eigen::MatrixXd rotate(const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) {
 DenseNewton::DenseNewton(const System& system, double beta_prime, double gamma_prime)
     : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime), mass_(system.mass_matrix()) {}
 
-Eigen::VectorXd DenseNewton::solve(double, const Eigen::VectorXd& q, const Eigen::VectorXd& mu,
-                                   const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
-                                   const Eigen::MatrixXd& jacobian) {
-  const Eigen::Index n = q.size(), m = phi.size();
+void DenseNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
+  const Eigen::Index n = q.size(), m = jacobian.rows();
   Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
   kkt.topLeftCorner(n, n) = mass_ + (system_.stiffness(q) + system_.constraint_hessian(q, beta_prime_ * mu)) / beta_prime_;
   for (int b = 0; b < system_.body_count(); ++b) {  // the damping's ξξ block Â D̂ Âᵀ, times γ'
@@ -39,9 +35,13 @@ Eigen::VectorXd DenseNewton::solve(double, const Eigen::VectorXd& q, const Eigen
   }
   kkt.topRightCorner(n, m) = jacobian.transpose();
   kkt.bottomLeftCorner(m, n) = jacobian;
-  Eigen::VectorXd rhs(n + m);
+  lu_.compute(kkt);
+}
+
+Eigen::VectorXd DenseNewton::solve(const Eigen::VectorXd&, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi) const {
+  Eigen::VectorXd rhs(residual.size() + phi.size());
   rhs << -residual, -phi;
-  return Eigen::PartialPivLU<Eigen::MatrixXd>(kkt).solve(rhs);
+  return lu_.solve(rhs);
 }
 
 ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime)
@@ -59,20 +59,18 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
       throw std::runtime_error("body '" + system.body_name(b) + "': the constant Newton core G_ff x I3 + K_hat/beta' is "
                                "not positive definite");
   }
+  eliminated_.resize(static_cast<std::size_t>(system.body_count()));
 }
 
-Eigen::VectorXd ConstantCoreNewton::solve(double, const Eigen::VectorXd& q, const Eigen::VectorXd& mu,
-                                          const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
-                                          const Eigen::MatrixXd& jacobian) {
+Eigen::MatrixXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) const {
+  return rotate(a, cores_[static_cast<std::size_t>(body)].solve(rotate(a.transpose(), x)));  // S_ff⁻¹ = Â C⁻¹ Âᵀ
+}
+
+void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
   const int n_b = system_.body_count();
-  const Eigen::Index m = phi.size(), n_r = 12 * n_b;
-  // The reduced system in [Δq_r (12 per body); Δμ].
+  const Eigen::Index m = jacobian.rows(), n_r = 12 * n_b;
+  // The reduced matrix in [Δq_r (12 per body); Δμ] after eliminating every body's ξ.
   Eigen::MatrixXd reduced = Eigen::MatrixXd::Zero(n_r + m, n_r + m);
-  Eigen::VectorXd rhs(n_r + m);
-  rhs.tail(m) = -phi;
-  // Per flexible body, S_ff⁻¹ [S_fr, J_fᵀ, r_f] for the back-substitution.
-  std::vector<Eigen::MatrixXd> eliminated(static_cast<std::size_t>(n_b));
-  std::vector<std::vector<Eigen::Index>> active_rows(static_cast<std::size_t>(n_b));
   for (int b = 0; b < n_b; ++b) {
     const BodyModel& model = system_.model(b);
     const Eigen::Index o = system_.offset(b), n_xi = 3 * model.field_count(), n_f = model.field_count();
@@ -99,34 +97,52 @@ Eigen::VectorXd ConstantCoreNewton::solve(double, const Eigen::VectorXd& q, cons
     reduced.block(12 * b, 12 * b, 12, 12) = s_rr;
     reduced.block(12 * b, n_r, 12, m) = jacobian.middleCols(o, 12).transpose();
     reduced.block(n_r, 12 * b, m, 12) = jacobian.middleCols(o, 12);
+    Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
+    e.rows.clear();
+    if (n_xi == 0) continue;
+    // Eliminate ξ for S_fr and the constraint rows that involve this body's ξ (its reference rows and joints).
+    const Eigen::MatrixXd j_all = jacobian.middleCols(o + 12, n_xi);
+    for (Eigen::Index k = 0; k < m; ++k)
+      if (j_all.row(k).cwiseAbs().maxCoeff() > 0.0) e.rows.push_back(k);
+    const auto k_rows = static_cast<Eigen::Index>(e.rows.size());
+    e.j_f = j_all(e.rows, Eigen::all);
+    e.s_rf = s_rf;
+    Eigen::MatrixXd columns(n_xi, 12 + k_rows);
+    columns << s_rf.transpose(), e.j_f.transpose();
+    e.y = core_solve(b, a, columns);
+    reduced.block(12 * b, 12 * b, 12, 12) -= s_rf * e.y.leftCols(12);
+    const Eigen::MatrixXd s_rf_y = s_rf * e.y.rightCols(k_rows), j_y = e.j_f * e.y.leftCols(12);
+    const Eigen::MatrixXd j_yj = e.j_f * e.y.rightCols(k_rows);
+    for (Eigen::Index i = 0; i < k_rows; ++i) {
+      reduced.col(n_r + e.rows[i]).segment(12 * b, 12) -= s_rf_y.col(i);
+      reduced.row(n_r + e.rows[i]).segment(12 * b, 12) -= j_y.row(i);
+      for (Eigen::Index l = 0; l < k_rows; ++l) reduced(n_r + e.rows[i], n_r + e.rows[l]) -= j_yj(i, l);
+    }
+  }
+  reduced_.compute(reduced);
+}
+
+Eigen::VectorXd ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual,
+                                          const Eigen::VectorXd& phi) const {
+  const int n_b = system_.body_count();
+  const Eigen::Index m = phi.size(), n_r = 12 * n_b;
+  Eigen::VectorXd rhs(n_r + m);
+  rhs.tail(m) = -phi;
+  std::vector<Eigen::VectorXd> y_r(static_cast<std::size_t>(n_b));
+  for (int b = 0; b < n_b; ++b) {
+    const Eigen::Index o = system_.offset(b), n_xi = 3 * system_.model(b).field_count();
     rhs.segment(12 * b, 12) = -residual.segment(o, 12);
     if (n_xi == 0) continue;
-    // Eliminate ξ: S_ff⁻¹ x = Â C⁻¹ Âᵀ x, for S_fr, the constraint rows that involve this body's ξ (its own
-    // reference rows and its joints: the others are zero there) and r_f.
-    const Eigen::MatrixXd j_all = jacobian.middleCols(o + 12, n_xi);
-    std::vector<Eigen::Index> rows;
-    for (Eigen::Index k = 0; k < m; ++k)
-      if (j_all.row(k).cwiseAbs().maxCoeff() > 0.0) rows.push_back(k);
-    const auto k_rows = static_cast<Eigen::Index>(rows.size());
-    const Eigen::MatrixXd j_f = j_all(rows, Eigen::all);
-    Eigen::MatrixXd columns(n_xi, 12 + k_rows + 1);
-    columns << s_rf.transpose(), j_f.transpose(), residual.segment(o + 12, n_xi);
-    Eigen::MatrixXd y = rotate(a, cores_[static_cast<std::size_t>(b)].solve(rotate(a.transpose(), columns)));
-    reduced.block(12 * b, 12 * b, 12, 12) -= s_rf * y.leftCols(12);
-    const Eigen::MatrixXd s_rf_y = s_rf * y.middleCols(12, k_rows), j_y = j_f * y.leftCols(12);
-    const Eigen::MatrixXd j_yj = j_f * y.middleCols(12, k_rows);
-    for (Eigen::Index i = 0; i < k_rows; ++i) {
-      reduced.col(n_r + rows[i]).segment(12 * b, 12) -= s_rf_y.col(i);
-      reduced.row(n_r + rows[i]).segment(12 * b, 12) -= j_y.row(i);
-      for (Eigen::Index l = 0; l < k_rows; ++l) reduced(n_r + rows[i], n_r + rows[l]) -= j_yj(i, l);
-    }
-    rhs.segment(12 * b, 12) += s_rf * y.col(12 + k_rows);
-    const Eigen::VectorXd j_yr = j_f * y.col(12 + k_rows);
-    for (Eigen::Index i = 0; i < k_rows; ++i) rhs(n_r + rows[i]) += j_yr(i);
-    eliminated[static_cast<std::size_t>(b)] = std::move(y);
-    active_rows[static_cast<std::size_t>(b)] = std::move(rows);
+    const Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
+    // S_ff⁻¹ r_f at the current A (the core is exact for any A; only the coupling blocks are from the factorization).
+    const Eigen::Matrix3d a = orientation_of(system_.body_coordinates(q, b));
+    Eigen::VectorXd y = core_solve(b, a, residual.segment(o + 12, n_xi));
+    rhs.segment(12 * b, 12) += e.s_rf * y;
+    const Eigen::VectorXd j_yr = e.j_f * y;
+    for (std::size_t i = 0; i < e.rows.size(); ++i) rhs(n_r + e.rows[i]) += j_yr(static_cast<Eigen::Index>(i));
+    y_r[static_cast<std::size_t>(b)] = std::move(y);
   }
-  const Eigen::VectorXd x = Eigen::PartialPivLU<Eigen::MatrixXd>(reduced).solve(rhs);
+  const Eigen::VectorXd x = reduced_.solve(rhs);
   // Back-substitute: Δq_f = −S_ff⁻¹ (r_f + S_fr Δq_r + J_fᵀ Δμ).
   Eigen::VectorXd out(q.size() + m);
   out.tail(m) = x.tail(m);
@@ -134,12 +150,10 @@ Eigen::VectorXd ConstantCoreNewton::solve(double, const Eigen::VectorXd& q, cons
     const Eigen::Index o = system_.offset(b), n_xi = 3 * system_.model(b).field_count();
     out.segment(o, 12) = x.segment(12 * b, 12);
     if (n_xi == 0) continue;
-    const Eigen::MatrixXd& y = eliminated[static_cast<std::size_t>(b)];
-    const std::vector<Eigen::Index>& rows = active_rows[static_cast<std::size_t>(b)];
-    const auto k_rows = static_cast<Eigen::Index>(rows.size());
-    const Eigen::VectorXd mu_rows = x.tail(m)(rows);
-    out.segment(o + 12, n_xi) =
-        -(y.col(12 + k_rows) + y.leftCols(12) * x.segment(12 * b, 12) + y.middleCols(12, k_rows) * mu_rows);
+    const Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
+    const Eigen::VectorXd mu_rows = x.tail(m)(e.rows);
+    out.segment(o + 12, n_xi) = -(y_r[static_cast<std::size_t>(b)] + e.y.leftCols(12) * x.segment(12 * b, 12) +
+                                  e.y.rightCols(static_cast<Eigen::Index>(e.rows.size())) * mu_rows);
   }
   return out;
 }

@@ -14,6 +14,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/LU>
 
 #include <vector>
 
@@ -22,34 +23,47 @@ namespace flexbody::runtime::detail {
 class NewtonSolver {
  public:
   virtual ~NewtonSolver() = default;
-  /// Returns [Δq; Δμ] for the scaled multipliers μ = λ/β' at (t, q), given the scaled residual r and Φ, J.
-  [[nodiscard]] virtual Eigen::VectorXd solve(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& mu,
-                                              const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
-                                              const Eigen::MatrixXd& jacobian) = 0;
+  /// Builds and factorizes the Newton matrix at (q, μ) with the constraint Jacobian J (μ = λ/β', scaled).
+  virtual void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) = 0;
+  /// [Δq; Δμ] for the scaled residual r and Φ with the last factorization (which may be from an earlier iterate:
+  /// a modified Newton iteration; the constant core is always applied at the current A).
+  [[nodiscard]] virtual Eigen::VectorXd solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual,
+                                              const Eigen::VectorXd& phi) const = 0;
 };
 
 class DenseNewton final : public NewtonSolver {
  public:
   DenseNewton(const System& system, double beta_prime, double gamma_prime);
-  Eigen::VectorXd solve(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::VectorXd& residual,
-                        const Eigen::VectorXd& phi, const Eigen::MatrixXd& jacobian) override;
+  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) override;
+  Eigen::VectorXd solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi) const override;
 
  private:
   const System& system_;
   double beta_prime_, gamma_prime_;
   Eigen::MatrixXd mass_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
 };
 
 class ConstantCoreNewton final : public NewtonSolver {
  public:
   ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime);
-  Eigen::VectorXd solve(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::VectorXd& residual,
-                        const Eigen::VectorXd& phi, const Eigen::MatrixXd& jacobian) override;
+  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) override;
+  Eigen::VectorXd solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi) const override;
 
  private:
+  // One flexible body's part of the factorization: S_rf, the constraint rows that touch its ξ (their J_f), and
+  // S_ff⁻¹ [S_fr, J_fᵀ] at the factorization's A.
+  struct Eliminated {
+    Eigen::MatrixXd s_rf, j_f, y;
+    std::vector<Eigen::Index> rows;
+  };
+  [[nodiscard]] Eigen::MatrixXd core_solve(int body, const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) const;
+
   const System& system_;
   double beta_prime_;
   std::vector<Eigen::LLT<Eigen::MatrixXd>> cores_;  ///< per body; empty factor for rigid bodies
+  std::vector<Eliminated> eliminated_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> reduced_;
 };
 
 }  // namespace flexbody::runtime::detail

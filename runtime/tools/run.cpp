@@ -1,5 +1,6 @@
 #include "run.hpp"
 
+#include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
 
 #include <fmt/format.h>
@@ -38,6 +39,19 @@ std::vector<std::string> columns_of(const Scene& scene, const Sensor& s) {
     if (q == "position") columns.insert(columns.end(), {"x [m]", "y [m]", "z [m]"});
     if (q == "velocity") columns.insert(columns.end(), {"vx [m/s]", "vy [m/s]", "vz [m/s]"});
     if (q == "reaction_force") columns.insert(columns.end(), {"fx [N]", "fy [N]", "fz [N]"});
+    if (q == "orientation")  // the marker frame's rotation matrix, row by row
+      for (int i = 1; i <= 3; ++i)
+        for (int j = 1; j <= 3; ++j) columns.push_back(fmt::format("R{}{} [1]", i, j));
+    if (q == "displacement" || q == "stress") {
+      const auto& region = scene.system.model(s.body).recovery[s.region];
+      static constexpr const char* kComponents[] = {"xx", "yy", "zz", "xy", "xz", "yz"};
+      for (Eigen::Index j = 0; j < region.nodes.size(); ++j) {
+        if (q == "displacement")
+          for (const char* c : {"x", "y", "z"}) columns.push_back(fmt::format("u{}_{} [m]", c, region.nodes(j)));
+        else
+          for (const char* c : kComponents) columns.push_back(fmt::format("s{}_{} [Pa]", c, region.nodes(j)));
+      }
+    }
     if (q == "modal_coordinates")
       for (Eigen::Index m = 0; m < scene.system.model(s.body).modes; ++m)
         columns.push_back(fmt::format("eta_{} [kg^1/2 m]", m + 1));
@@ -54,6 +68,28 @@ Eigen::VectorXd values_of(const Scene& scene, const Sensor& s, const runtime::Ge
       push(runtime::marker_position(s.marker, system.body_coordinates(integrator.coordinates(), s.marker.body)));
     if (q == "velocity")  // ṙ = (yᵀ ⊗ I3) q̇_b: the position is linear in q
       push(runtime::marker_position_jacobian(s.marker) * system.body_coordinates(integrator.velocities(), s.marker.body));
+    if (q == "orientation") {  // A (I + [θ̄]×) with θ̄ = R ξ̄: the marker frame (to first order in θ̄)
+      const Eigen::VectorXd q_b = system.body_coordinates(integrator.coordinates(), s.marker.body);
+      Eigen::Matrix3d frame;
+      for (int k = 0; k < 3; ++k) frame.col(k) = runtime::marker_direction(s.marker, q_b, Eigen::Vector3d::Unit(k));
+      const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> rows = frame;
+      push(Eigen::Map<const Eigen::Matrix<double, 9, 1>>(rows.data()));
+    }
+    if (q == "displacement" || q == "stress") {  // body axes: ū_i = Σ_f Ῡ'(i, f) ξ̄_f, σ̄ = S ξ̄ (SCHEMA.md)
+      const runtime::BodyModel& model = system.model(s.body);
+      const auto& region = model.recovery[s.region];
+      const Eigen::VectorXd q_b = system.body_coordinates(integrator.coordinates(), s.body);
+      const Eigen::VectorXd xi_bar = runtime::body_frame_coordinates(runtime::orientation_of(q_b), q_b.tail(q_b.size() - 12));
+      if (q == "stress") {
+        push(region.stress_modes * xi_bar);
+      } else {
+        const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> fields_xi(xi_bar.data(), 3, model.field_count());
+        Eigen::VectorXd u(3 * region.nodes.size());
+        for (Eigen::Index j = 0; j < region.nodes.size(); ++j)
+          u.segment<3>(3 * j) = fields_xi * model.fields.row(region.nodes(j)).transpose();
+        push(u);
+      }
+    }
     if (q == "reaction_force")  // the force of the joint on marker 1: −λ of its position rows
       push(-integrator.multipliers().segment<3>(system.joint_row(s.joint)));
     if (q == "modal_coordinates") {

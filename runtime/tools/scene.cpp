@@ -303,7 +303,7 @@ Scene read_scene(const std::filesystem::path& file) {
       if (s.name.empty() || s.name.find_first_of("/\\") != std::string::npos || s.name == "monitors")
         r.fail(it->first, fmt::format("{}: the name must be a plain file name (not 'monitors')", where));
       const YAML::Node o = it->second;
-      r.expect_map(o, where, {"body", "interface", "point", "node", "joint", "quantities"});
+      r.expect_map(o, where, {"body", "interface", "point", "node", "region", "joint", "quantities"});
       const YAML::Node quantities = r.required(o, "quantities", where);
       if (!quantities.IsSequence() || quantities.size() == 0) r.fail(quantities, fmt::format("{} quantities must be a list", where));
       std::vector<std::string> allowed;
@@ -322,10 +322,21 @@ Scene read_scene(const std::filesystem::path& file) {
       } else {
         const LoadedBody& body = body_of(r.required(o, "body", where), where);
         s.body = body.index;
-        if (o["interface"] || o["point"] || o["node"]) {
+        if (const YAML::Node region = o["region"]) {
+          s.kind = Sensor::Kind::region;
+          const std::string name = r.text(region, where + " region");
+          const auto& regions = scene.system.model(body.index).recovery;
+          std::string known;
+          for (const auto& g : regions) known += (known.empty() ? "" : ", ") + g.name;
+          while (s.region < regions.size() && regions[s.region].name != name) ++s.region;
+          if (s.region == regions.size())
+            r.fail(region, fmt::format("{}: the body file has no output region '{}' (regions: {})", where, name,
+                                       known.empty() ? "none; name output_regions in its body spec" : known));
+          allowed = {"displacement", "stress"};
+        } else if (o["interface"] || o["point"] || o["node"]) {
           s.kind = Sensor::Kind::marker;
           s.marker = read_marker(r, o, scene.system, body.index, body, where);
-          allowed = {"position", "velocity"};
+          allowed = {"position", "velocity", "orientation"};
         } else {
           s.kind = Sensor::Kind::modal;
           allowed = {"modal_coordinates"};

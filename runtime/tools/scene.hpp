@@ -11,15 +11,19 @@
 
 namespace flexbody::fbsim {
 
-/// One output file: a marker's position or velocity, a joint's reaction force, a body's modal coordinates.
+/// One output file: a marker's position, velocity or orientation, a joint's reaction force, a body's modal
+/// coordinates, or an output region's elastic displacements and stresses.
 struct Sensor {
-  enum class Kind { marker, joint, modal };
+  enum class Kind { marker, joint, modal, region };
   std::string name;
   Kind kind = Kind::marker;
   runtime::Marker marker;          ///< Kind::marker
   std::size_t joint = 0;           ///< Kind::joint: index into System::joints()
-  int body = 0;                    ///< Kind::modal (and the marker's body)
-  std::vector<std::string> quantities;  ///< marker: position, velocity; joint: reaction_force; modal: modal_coordinates
+  int body = 0;                    ///< Kind::modal and Kind::region (and the marker's body)
+  std::size_t region = 0;          ///< Kind::region: index into the body model's recovery regions
+  /// marker: position, velocity, orientation; joint: reaction_force; modal: modal_coordinates;
+  /// region: displacement, stress
+  std::vector<std::string> quantities;
 };
 
 struct Scene {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -106,4 +107,50 @@ TEST(FbsimCli, BadScenesNameTheLine) {
   expect_scene_error(head + "springs:\n  s: {from: {body: bar, interface: tip}, to: {ground: [1, 0, 0]}, stiffness: -1}\n" +
                          tail, 4, "spring 's': stiffness, damping and length must be >= 0");
   expect_scene_error(head + "forces:\n  f: {body: bar, interface: tip}\n" + tail, 4, "force 'f' needs force or torque");
+}
+
+TEST(FbsimCli, RegionDisplacementsStressesAndOrientationsAreWritten) {
+  // The bar's default output region ("body": every node, the mesh is small) and the tip's frame, over 20 ms of
+  // swinging from horizontal: at t = 0 the bar is undeformed and aligned (zero displacement and stress, R = I);
+  // later it bends under its own inertia, so some stress is non-zero, and every value is finite.
+  const auto& dir = bar_folder();
+  write_text(dir / "regions.yaml", R"(bodies:
+  bar: {file: bar.fbh5, modes: 4}
+joints:
+  pivot: {type: revolute, body: bar, interface: root, to: ground, axis: [0, 0, 1]}
+gravity: [0, -9.81, 0]
+integrator: {step: 1.0e-3, end: 0.02}
+outputs:
+  whole: {body: bar, region: body, quantities: [displacement, stress]}
+  frame: {body: bar, interface: tip, quantities: [orientation]}
+)");
+  const CliRun run = run_fbsim(dir, "regions.yaml -o regions_out -q");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  auto rows_of = [](const std::filesystem::path& file) {
+    std::ifstream in(file);
+    std::vector<std::vector<std::string>> rows;
+    for (std::string line; std::getline(in, line);) {
+      std::vector<std::string> cells;
+      std::stringstream cells_in(line);
+      for (std::string cell; std::getline(cells_in, cell, ',');) cells.push_back(cell);
+      rows.push_back(cells);
+    }
+    return rows;
+  };
+  const auto whole = rows_of(dir / "regions_out" / "whole.csv");
+  ASSERT_EQ(whole.size(), 22u);  // header, t = 0, 20 steps
+  EXPECT_EQ(whole[0][1], "ux_0 [m]");
+  const std::size_t nodes = (whole[0].size() - 1) / 9;
+  EXPECT_EQ(whole[0][1 + 3 * nodes], "sxx_0 [Pa]");
+  double largest_stress = 0.0;
+  for (std::size_t c = 1; c < whole[1].size(); ++c) EXPECT_EQ(std::stod(whole[1][c]), 0.0);
+  for (std::size_t c = 1 + 3 * nodes; c < whole.back().size(); ++c) {
+    const double value = std::stod(whole.back()[c]);
+    ASSERT_TRUE(std::isfinite(value));
+    largest_stress = std::max(largest_stress, std::abs(value));
+  }
+  EXPECT_GT(largest_stress, 1.0);  // Pa: a swinging steel bar is stressed (kPa to MPa), far above round-off
+  const auto frame = rows_of(dir / "regions_out" / "frame.csv");
+  EXPECT_EQ(frame[0][1], "R11 [1]");
+  for (int k = 0; k < 9; ++k) EXPECT_NEAR(std::stod(frame[1][1 + k]), k % 4 == 0 ? 1.0 : 0.0, 1e-12);
 }

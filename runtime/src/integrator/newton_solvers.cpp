@@ -84,7 +84,7 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
       for (int c = 0; c < 4; ++c) s_rr.block<3, 3>(3 * r, 3 * c).diagonal().setConstant(g(r, c));
       for (Eigen::Index f = 0; f < n_f; ++f) s_rf.block<3, 3>(3 * r, 3 * f).diagonal().setConstant(g(r, 4 + f));
     }
-    const Eigen::Index ref_rows = model.rigid() ? 6 : 9;
+    const Eigen::Index ref_rows = model.rigid() ? 6 : 9;  // rows with curvature (Eq. 77's rows are linear)
     Eigen::Matrix<double, 9, 1> lambda = Eigen::Matrix<double, 9, 1>::Zero();
     lambda.head(ref_rows) = beta_prime_ * mu.segment(system_.reference_row(b), ref_rows);
     const Eigen::MatrixXd h = reference_hessian(model.tisserand, a, xi, lambda);  // over [a; ξ]

@@ -221,7 +221,12 @@ Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
     const Eigen::Index n = b.model.coordinate_count();
     const Eigen::VectorXd q_b = q.segment(b.offset, n);
     const Eigen::Matrix<double, 9, 1> ref = reference_residual(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12));
-    phi.segment(row, reference_rows(b)) = ref.head(reference_rows(b));
+    phi.segment(row, std::min<Eigen::Index>(9, reference_rows(b))) = ref.head(std::min<Eigen::Index>(9, reference_rows(b)));
+    if (reference_rows(b) == 12) {  // Eq. 77: Σ_f G[0, 4 + f] ξ_f
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (Eigen::Index f = 0; f < b.model.field_count(); ++f) sum += b.model.mass_matrix(0, 4 + f) * q_b.segment<3>(12 + 3 * f);
+      phi.segment<3>(row + 9) = sum;
+    }
     row += reference_rows(b);
   }
   for (const Joint& j : joints_) {
@@ -240,7 +245,11 @@ Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) 
     const Eigen::Index n = b.model.coordinate_count();
     const Eigen::VectorXd q_b = q.segment(b.offset, n);
     const Eigen::MatrixXd ref = reference_jacobian(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12));
-    jac.block(row, b.offset + 3, reference_rows(b), n - 3) = ref.topRows(reference_rows(b));
+    jac.block(row, b.offset + 3, std::min<Eigen::Index>(9, reference_rows(b)), n - 3) =
+        ref.topRows(std::min<Eigen::Index>(9, reference_rows(b)));
+    if (reference_rows(b) == 12)
+      for (Eigen::Index f = 0; f < b.model.field_count(); ++f)
+        jac.block<3, 3>(row + 9, b.offset + 12 + 3 * f).diagonal().setConstant(b.model.mass_matrix(0, 4 + f));
     row += reference_rows(b);
   }
   for (const Joint& j : joints_) {
@@ -261,7 +270,7 @@ Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen
     const Eigen::Index n = b.model.coordinate_count();
     const Eigen::VectorXd q_b = q.segment(b.offset, n);
     Eigen::Matrix<double, 9, 1> l = Eigen::Matrix<double, 9, 1>::Zero();
-    l.head(reference_rows(b)) = lambda.segment(row, reference_rows(b));
+    l.head(std::min<Eigen::Index>(9, reference_rows(b))) = lambda.segment(row, std::min<Eigen::Index>(9, reference_rows(b)));
     h.block(b.offset + 3, b.offset + 3, n - 3, n - 3) =
         reference_hessian(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12), l);
     row += reference_rows(b);
@@ -272,7 +281,8 @@ Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen
 std::string System::constraint_name(Eigen::Index row) const {
   for (const Body& b : bodies_) {
     if (row < 6) return "body '" + b.name + "': orthogonality of A (Eq. 79)";
-    if (row < reference_rows(b)) return "body '" + b.name + "': rotational Tisserand condition (Eq. 78)";
+    if (row < 9 && row < reference_rows(b)) return "body '" + b.name + "': rotational Tisserand condition (Eq. 78)";
+    if (row < reference_rows(b)) return "body '" + b.name + "': translational Tisserand condition (Eq. 77)";
     row -= reference_rows(b);
   }
   for (const Joint& j : joints_) {

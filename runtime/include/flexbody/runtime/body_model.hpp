@@ -38,6 +38,12 @@ struct BodyModel {
   Eigen::MatrixXd damping;
   format::RowMatrixX3d nodes;                     ///< X̄ (body frame) [m]
 
+  /// G[0, 4:] (n_f): zero when every field is M-orthogonal to translations (every body file); otherwise (the
+  /// full-order reference, full_order.hpp) the translational Tisserand rows Σ_f G[0, 4 + f] ξ_f = 0 (Eq. 77) are
+  /// imposed too.
+  [[nodiscard]] bool needs_translational_tisserand() const {
+    return field_count() > 0 && mass_matrix.row(0).tail(field_count()).cwiseAbs().maxCoeff() > 1e-12 * mass;
+  }
   [[nodiscard]] Eigen::Index field_count() const { return stiffness.rows() / 3; }
   [[nodiscard]] Eigen::Index coordinate_count() const { return 12 + stiffness.rows(); }
   [[nodiscard]] bool rigid() const { return field_count() == 0; }

@@ -5,7 +5,8 @@
 //   M q̈ + ∂U/∂q + Φ_qᵀ λ = Q(t, q, q̇),   Φ(q, t) = 0,   M = diag(G_b ⊗ I3) constant.
 //
 // Coordinates are stacked body by body, q_b = [τ; a; ξ] (12 + 3 n_f). Constraint rows: per body its reference
-// conditions (6 orthogonality rows, and 3 rotational Tisserand rows if it is flexible), then every joint's rows.
+// conditions (6 orthogonality rows; 3 rotational Tisserand rows if it is flexible; 3 translational Tisserand rows
+// if its fields are not M-orthogonal to translations, as in the full-order reference), then every joint's rows.
 
 #include "flexbody/runtime/body_model.hpp"
 #include "flexbody/runtime/joint.hpp"
@@ -100,7 +101,8 @@ class System {
   [[nodiscard]] std::string constraint_name(Eigen::Index row) const;
   /// The first constraint row of joint j (its rows follow in the order of joint.hpp).
   [[nodiscard]] Eigen::Index joint_row(std::size_t joint) const;
-  /// The first constraint row of body b's reference conditions (6 orthogonality, then 3 Tisserand if flexible).
+  /// The first constraint row of body b's reference conditions (6 orthogonality, then 3 rotational Tisserand if
+  /// flexible, then 3 translational Tisserand if needed).
   [[nodiscard]] Eigen::Index reference_row(int body) const;
   [[nodiscard]] Energies energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
 
@@ -111,7 +113,9 @@ class System {
     BodyState initial;
     Eigen::Index offset = 0;
   };
-  [[nodiscard]] Eigen::Index reference_rows(const Body& b) const { return b.model.rigid() ? 6 : 9; }
+  [[nodiscard]] Eigen::Index reference_rows(const Body& b) const {
+    return b.model.rigid() ? 6 : (b.model.needs_translational_tisserand() ? 12 : 9);
+  }
   void check_marker(const Marker& m, const std::string& what) const;
   std::vector<Body> bodies_;
   std::vector<Joint> joints_;

@@ -39,7 +39,7 @@ void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) con
     for (Eigen::Index f = 0; f < model.field_count(); ++f)
       for (Eigen::Index h = 0; h < model.field_count(); ++h) squared += g(4 + f, 4 + h) * xi.segment<3>(3 * f).dot(xi.segment<3>(3 * h));
     const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
-    const double size = (model.nodes.colwise().maxCoeff() - model.nodes.colwise().minCoeff()).norm();
+    const double size = body_sizes_[static_cast<std::size_t>(b)];
     if (rms > options_.deformation_limit * size) {
       std::ostringstream why;
       why << "t = " << t << " s: body '" << system_.body_name(b) << "' left the small-deformation range of its linear "
@@ -67,6 +67,10 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   q_ = system.initial_coordinates();
   v_ = system.initial_velocities();
   mass_ = system.mass_matrix();
+  for (int b = 0; b < system.body_count(); ++b) {  // bounding-box diagonals, for the deformation limit
+    const format::RowMatrixX3d& nodes = system.model(b).nodes;
+    body_sizes_.push_back(nodes.rows() ? (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm() : 0.0);
+  }
   const Eigen::Index n = q_.size(), m = system.constraint_count();
   const Eigen::VectorXd phi = system.constraints(t_, q_);
   for (Eigen::Index k = 0; k < m; ++k)

@@ -18,6 +18,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace flexbody::runtime {
 
@@ -88,6 +89,7 @@ class GeneralizedAlpha {
   long steps_ = 0;  ///< t = t0 + steps h: no accumulated rounding in the time
   Eigen::VectorXd q_, v_, qdd_, a_, lambda_;
   Eigen::MatrixXd mass_;
+  std::vector<double> body_sizes_;  ///< bounding-box diagonal of each body's mesh [m]
   std::unique_ptr<detail::NewtonSolver> solver_;
   int iterations_ = 0;
   long total_iterations_ = 0, factorizations_ = 0;

@@ -24,8 +24,8 @@ namespace flexbody::runtime {
 
 /// How each Newton iteration's linear system is solved.
 enum class NewtonMatrix {
-  /// Eliminate each flexible body's ξ block with the factor of C = G_ff ⊗ I3 + K̂/β', constant for the step
-  /// size (FORMULATION.md section 5): O((3 n_f)²) per right-hand side instead of O(n³).
+  /// Eliminate each flexible body's ξ block with the factor of C = G_ff ⊗ I3 + (K̂ + γ' D̂)/β', constant for the
+  /// step size (FORMULATION.md section 5): O((3 n_f)²) per right-hand side instead of O(n³).
   constant_core,
   dense,  ///< the whole matrix, LU per iteration: the reference the constant core is tested against
 };
@@ -63,9 +63,13 @@ class GeneralizedAlpha {
   ~GeneralizedAlpha();
   GeneralizedAlpha(const GeneralizedAlpha&) = delete;
   GeneralizedAlpha& operator=(const GeneralizedAlpha&) = delete;
-  /// Starts at t0 from the system's initial coordinates and velocities, with consistent accelerations and
-  /// multipliers ([M Φ_qᵀ; Φ_q 0] [q̈; λ] = [Q; −d/dt(Φ_q q̇ + Φ_t)]).
+  /// Starts at t0 from the system's initial coordinates and velocities (made consistent with the constraints),
+  /// with consistent accelerations and multipliers ([M Φ_qᵀ; Φ_q 0] [q̈; λ] = [Q; −d/dt(Φ_q q̇ + Φ_t)]). The
+  /// system is borrowed: it must outlive the integrator and not change while it runs. Throws
+  /// std::invalid_argument for bad options, an initial state that violates a constraint, or redundant or
+  /// contradictory constraints.
   GeneralizedAlpha(const System& system, const GeneralizedAlphaOptions& options, double t0 = 0.0);
+  GeneralizedAlpha(System&&, const GeneralizedAlphaOptions&, double = 0.0) = delete;  // borrows: would dangle
 
   /// Advances one step of size h. Throws StepFailure (and leaves the state at the last good step).
   void step();

@@ -4,6 +4,7 @@
 #include "flexbody/preprocess/stress_recovery.hpp"
 #include "cli_run.hpp"
 #include "test_meshes.hpp"
+#include "vtu_read.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -17,6 +18,8 @@ namespace {
 
 using flexbody::test::CliRun;
 using flexbody::test::slurp;
+using flexbody::test::base64_decode;
+using flexbody::test::vtu_array;
 
 CliRun fbprep(const std::filesystem::path& dir, const std::string& arguments) {
   return flexbody::test::run_fbprep(dir, arguments);
@@ -129,36 +132,6 @@ TEST(FbprepCli, InspectReadsBackWhatWasWritten) {
   EXPECT_EQ(std::count(usage.err.begin(), usage.err.end(), '\n'), 1) << usage.err;
 }
 
-namespace {
-
-std::vector<unsigned char> base64_decode(const std::string& text) {
-  static const std::string alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::vector<unsigned char> out;
-  std::uint32_t buffer = 0;
-  int bits = 0;
-  for (char c : text) {
-    if (c == '=') break;
-    const auto value = alphabet.find(c);
-    if (value == std::string::npos) continue;
-    buffer = (buffer << 6) | static_cast<std::uint32_t>(value);
-    bits += 6;
-    if (bits >= 8) {
-      bits -= 8;
-      out.push_back(static_cast<unsigned char>((buffer >> bits) & 0xFF));
-    }
-  }
-  return out;
-}
-
-// The base64 text of the DataArray named `name` in a .vtu file.
-std::string vtu_array(const std::string& vtu, const std::string& name) {
-  const auto at = vtu.find("Name=\"" + name + "\"");
-  if (at == std::string::npos) return "";
-  const auto begin = vtu.find('>', at) + 1;
-  return vtu.substr(begin, vtu.find("</DataArray>", begin) - begin);
-}
-
-}  // namespace
 
 TEST(FbprepCli, ExportVtuWritesTheModesForParaView) {
   const auto dir = flexbody::test::scratch_dir();

@@ -1,9 +1,9 @@
 #include "flexbody/format/vtk_xml.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <cstring>
-#include <iomanip>
-#include <sstream>
+#include <string_view>
 #include <stdexcept>
 #include <unistd.h>
 
@@ -151,9 +151,12 @@ void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<do
     if (!out) throw std::runtime_error(path.string() + ": cannot be written");
     out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
         << "  <Collection>\n";
-    out << std::setprecision(17);
-    for (const auto& [time, file] : steps)
-      out << "    <DataSet timestep=\"" << time << "\" part=\"0\" file=\"" << escaped(file) << "\"/>\n";
+    for (const auto& [time, file] : steps) {
+      char text[32];  // the shortest text that reads back as the same double
+      const auto end = std::to_chars(text, text + sizeof text, time).ptr;
+      out << "    <DataSet timestep=\"" << std::string_view(text, static_cast<std::size_t>(end - text))
+          << "\" part=\"0\" file=\"" << escaped(file) << "\"/>\n";
+    }
     out << "  </Collection>\n</VTKFile>\n";
     out.close();
     if (!out) throw std::runtime_error(path.string() + ": writing failed (disk full?)");

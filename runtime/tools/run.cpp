@@ -1,6 +1,7 @@
 #include "run.hpp"
 
 #include "flexbody/runtime/gcms_elastic.hpp"
+#include "flexbody/runtime/paraview_series.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
 
 #include <fmt/format.h>
@@ -147,9 +148,18 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
                                                         "max |A^T A - I|", "max |Tisserand| [kg m^2]",
                                                         "max |joint residual|", "Newton iterations"});
   }
+  std::vector<runtime::ParaViewSeries> series;
+  for (const SurfaceSeries& s : scene.paraview) {
+    series.emplace_back(directory, scene.system.body_name(s.body), scene.system.model(s.body), s.stresses);
+    summary.files.push_back(series.back().collection());
+  }
   auto record = [&] {
     for (std::size_t k = 0; k < files.size(); ++k) files[k]->row(integrator.time(), values_of(scene, scene.sensors[k], integrator));
     if (monitors) monitors->row(integrator.time(), monitor_values(scene, integrator));
+  };
+  auto draw = [&] {
+    for (std::size_t k = 0; k < series.size(); ++k)
+      series[k].write(integrator.time(), scene.system.body_coordinates(integrator.coordinates(), scene.paraview[k].body));
   };
   const runtime::Energies e0 = scene.system.energies(integrator.coordinates(), integrator.velocities());
   summary.energy_initial = summary.energy_final = e0.total();
@@ -157,12 +167,13 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
   // gravity potential is zero).
   double exchanged = e0.kinetic + e0.elastic + e0.springs, largest_change = 0.0;
   record();
+  draw();
   const long steps = std::lround(scene.end_time / scene.integrator.step);
-  bool written = true;
+  bool written = true, drawn = true;
   try {
     for (long k = 1; k <= steps; ++k) {
       integrator.step();
-      written = false;
+      written = drawn = false;
       ++summary.steps;
       summary.newton_iterations += integrator.last_iterations();
       summary.max_constraint_residual = std::max(
@@ -176,10 +187,15 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
         record();
         written = true;
       }
+      if (k % scene.paraview_every == 0 || k == steps) {
+        draw();
+        drawn = true;
+      }
       if (progress && k % 100 == 0) progress(integrator.time());
     }
   } catch (...) {
     if (!written) record();  // the last completed step, whatever output_every says
+    if (!drawn) draw();
     summary.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     throw;
   }

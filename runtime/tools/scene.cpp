@@ -3,6 +3,7 @@
 #include "flexbody/format/body_file.hpp"
 #include "flexbody/format/yaml_reader.hpp"
 #include "flexbody/runtime/damping.hpp"
+#include "flexbody/runtime/paraview_series.hpp"
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
@@ -67,7 +68,7 @@ Scene read_scene(const std::filesystem::path& file) {
   const YAML::Node loaded_root = r.load("scene");
   const YAML::Node& root = loaded_root;
   r.expect_map(root, "the scene",
-               {"bodies", "joints", "forces", "springs", "gravity", "integrator", "outputs", "monitors"});
+               {"bodies", "joints", "forces", "springs", "gravity", "integrator", "outputs", "monitors", "paraview"});
   Scene scene;
   const std::filesystem::path base = file.parent_path();
   std::map<std::string, LoadedBody> bodies;
@@ -349,6 +350,40 @@ Scene read_scene(const std::filesystem::path& file) {
         s.quantities.push_back(q);
       }
       scene.sensors.push_back(std::move(s));
+    }
+  }
+
+  // paraview: {bodies: [names] (default: all), every: n steps (default: about 100 frames), stresses: true}
+  if (const YAML::Node paraview = root["paraview"]) {
+    r.expect_map(paraview, "paraview", {"bodies", "every", "stresses"});
+    bool stresses = true;
+    if (const YAML::Node s = paraview["stresses"]) {
+      const std::string text = r.text(s, "paraview stresses");
+      if (text != "true" && text != "false") r.fail(s, "paraview stresses must be true or false");
+      stresses = text == "true";
+    }
+    std::vector<std::pair<int, YAML::Node>> chosen;
+    if (const YAML::Node list = paraview["bodies"]) {
+      if (!list.IsSequence() || list.size() == 0) r.fail(list, "paraview bodies must be a list of body names");
+      for (std::size_t k = 0; k < list.size(); ++k) chosen.emplace_back(body_of(list[k], "paraview").index, list[k]);
+    } else {
+      for (int b = 0; b < scene.system.body_count(); ++b) chosen.emplace_back(b, paraview);
+    }
+    for (const auto& [body, node] : chosen) {
+      if (std::any_of(scene.paraview.begin(), scene.paraview.end(), [b = body](const SurfaceSeries& s) { return s.body == b; }))
+        r.fail(node, fmt::format("paraview: body '{}' is named twice", scene.system.body_name(body)));
+      try {  // the checks of the series itself (surface stresses recovered?), before anything runs
+        const runtime::ParaViewSeries check({}, scene.system.body_name(body), scene.system.model(body), stresses);
+      } catch (const std::invalid_argument& e) {
+        r.fail(node, fmt::format("paraview: body '{}': {}", scene.system.body_name(body), e.what()));
+      }
+      scene.paraview.push_back({body, stresses});
+    }
+    const long steps = std::lround(scene.end_time / scene.integrator.step);
+    scene.paraview_every = static_cast<int>(std::max(1L, (steps + 99) / 100));
+    if (const YAML::Node every = paraview["every"]) {
+      scene.paraview_every = r.count(every, "paraview every");
+      if (scene.paraview_every < 1) r.fail(every, "paraview every must be at least 1");
     }
   }
   return scene;

@@ -26,6 +26,12 @@ struct Sensor {
   std::vector<std::string> quantities;
 };
 
+/// A ParaView series of one body's deformed surface (runtime/paraview_series.hpp).
+struct SurfaceSeries {
+  int body = 0;
+  bool stresses = true;
+};
+
 struct Scene {
   runtime::System system;
   runtime::GeneralizedAlphaOptions integrator;
@@ -33,6 +39,8 @@ struct Scene {
   int output_every = 1;        ///< write every n-th step
   bool monitors = false;       ///< monitors.csv: energies, ‖AᵀA − I‖, constraint residuals, Newton iterations
   std::vector<Sensor> sensors;
+  std::vector<SurfaceSeries> paraview;  ///< DIR/<body>.pvd + DIR/<body>/*.vtu
+  int paraview_every = 1;               ///< a frame every n-th step
 };
 
 /// Reads and assembles a scene; body files are read relative to the scene's directory.

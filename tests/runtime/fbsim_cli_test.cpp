@@ -1,7 +1,11 @@
 // fbsim as a user runs it: the issue's scene on a bar made by fbprep, and bad scenes that must each give one
 // error line naming the scene line, exit code 2 and no crash.
 #include "cli_run.hpp"
+#include "flexbody/format/body_file.hpp"
+#include "flexbody/runtime/body_model.hpp"
+#include "flexbody/runtime/paraview_series.hpp"
 #include "test_meshes.hpp"
+#include "vtu_read.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -107,6 +111,8 @@ TEST(FbsimCli, BadScenesNameTheLine) {
   expect_scene_error(head + "springs:\n  s: {from: {body: bar, interface: tip}, to: {ground: [1, 0, 0]}, stiffness: -1}\n" +
                          tail, 4, "spring 's': stiffness, damping and length must be >= 0");
   expect_scene_error(head + "forces:\n  f: {body: bar, interface: tip}\n" + tail, 4, "force 'f' needs force or torque");
+  expect_scene_error(head + "paraview: {bodies: [wheel]}\n" + tail, 3, "paraview: no body 'wheel' in the scene");
+  expect_scene_error(head + "paraview: {every: 0}\n" + tail, 3, "paraview every must be at least 1");
 }
 
 TEST(FbsimCli, RegionDisplacementsStressesAndOrientationsAreWritten) {
@@ -153,4 +159,117 @@ outputs:
   const auto frame = rows_of(dir / "regions_out" / "frame.csv");
   EXPECT_EQ(frame[0][1], "R11 [1]");
   for (int k = 0; k < 9; ++k) EXPECT_NEAR(std::stod(frame[1][1 + k]), k % 4 == 0 ? 1.0 : 0.0, 1e-12);
+}
+
+namespace {
+
+std::vector<std::vector<double>> csv_numbers(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::vector<std::vector<double>> rows;
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::vector<double> row;
+    std::stringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) row.push_back(std::stod(cell));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+double von_mises_of_voigt(const double* s) {  // xx, yy, zz, xy, xz, yz
+  return std::sqrt(0.5 * ((s[0] - s[1]) * (s[0] - s[1]) + (s[1] - s[2]) * (s[1] - s[2]) + (s[2] - s[0]) * (s[2] - s[0])) +
+                   3.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]));
+}
+
+}  // namespace
+
+TEST(FbsimCli, ParaViewSeriesAgreesWithTheCsvOutputs) {
+  // The swinging bar of the test above, drawn every 5 steps. The series and the CSV files compute the same
+  // quantities by different paths (surface arrays vs marker rows and region stress modes), so they must agree to
+  // round-off: a surface node's position with a node marker's, the norm of its world displacement with the
+  // region's body-axes displacement, its von Mises stress (rotation invariant) with the region's stress.
+  const auto& dir = bar_folder();
+  const auto body = flexbody::format::read_body_file(dir / "bar.fbh5");
+  std::vector<int> surface(body.mesh.surface_triangles.data(),
+                           body.mesh.surface_triangles.data() + body.mesh.surface_triangles.size());
+  std::sort(surface.begin(), surface.end());
+  surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
+  const int node = body.interfaces[1].nodes(0);  // a node of the tip face: on the surface, and it moves most
+  const auto local = std::lower_bound(surface.begin(), surface.end(), node) - surface.begin();
+  ASSERT_EQ(surface[static_cast<std::size_t>(local)], node);
+  write_text(dir / "movie.yaml", R"(bodies:
+  bar: {file: bar.fbh5, modes: 4}
+joints:
+  pivot: {type: revolute, body: bar, interface: root, to: ground, axis: [0, 0, 1]}
+gravity: [0, -9.81, 0]
+integrator: {step: 1.0e-3, end: 0.02}
+outputs:
+  whole: {body: bar, region: body, quantities: [displacement, stress]}
+  corner: {body: bar, node: )" + std::to_string(node) + R"(, quantities: [position]}
+paraview: {every: 5}
+)");
+  const CliRun run = run_fbsim(dir, "movie.yaml -o movie_out --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string pvd = flexbody::test::slurp(dir / "movie_out" / "bar.pvd");
+  for (int frame = 0; frame <= 4; ++frame) {  // t = 0, 5, 10, 15, 20 ms
+    const std::string file = "bar/bar_00000" + std::to_string(frame) + ".vtu";
+    EXPECT_NE(pvd.find("file=\"" + file + "\""), std::string::npos) << file;
+    EXPECT_TRUE(std::filesystem::exists(dir / "movie_out" / file)) << file;
+  }
+  EXPECT_NE(pvd.find("timestep=\"0.02\""), std::string::npos) << pvd;
+  EXPECT_EQ(pvd.find("bar_000005"), std::string::npos);
+
+  const std::string vtu = flexbody::test::slurp(dir / "movie_out" / "bar" / "bar_000004.vtu");
+  const auto points = flexbody::test::vtu_values<double>(vtu, "Points");
+  const auto displacement = flexbody::test::vtu_values<double>(vtu, "displacement");
+  const auto mises = flexbody::test::vtu_values<double>(vtu, "von_mises");
+  const auto stress = flexbody::test::vtu_values<double>(vtu, "stress");
+  const auto triangles = flexbody::test::vtu_values<std::int64_t>(vtu, "connectivity");
+  ASSERT_EQ(points.size(), 3 * surface.size());
+  ASSERT_EQ(displacement.size(), 3 * surface.size());
+  ASSERT_EQ(mises.size(), surface.size());
+  ASSERT_EQ(stress.size(), 6 * surface.size());
+  ASSERT_EQ(triangles.size(), 3 * static_cast<std::size_t>(body.mesh.surface_triangles.rows()));
+
+  const auto corner = csv_numbers(dir / "movie_out" / "corner.csv").back();
+  ASSERT_NEAR(corner[0], 0.02, 1e-15);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(points[3 * local + k], corner[1 + k], 1e-13);  // m, on a 1 m bar
+  const auto whole = csv_numbers(dir / "movie_out" / "whole.csv").back();
+  const std::size_t n_n = static_cast<std::size_t>(body.mesh.nodes.rows());
+  ASSERT_EQ(whole.size(), 1 + 9 * n_n);  // the region "body" holds every node, in order
+  const double* u_bar = &whole[1 + 3 * static_cast<std::size_t>(node)];
+  const double* sigma_bar = &whole[1 + 3 * n_n + 6 * static_cast<std::size_t>(node)];
+  const double u_norm = std::sqrt(u_bar[0] * u_bar[0] + u_bar[1] * u_bar[1] + u_bar[2] * u_bar[2]);
+  const double series_u = std::sqrt(displacement[3 * local] * displacement[3 * local] +
+                                    displacement[3 * local + 1] * displacement[3 * local + 1] +
+                                    displacement[3 * local + 2] * displacement[3 * local + 2]);
+  EXPECT_GT(u_norm, 1e-7);  // m: the tip lags the rigid swing measurably
+  EXPECT_NEAR(series_u, u_norm, 1e-12 * u_norm + 1e-18);
+  const double expected_mises = von_mises_of_voigt(sigma_bar);
+  EXPECT_GT(expected_mises, 1.0);  // Pa
+  EXPECT_NEAR(mises[static_cast<std::size_t>(local)], expected_mises, 1e-9 * expected_mises);
+  // The world-axes tensor has the body-axes tensor's invariants: its trace.
+  const double* s = &stress[6 * static_cast<std::size_t>(local)];
+  EXPECT_NEAR(s[0] + s[1] + s[2], sigma_bar[0] + sigma_bar[1] + sigma_bar[2], 1e-9 * expected_mises);
+}
+
+TEST(ParaViewSeries, RefusesStressesThatTheBodyFileDoesNotRecover) {
+  // A region that leaves surface nodes out cannot colour the surface: one clear error, not zeros or NaN. Without
+  // stresses the same body is drawn.
+  const auto body = flexbody::format::read_body_file(bar_folder() / "bar.fbh5");
+  flexbody::runtime::BodyModel model = flexbody::runtime::make_body_model(body, 2, "bar.fbh5");
+  auto& region = model.recovery.at(0);
+  const Eigen::Index half = region.nodes.size() / 2;
+  region.nodes.conservativeResize(half);
+  region.stress_modes.conservativeResize(6 * half, Eigen::NoChange);
+  try {
+    const flexbody::runtime::ParaViewSeries series(bar_folder() / "refused", "bar", model, true);
+    ADD_FAILURE() << "accepted a partial stress recovery";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("bar.fbh5: its output regions recover stresses at "), std::string::npos) << e.what();
+  }
+  const flexbody::runtime::ParaViewSeries series(bar_folder() / "drawn", "bar", model, false);
+  EXPECT_FALSE(series.writes_stresses());
+  EXPECT_FALSE(std::filesystem::exists(bar_folder() / "refused"));
 }

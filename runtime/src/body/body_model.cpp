@@ -28,6 +28,7 @@ BodyModel make_body_model(const format::BodyData& body, std::optional<Eigen::Ind
   model.mode_coefficients = body.gcms.mode_coefficients.topLeftCorner(n_f, 3 * k);
   model.frequencies_hz = body.modes.frequencies_hz.head(k);
   model.nodes = body.mesh.nodes;
+  model.surface_triangles = body.mesh.surface_triangles;
   for (format::Interface i : body.interfaces) {
     i.y_row.conservativeResize(4 + n_f);
     i.rotation.conservativeResize(Eigen::NoChange, 3 * n_f);

@@ -37,6 +37,7 @@ struct BodyModel {
   /// D̂ (3 n_f square) [1/s] on the body-frame field velocities (damping.hpp); empty: undamped.
   Eigen::MatrixXd damping;
   format::RowMatrixX3d nodes;                     ///< X̄ (body frame) [m]
+  format::RowMatrixX3i surface_triangles;         ///< the mesh's boundary, for pictures (paraview_series.hpp)
 
   /// G[0, 4:] (n_f): zero when every field is M-orthogonal to translations (every body file); otherwise (the
   /// full-order reference, full_order.hpp) the translational Tisserand rows Σ_f G[0, 4 + f] ξ_f = 0 (Eq. 77) are

@@ -1,0 +1,126 @@
+#include "flexbody/runtime/paraview_series.hpp"
+
+#include "flexbody/format/vtk_xml.hpp"
+#include "flexbody/runtime/gcms_elastic.hpp"
+#include "flexbody/runtime/marker.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace flexbody::runtime {
+namespace {
+
+// ParaView's SymmetricTensor order XX, YY, ZZ, XY, YZ, XZ as (row, column) pairs.
+constexpr std::array<std::array<int, 2>, 6> kParaViewComponents = {{{0, 0}, {1, 1}, {2, 2}, {0, 1}, {1, 2}, {0, 2}}};
+
+// σ̄ from the stored Voigt order xx, yy, zz, xy, xz, yz (SCHEMA.md /recovery).
+Eigen::Matrix3d tensor_of(const double* voigt) {
+  Eigen::Matrix3d s;
+  s << voigt[0], voigt[3], voigt[4],  //
+      voigt[3], voigt[1], voigt[5],   //
+      voigt[4], voigt[5], voigt[2];
+  return s;
+}
+
+double von_mises_of(const Eigen::Matrix3d& s) {
+  const Eigen::Matrix3d deviator = s - s.trace() / 3.0 * Eigen::Matrix3d::Identity();
+  return std::sqrt(1.5 * deviator.squaredNorm());
+}
+
+std::string frame_name(const std::string& name, std::size_t frame) {
+  char number[16];
+  std::snprintf(number, sizeof number, "_%06zu.vtu", frame);
+  return name + number;
+}
+
+}  // namespace
+
+ParaViewSeries::ParaViewSeries(std::filesystem::path directory, std::string name, const BodyModel& model, bool stresses)
+    : directory_(std::move(directory)), name_(std::move(name)) {
+  collection_ = directory_ / (name_ + ".pvd");
+  if (model.surface_triangles.rows() == 0)
+    throw std::invalid_argument(model.source + ": the body has no surface triangles to draw");
+  // The surface's nodes, numbered in ascending order of their body node.
+  std::vector<int> used(model.surface_triangles.data(), model.surface_triangles.data() + model.surface_triangles.size());
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  if (used.front() < 0 || used.back() >= model.nodes.rows())
+    throw std::invalid_argument(model.source + ": a surface triangle names a node outside the mesh");
+  const Eigen::Index n_s = static_cast<Eigen::Index>(used.size());
+  node_index_ = Eigen::Map<const Eigen::VectorXi>(used.data(), n_s);
+  std::vector<Eigen::Index> local(static_cast<std::size_t>(model.nodes.rows()), -1);
+  nodes_.resize(n_s, 3);
+  fields_.resize(n_s, model.field_count());
+  for (Eigen::Index j = 0; j < n_s; ++j) {
+    local[static_cast<std::size_t>(node_index_(j))] = j;
+    nodes_.row(j) = model.nodes.row(node_index_(j));
+    fields_.row(j) = model.fields.row(node_index_(j));
+  }
+  triangles_.reserve(static_cast<std::size_t>(model.surface_triangles.size()));
+  for (Eigen::Index t = 0; t < model.surface_triangles.rows(); ++t)
+    for (int k = 0; k < 3; ++k) triangles_.push_back(local[static_cast<std::size_t>(model.surface_triangles(t, k))]);
+
+  if (stresses && !model.rigid()) {  // each surface node's rows of S, from the first region that holds it
+    stress_modes_.resize(6 * n_s, 3 * model.field_count());
+    std::vector<bool> found(static_cast<std::size_t>(n_s), false);
+    for (const format::RecoveryRegion& region : model.recovery)
+      for (Eigen::Index j = 0; j < region.nodes.size(); ++j) {
+        const Eigen::Index s = local[static_cast<std::size_t>(region.nodes(j))];
+        if (s < 0 || found[static_cast<std::size_t>(s)]) continue;
+        stress_modes_.middleRows<6>(6 * s) = region.stress_modes.middleRows<6>(6 * j);
+        found[static_cast<std::size_t>(s)] = true;
+      }
+    const auto covered = std::count(found.begin(), found.end(), true);
+    if (covered < n_s)
+      throw std::invalid_argument(model.source + ": its output regions recover stresses at " + std::to_string(covered) +
+                                  " of the " + std::to_string(n_s) +
+                                  " surface nodes; re-run fbprep with an output region that holds the surface "
+                                  "(or leave output_regions out), or ask for no stresses");
+  }
+}
+
+void ParaViewSeries::write(double t, const Eigen::VectorXd& q_b) {
+  const Eigen::Index n_s = nodes_.rows(), n_f = fields_.cols();
+  if (q_b.size() != 12 + 3 * n_f)
+    throw std::invalid_argument(name_ + ": " + std::to_string(q_b.size()) + " body coordinates for a body of " +
+                                std::to_string(12 + 3 * n_f));
+  if (frames_.empty()) std::filesystem::create_directories(directory_ / name_);
+  const Eigen::Matrix3d a = orientation_of(q_b);
+  const Eigen::Vector3d tau = q_b.head<3>();
+  const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> xi(q_b.data() + 12, 3, n_f);
+
+  std::vector<double> points(static_cast<std::size_t>(3 * n_s)), displacement(static_cast<std::size_t>(3 * n_s));
+  for (Eigen::Index j = 0; j < n_s; ++j) {
+    const Eigen::Vector3d u = xi * fields_.row(j).transpose();  // Σ_f Ῡ'_f(i) ξ_f, world axes
+    const Eigen::Vector3d r = tau + a * nodes_.row(j).transpose() + u;
+    for (int k = 0; k < 3; ++k) {
+      points[static_cast<std::size_t>(3 * j + k)] = r(k);
+      displacement[static_cast<std::size_t>(3 * j + k)] = u(k);
+    }
+  }
+  const std::string file = frame_name(name_, frames_.size());
+  format::VtuWriter out(directory_ / name_ / file, n_s, static_cast<std::int64_t>(triangles_.size() / 3));
+  out.point_array("displacement", 3, displacement);
+  if (writes_stresses()) {
+    const Eigen::VectorXd sigma_bar = stress_modes_ * body_frame_coordinates(a, q_b.tail(3 * n_f));
+    std::vector<double> stress(static_cast<std::size_t>(6 * n_s)), mises(static_cast<std::size_t>(n_s));
+    for (Eigen::Index j = 0; j < n_s; ++j) {
+      const Eigen::Matrix3d s = a * tensor_of(sigma_bar.data() + 6 * j) * a.transpose();
+      for (std::size_t c = 0; c < kParaViewComponents.size(); ++c)
+        stress[static_cast<std::size_t>(6 * j) + c] = s(kParaViewComponents[c][0], kParaViewComponents[c][1]);
+      mises[static_cast<std::size_t>(j)] = von_mises_of(s);
+    }
+    out.point_array("stress", 6, stress);
+    out.point_array("von_mises", 1, mises);
+  }
+  out.points(points);
+  out.cells(triangles_, 3, format::kVtkTriangle);
+  out.commit();
+  frames_.emplace_back(t, name_ + "/" + file);
+  format::write_pvd(collection_, frames_);
+}
+
+}  // namespace flexbody::runtime

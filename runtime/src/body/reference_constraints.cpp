@@ -61,6 +61,28 @@ Eigen::MatrixXd reference_jacobian(const TisserandMatrix& g, const Eigen::Matrix
   return jac;
 }
 
+Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, const Eigen::Matrix3d& a,
+                                                     const Eigen::VectorXd& xi, const Eigen::Matrix<double, 9, 1>& mu) {
+  check_sizes(g, xi);
+  const Eigen::Index n_f = g.cols();
+  Eigen::VectorXd out(9 + 3 * n_f);
+  Eigen::Matrix3d d_a = Eigen::Matrix3d::Zero();  // ∂/∂A, column j = ∂/∂a_j
+  for (int k = 0; k < kOrthogonalityRows; ++k) {
+    const auto [i, j] = kPairs[static_cast<std::size_t>(k)];
+    d_a.col(i) += mu(k) * a.col(j);
+    d_a.col(j) += mu(k) * a.col(i);
+  }
+  const Eigen::Vector3d mu_t = mu.tail<3>();
+  for (Eigen::Index f = 0; f < n_f; ++f) {
+    const Eigen::Vector3d c = mu_t.cross(g.col(f));
+    const Eigen::Vector3d x = xi.segment<3>(3 * f);
+    d_a.noalias() += x * c.transpose();
+    out.segment<3>(9 + 3 * f).noalias() = a * c;
+  }
+  out.head<9>() = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(d_a.data());
+  return out;
+}
+
 Eigen::MatrixXd reference_hessian(const TisserandMatrix& g, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
                                   const Eigen::Matrix<double, 9, 1>& lambda) {
   check_sizes(g, xi);

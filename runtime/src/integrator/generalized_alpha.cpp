@@ -33,11 +33,13 @@ void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) con
     if (model.rigid()) continue;
     // ∫|ū|² dm = ξ̄ᵀ (G_ff ⊗ I3) ξ̄, and |ξ̄| = |ξ| for orthogonal A: the RMS displacement without rotating.
     const Eigen::VectorXd q_b = system_.body_coordinates(q, b);
-    const Eigen::VectorXd xi = q_b.tail(q_b.size() - 12);
-    double squared = 0.0;
-    const Eigen::MatrixXd& g = model.mass_matrix;
-    for (Eigen::Index f = 0; f < model.field_count(); ++f)
-      for (Eigen::Index h = 0; h < model.field_count(); ++h) squared += g(4 + f, 4 + h) * xi.segment<3>(3 * f).dot(xi.segment<3>(3 * h));
+    const Eigen::Index n_f = model.field_count();
+    const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> xi(q_b.data() + 12, 3, n_f);
+    double squared = 0.0;  // Σ_d x_dᵀ G_ff x_d over the three directions' rows x_d of ξ
+    for (int d = 0; d < 3; ++d) {
+      const Eigen::VectorXd x_d = xi.row(d).transpose();
+      squared += x_d.dot(model.mass_matrix.bottomRightCorner(n_f, n_f) * x_d);
+    }
     const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
     const double size = body_sizes_[static_cast<std::size_t>(b)];
     if (rms > options_.deformation_limit * size) {
@@ -66,7 +68,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   beta_ = 0.25 * (gamma_ + 0.5) * (gamma_ + 0.5);
   q_ = system.initial_coordinates();
   v_ = system.initial_velocities();
-  mass_ = system.mass_matrix();
+  const Eigen::MatrixXd mass = system.mass_matrix();
   for (int b = 0; b < system.body_count(); ++b) {  // bounding-box diagonals, for the deformation limit
     const format::RowMatrixX3d& nodes = system.model(b).nodes;
     body_sizes_.push_back(nodes.rows() ? (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm() : 0.0);
@@ -78,7 +80,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
       throw std::invalid_argument("initial state violates " + system.constraint_name(k) + " by " + std::to_string(phi(k)));
   Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
   const Eigen::MatrixXd jac = system.constraint_jacobian(t_, q_);
-  kkt.topLeftCorner(n, n) = mass_;
+  kkt.topLeftCorner(n, n) = mass;
   kkt.topRightCorner(n, m) = jac.transpose();
   kkt.bottomLeftCorner(m, n) = jac;
   const Eigen::PartialPivLU<Eigen::MatrixXd> lu(kkt);
@@ -89,7 +91,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
     const Eigen::VectorXd phi_t = (system.constraints(t_ + dt, q_) - system.constraints(t_ - dt, q_)) / (2 * dt);
     if ((jac * v_ + phi_t).cwiseAbs().maxCoeff() > 1e-12 * std::max(1.0, v_.cwiseAbs().maxCoeff())) {
       Eigen::VectorXd rhs(n + m);
-      rhs << mass_ * v_, -phi_t;
+      rhs << mass * v_, -phi_t;
       v_ = lu.solve(rhs).head(n);
     }
   }
@@ -134,14 +136,15 @@ void GeneralizedAlpha::step() {
     double previous_correction = std::numeric_limits<double>::infinity();
     bool converged = false;
     for (iterations_ = 1; iterations_ <= options_.max_iterations; ++iterations_) {
-      const Eigen::MatrixXd jac = system_.constraint_jacobian(t1, q);
       const Eigen::VectorXd phi = system_.constraints(t1, q);
-      const Eigen::VectorXd inertia = mass_ * qdd;
-      residual.head(n) = (inertia - system_.forces(t1, q, v)) / beta_prime + jac.transpose() * mu;
+      const Eigen::VectorXd inertia = system_.mass_product(qdd);
+      residual.head(n) = (inertia - system_.forces(t1, q, v)) / beta_prime +
+                         system_.constraint_jacobian_transpose_product(t1, q, mu);
       residual.tail(m) = phi;
       if (refresh_ || !options_.reuse_newton_matrix) {
-        solver_->factor(q, mu, jac);
+        solver_->factor(q, mu, system_.constraint_jacobian(t1, q));
         refresh_ = false;
+        extra_iterations_ = 0;
         fresh_this_step = true;
         ++factorizations_;
       }
@@ -191,6 +194,11 @@ void GeneralizedAlpha::step() {
   qdd_ = qdd;
   a_ = a;
   lambda_ = beta_prime * mu;
+  // A kept matrix slowly goes stale as the bodies rotate away from where it was built: steps then need a third
+  // or fourth iteration. Once such extra iterations add up to about the cost of building a new matrix (a build is
+  // ~10 iterations' work: the elastic tangent and ~20 core products against 2-3 per iteration), rebuild it.
+  extra_iterations_ += std::max(0, iterations_ - 2);
+  if (extra_iterations_ >= kExtraIterationsPerRebuild) refresh_ = true;
   t_ = t1;
   ++steps_;
   total_iterations_ += iterations_;

@@ -61,7 +61,7 @@ class ConstantCoreNewton final : public NewtonSolver {
 
   const System& system_;
   double beta_prime_;
-  std::vector<Eigen::LLT<Eigen::MatrixXd>> cores_;  ///< per body; empty factor for rigid bodies
+  std::vector<Eigen::MatrixXd> inverses_;  ///< C⁻¹ per body; empty for rigid bodies
   std::vector<Eliminated> eliminated_;
   Eigen::PartialPivLU<Eigen::MatrixXd> reduced_;
 };

@@ -138,6 +138,22 @@ Eigen::MatrixXd System::mass_matrix() const {
   return m;
 }
 
+Eigen::VectorXd System::mass_product(const Eigen::VectorXd& x) const {
+  Eigen::VectorXd y(coordinates_);
+  using Strided = Eigen::InnerStride<3>;
+  for (const Body& b : bodies_) {
+    const Eigen::Index columns = b.model.mass_matrix.rows();
+    // (G ⊗ I3) x = per direction d, G times the d-th entries of the 3-blocks: three matrix-vector products (GEMM's
+    // packing does not pay off for three rows: measured twice the instructions).
+    for (int d = 0; d < 3; ++d) {
+      const Eigen::Map<const Eigen::VectorXd, 0, Strided> x_d(x.data() + b.offset + d, columns);
+      Eigen::Map<Eigen::VectorXd, 0, Strided> y_d(y.data() + b.offset + d, columns);
+      y_d.noalias() = b.model.mass_matrix * x_d;
+    }
+  }
+  return y;
+}
+
 Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   Eigen::VectorXd f = Eigen::VectorXd::Zero(coordinates_);
   for (const Body& b : bodies_) {
@@ -261,6 +277,32 @@ Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) 
     row += j.rows();
   }
   return jac;
+}
+
+Eigen::VectorXd System::constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q,
+                                                              const Eigen::VectorXd& mu) const {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(coordinates_);
+  Eigen::Index row = 0;
+  for (const Body& b : bodies_) {
+    const Eigen::Index n = b.model.coordinate_count(), rows = std::min<Eigen::Index>(9, reference_rows(b));
+    const Eigen::VectorXd q_b = q.segment(b.offset, n);
+    Eigen::Matrix<double, 9, 1> mu_b = Eigen::Matrix<double, 9, 1>::Zero();
+    mu_b.head(rows) = mu.segment(row, rows);
+    out.segment(b.offset + 3, n - 3) = reference_jacobian_transpose_product(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12), mu_b);
+    if (reference_rows(b) == 12)
+      for (Eigen::Index f = 0; f < b.model.field_count(); ++f)
+        out.segment<3>(b.offset + 12 + 3 * f) += b.model.mass_matrix(0, 4 + f) * mu.segment<3>(row + 9);
+    row += reference_rows(b);
+  }
+  for (const Joint& j : joints_) {
+    const JointEvaluation e = evaluate_joint(j, t, body_coordinates(q, j.first.body), body_coordinates(q, j.second.body));
+    const auto mu_j = mu.segment(row, j.rows());
+    if (j.first.body != kGround) out.segment(offset(j.first.body), e.jacobian_first.cols()) += e.jacobian_first.transpose() * mu_j;
+    if (j.second.body != kGround)
+      out.segment(offset(j.second.body), e.jacobian_second.cols()) += e.jacobian_second.transpose() * mu_j;
+    row += j.rows();
+  }
+  return out;
 }
 
 Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const {

@@ -92,12 +92,13 @@ class GeneralizedAlpha {
   double t0_ = 0.0, t_ = 0.0;
   long steps_ = 0;  ///< t = t0 + steps h: no accumulated rounding in the time
   Eigen::VectorXd q_, v_, qdd_, a_, lambda_;
-  Eigen::MatrixXd mass_;
   std::vector<double> body_sizes_;  ///< bounding-box diagonal of each body's mesh [m]
   std::unique_ptr<detail::NewtonSolver> solver_;
   int iterations_ = 0;
   long total_iterations_ = 0, factorizations_ = 0;
   bool refresh_ = true;  ///< build the Newton matrix at the next iteration
+  int extra_iterations_ = 0;  ///< iterations beyond two per step since the Newton matrix was built
+  static constexpr int kExtraIterationsPerRebuild = 10;
 };
 
 }  // namespace flexbody::runtime

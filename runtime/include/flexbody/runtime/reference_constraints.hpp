@@ -28,6 +28,13 @@ using TisserandMatrix = Eigen::Matrix<double, 3, Eigen::Dynamic>;
 [[nodiscard]] Eigen::MatrixXd reference_jacobian(const TisserandMatrix& g, const Eigen::Matrix3d& a,
                                                  const Eigen::VectorXd& xi);
 
+/// Jᵀ μ for the 9 rows (Jacobian over [a; ξ], 9 + 3 n_f) without forming J: O(n_f). With c_f = μ_T × g_f,
+/// the Tisserand rows give ∂/∂A = Σ_f ξ_f c_fᵀ and ∂/∂ξ_f = A c_f; the orthogonality rows μ_k (a_i·a_j − δ_ij)
+/// give μ_k a_j on a_i and μ_k a_i on a_j.
+[[nodiscard]] Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, const Eigen::Matrix3d& a,
+                                                                   const Eigen::VectorXd& xi,
+                                                                   const Eigen::Matrix<double, 9, 1>& mu);
+
 /// Σ_k λ_k ∂²Φ_k/∂[a; ξ]² ((9 + 3 n_f) square, symmetric).
 [[nodiscard]] Eigen::MatrixXd reference_hessian(const TisserandMatrix& g, const Eigen::Matrix3d& a,
                                                 const Eigen::VectorXd& xi, const Eigen::Matrix<double, 9, 1>& lambda);

@@ -87,6 +87,9 @@ class System {
 
   /// M = diag(G_b ⊗ I3), dense.
   [[nodiscard]] Eigen::MatrixXd mass_matrix() const;
+  /// M x without forming M: per body (G ⊗ I3) x_b = vec(X_b G) with X_b the 3 x (4 + n_f) blocks of x_b, a third of
+  /// the dense product's work.
+  [[nodiscard]] Eigen::VectorXd mass_product(const Eigen::VectorXd& x) const;
   /// Q − ∂U/∂q − ∂R/∂q̇: gravity (G[:, 0] ⊗ g), point forces ((y ⊗ I3) F), torques, spring-dampers, minus the
   /// elastic forces (Eqs. 86-87) and the bodies' structural damping (damping.hpp).
   [[nodiscard]] Eigen::VectorXd forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
@@ -94,6 +97,9 @@ class System {
   [[nodiscard]] Eigen::MatrixXd stiffness(const Eigen::VectorXd& q) const;
   [[nodiscard]] Eigen::VectorXd constraints(double t, const Eigen::VectorXd& q) const;
   [[nodiscard]] Eigen::MatrixXd constraint_jacobian(double t, const Eigen::VectorXd& q) const;
+  /// Φ_qᵀ μ without forming Φ_q (the reference rows in O(n_f) per body): what a Newton residual needs.
+  [[nodiscard]] Eigen::VectorXd constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q,
+                                                                      const Eigen::VectorXd& mu) const;
   /// Σ_k λ_k ∂²Φ_k/∂q² of the reference conditions (exact); the joints' curvature terms are left out (they only
   /// change the Newton iteration's convergence rate, not its solution).
   [[nodiscard]] Eigen::MatrixXd constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const;

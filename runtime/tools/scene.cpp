@@ -194,6 +194,12 @@ Scene read_scene(const std::filesystem::path& file) {
       } catch (const std::invalid_argument& e) {
         r.fail(j, e.what());
       }
+      // Rows that repeat earlier ones make the DAE singular: name the joint that adds them, here.
+      if (const Eigen::Index row = scene.system.first_redundant_constraint(0.0, q0); row >= 0)
+        r.fail(j, fmt::format("{} is redundant: with the joints before it, it constrains some motion twice (row {} of "
+                              "its {}); remove it or use a joint with fewer rows", where,
+                              row - scene.system.joint_row(scene.system.joints().size() - 1) + 1,
+                              scene.system.joints().back().rows()));
     }
   }
 

@@ -112,6 +112,10 @@ TEST(FbsimCli, BadScenesNameTheLine) {
                          tail, 4, "spring 's': stiffness, damping and length must be >= 0");
   expect_scene_error(head + "forces:\n  f: {body: bar, interface: tip}\n" + tail, 4, "force 'f' needs force or torque");
   expect_scene_error(head + "paraview: {bodies: [wheel]}\n" + tail, 3, "paraview: no body 'wheel' in the scene");
+  // A second joint at the same interface that holds what the first already holds: its first row repeats.
+  expect_scene_error(head + "joints:\n  a: {type: revolute, body: bar, interface: root, axis: [0, 0, 1]}\n"
+                            "  b: {type: spherical, body: bar, interface: root}\n" + tail, 5,
+                     "joint 'b' is redundant: with the joints before it, it constrains some motion twice");
   expect_scene_error(head + "paraview: {every: 0}\n" + tail, 3, "paraview every must be at least 1");
 }
 

@@ -98,9 +98,12 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   Eigen::VectorXd rhs(n + m);
   rhs << system.forces(t_, q_, v_), -constraint_curvature(system, t_, q_, v_);
   const Eigen::VectorXd x = lu.solve(rhs);
-  if (!x.allFinite() || (kkt * x - rhs).norm() > 1e-8 * std::max(1.0, rhs.norm()))
-    throw std::invalid_argument("initial accelerations: the constraints are redundant or contradictory "
-                                "(the matrix [M J^T; J 0] is singular)");
+  if (!x.allFinite() || (kkt * x - rhs).norm() > 1e-8 * std::max(1.0, rhs.norm())) {
+    const Eigen::Index redundant = system.first_redundant_constraint(t_, q_);
+    throw std::invalid_argument(redundant >= 0 ? system.constraint_name(redundant) + " is redundant: it repeats what "
+                                                     "the constraints before it already impose"
+                                               : std::string("initial accelerations: the matrix [M J^T; J 0] is singular"));
+  }
   qdd_ = x.head(n);
   lambda_ = x.tail(m);
   a_ = qdd_;

@@ -320,6 +320,24 @@ Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen
   return h;
 }
 
+Eigen::Index System::first_redundant_constraint(double t, const Eigen::VectorXd& q) const {
+  const Eigen::MatrixXd jac = constraint_jacobian(t, q);
+  // Gram-Schmidt over the rows in order, each normalised (rows carry different units), orthogonalised twice
+  // ("twice is enough", Giraud et al. 2005); a row whose remainder is below 1e-9 of its length adds nothing.
+  Eigen::MatrixXd basis(jac.cols(), 0);
+  for (Eigen::Index k = 0; k < jac.rows(); ++k) {
+    const double length = jac.row(k).norm();
+    if (!(length > 0.0)) return k;  // a row that constrains nothing
+    Eigen::VectorXd r = jac.row(k).transpose() / length;
+    for (int pass = 0; pass < 2; ++pass) r -= basis * (basis.transpose() * r);
+    const double remainder = r.norm();
+    if (remainder < 1e-9) return k;
+    basis.conservativeResize(Eigen::NoChange, basis.cols() + 1);
+    basis.col(basis.cols() - 1) = r / remainder;
+  }
+  return -1;
+}
+
 std::string System::constraint_name(Eigen::Index row) const {
   for (const Body& b : bodies_) {
     if (row < 6) return "body '" + b.name + "': orthogonality of A (Eq. 79)";

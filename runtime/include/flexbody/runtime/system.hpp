@@ -103,6 +103,10 @@ class System {
   /// Σ_k λ_k ∂²Φ_k/∂q² of the reference conditions (exact); the joints' curvature terms are left out (they only
   /// change the Newton iteration's convergence rate, not its solution).
   [[nodiscard]] Eigen::MatrixXd constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const;
+  /// The first constraint row (in row order) that is linearly dependent on the rows before it at (t, q), or −1 if
+  /// the rows are independent. A dependent row makes [M Φ_qᵀ; Φ_q 0] singular: its joint repeats what earlier
+  /// constraints already impose (two revolute joints on one axis, a fixed joint plus a spherical one, ...).
+  [[nodiscard]] Eigen::Index first_redundant_constraint(double t, const Eigen::VectorXd& q) const;
   /// What constraint row k is: "body 'bar': orthogonality", "body 'bar': Tisserand", "joint 'pivot'".
   [[nodiscard]] std::string constraint_name(Eigen::Index row) const;
   /// The first constraint row of joint j (its rows follow in the order of joint.hpp).

@@ -2,7 +2,10 @@
 """Plot bench/results/runtime_bench.csv (written by build/bin/runtime_bench): cost per time step against the
 number of modes, constant-core Newton against the dense Newton matrix, with n^2 and n^3 guides.
 
-    python3 bench/runtime_plot.py bench/results/runtime_bench.csv bench/results/runtime_bench.png
+    python3 bench/runtime_plot.py bench/results/runtime_bench.csv bench/results/runtime_bench.png \
+        [bench/results/runtime_bench_native.csv]
+
+The optional third file is the same benchmark built with -DFLEXBODY_NATIVE=ON; its default variant is drawn too.
 """
 import csv
 import sys
@@ -13,7 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def main(source, target):
+def main(source, target, native=None):
     rows = [r for r in csv.DictReader(open(source)) if r["scene"] == "free"]
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     labels = {"core_kept": "constant core, matrix kept (default)", "core_every_iteration": "constant core, rebuilt",
@@ -21,6 +24,10 @@ def main(source, target):
     for newton, style in (("core_kept", "o-"), ("core_every_iteration", "^-"), ("dense_every_iteration", "s--")):
         pts = sorted((int(r["modes"]), float(r["us_per_step"])) for r in rows if r["newton"] == newton)
         ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, label=labels[newton])
+    if native:
+        native_rows = [r for r in csv.DictReader(open(native)) if r["scene"] == "free" and r["newton"] == "core_kept"]
+        pts = sorted((int(r["modes"]), float(r["us_per_step"])) for r in native_rows)
+        ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", mfc="none", label="constant core, kept, -march=native")
     core = sorted((int(r["modes"]), float(r["us_per_step"])) for r in rows if r["newton"] == "core_kept")
     dense = sorted((int(r["modes"]), float(r["us_per_step"])) for r in rows if r["newton"] == "dense_every_iteration")
     n0, c0 = core[1]
@@ -40,4 +47,4 @@ def main(source, target):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2])
+    main(sys.argv[1], sys.argv[2], sys.argv[3] if len(sys.argv) > 3 else None)

@@ -157,9 +157,10 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
     for (std::size_t k = 0; k < files.size(); ++k) files[k]->row(integrator.time(), values_of(scene, scene.sensors[k], integrator));
     if (monitors) monitors->row(integrator.time(), monitor_values(scene, integrator));
   };
-  auto draw = [&] {
+  auto draw = [&] {  // each series once per time, also when called again after one of them failed
     for (std::size_t k = 0; k < series.size(); ++k)
-      series[k].write(integrator.time(), scene.system.body_coordinates(integrator.coordinates(), scene.paraview[k].body));
+      if (series[k].last_time() != integrator.time())
+        series[k].write(integrator.time(), scene.system.body_coordinates(integrator.coordinates(), scene.paraview[k].body));
   };
   const runtime::Energies e0 = scene.system.energies(integrator.coordinates(), integrator.velocities());
   summary.energy_initial = summary.energy_final = e0.total();
@@ -194,8 +195,16 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
       if (progress && k % 100 == 0) progress(integrator.time());
     }
   } catch (...) {
-    if (!written) record();  // the last completed step, whatever output_every says
-    if (!drawn) draw();
+    // The last completed step, whatever output_every says; a failure to write it must not hide why the run
+    // stopped (the exception being handled), so it is dropped here.
+    try {
+      if (!written) record();
+    } catch (const std::exception&) {
+    }
+    try {
+      if (!drawn) draw();
+    } catch (const std::exception&) {
+    }
     summary.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     throw;
   }

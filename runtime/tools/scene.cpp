@@ -155,6 +155,7 @@ Scene read_scene(const std::filesystem::path& file) {
   };
 
   const Eigen::VectorXd q0 = scene.system.initial_coordinates();
+  std::vector<YAML::Node> joint_nodes;  // each joint's scene entry, in System::joints() order
   if (const YAML::Node joints = root["joints"]) {
     if (!joints.IsMap()) r.fail(joints, "joints must be a map of names to joints");
     for (auto it = joints.begin(); it != joints.end(); ++it) {
@@ -194,13 +195,22 @@ Scene read_scene(const std::filesystem::path& file) {
       } catch (const std::invalid_argument& e) {
         r.fail(j, e.what());
       }
-      // Rows that repeat earlier ones make the DAE singular: name the joint that adds them, here.
-      if (const Eigen::Index row = scene.system.first_redundant_constraint(0.0, q0); row >= 0)
-        r.fail(j, fmt::format("{} is redundant: with the joints before it, it constrains some motion twice (row {} of "
-                              "its {}); remove it or use a joint with fewer rows", where,
-                              row - scene.system.joint_row(scene.system.joints().size() - 1) + 1,
-                              scene.system.joints().back().rows()));
+      joint_nodes.push_back(j);
     }
+  }
+
+  // Rows that repeat earlier ones make the DAE singular: name the joint that adds the first such row (the scan
+  // goes in row order, so that is the joint that repeats what the constraints before it impose).
+  if (const Eigen::Index row = scene.system.first_redundant_constraint(0.0, q0); row >= 0) {
+    const auto& joints = scene.system.joints();
+    std::size_t k = 0;
+    while (k + 1 < joints.size() && scene.system.joint_row(k + 1) <= row) ++k;
+    if (joints.empty() || row < scene.system.joint_row(0))  // a body's own reference rows (a degenerate body file)
+      r.fail(root["bodies"], fmt::format("{} is degenerate: its rows are linearly dependent",
+                                         scene.system.constraint_name(row)));
+    r.fail(joint_nodes.at(k), fmt::format("joint '{}' is redundant: with the joints before it, it constrains some motion "
+                                          "twice (its row {} of {}); remove it or use a joint with fewer rows",
+                                          joints[k].name, row - scene.system.joint_row(k) + 1, joints[k].rows()));
   }
 
   if (const YAML::Node forces = root["forces"]) {

@@ -7,6 +7,7 @@
 #include "test_meshes.hpp"
 #include "vtu_read.hpp"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -276,4 +277,67 @@ TEST(ParaViewSeries, RefusesStressesThatTheBodyFileDoesNotRecover) {
   const flexbody::runtime::ParaViewSeries series(bar_folder() / "drawn", "bar", model, false);
   EXPECT_FALSE(series.writes_stresses());
   EXPECT_FALSE(std::filesystem::exists(bar_folder() / "refused"));
+}
+
+TEST(ParaViewSeries, DrawsRotatedBodiesInWorldAxes) {
+  // A deformed bar at a general orientation: every component of the written positions, displacements and stress
+  // tensors must equal τ + A(X̄ + ū), A ū and A σ̄ Aᵀ computed here from the body file's fields and stress modes
+  // (ū_i = Σ_f Ῡ'_f(i) ξ̄_f, σ̄ = S ξ̄), in ParaView's XX, YY, ZZ, XY, YZ, XZ order. A rotation far from the
+  // identity catches A swapped with Aᵀ and swapped shear components, which invariants would not.
+  const auto body = flexbody::format::read_body_file(bar_folder() / "bar.fbh5");
+  const flexbody::runtime::BodyModel model = flexbody::runtime::make_body_model(body, 4, "bar.fbh5");
+  const Eigen::Index n_f = model.field_count();
+  const Eigen::Matrix3d a = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Vector3d tau(0.1, -0.2, 0.3);
+  Eigen::VectorXd xi_bar(3 * n_f);
+  for (Eigen::Index f = 0; f < n_f; ++f)  // modes 1 and 3 with amplitudes 1e-3 and -5e-4 kg^1/2 m
+    xi_bar.segment<3>(3 * f) = 1e-3 * model.mode_coefficients.block<1, 3>(f, 0).transpose() -
+                               5e-4 * model.mode_coefficients.block<1, 3>(f, 6).transpose();
+  Eigen::VectorXd q_b(12 + 3 * n_f);
+  q_b.head<3>() = tau;
+  q_b.segment<9>(3) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(a.data());
+  for (Eigen::Index f = 0; f < n_f; ++f) q_b.segment<3>(12 + 3 * f) = a * xi_bar.segment<3>(3 * f);
+
+  const auto dir = flexbody::test::scratch_dir();
+  flexbody::runtime::ParaViewSeries series(dir, "bar", model, true);
+  series.write(0.5, q_b);
+  EXPECT_NE(flexbody::test::slurp(dir / "bar.pvd").find("timestep=\"0.5\" part=\"0\" file=\"bar/bar_000000.vtu\""),
+            std::string::npos);
+  const std::string vtu = flexbody::test::slurp(dir / "bar" / "bar_000000.vtu");
+  const auto points = flexbody::test::vtu_values<double>(vtu, "Points");
+  const auto displacement = flexbody::test::vtu_values<double>(vtu, "displacement");
+  const auto stress = flexbody::test::vtu_values<double>(vtu, "stress");
+  std::vector<int> surface(body.mesh.surface_triangles.data(),
+                           body.mesh.surface_triangles.data() + body.mesh.surface_triangles.size());
+  std::sort(surface.begin(), surface.end());
+  surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
+  ASSERT_EQ(points.size(), 3 * surface.size());
+  ASSERT_EQ(stress.size(), 6 * surface.size());
+  const auto& region = model.recovery.at(0);  // "body": every node
+  double worst_position = 0.0, worst_displacement = 0.0, worst_stress = 0.0, largest_u = 0.0, largest_stress = 0.0;
+  for (std::size_t j = 0; j < surface.size(); ++j) {
+    const int i = surface[j];
+    Eigen::Vector3d u_bar = Eigen::Vector3d::Zero();
+    for (Eigen::Index f = 0; f < n_f; ++f) u_bar += model.fields(i, f) * xi_bar.segment<3>(3 * f);
+    const Eigen::Vector3d u = a * u_bar, r = tau + a * (model.nodes.row(i).transpose() + u_bar);
+    const auto at = std::find(region.nodes.data(), region.nodes.data() + region.nodes.size(), i) - region.nodes.data();
+    ASSERT_LT(at, region.nodes.size());
+    const Eigen::Matrix<double, 6, 1> v = region.stress_modes.middleRows<6>(6 * at) * xi_bar;  // xx yy zz xy xz yz
+    Eigen::Matrix3d s_bar;
+    s_bar << v(0), v(3), v(4), v(3), v(1), v(5), v(4), v(5), v(2);
+    const Eigen::Matrix3d s = a * s_bar * a.transpose();
+    const double expected_stress[6] = {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(1, 2), s(0, 2)};
+    for (int k = 0; k < 3; ++k) {
+      worst_position = std::max(worst_position, std::abs(points[3 * j + k] - r(k)));
+      worst_displacement = std::max(worst_displacement, std::abs(displacement[3 * j + k] - u(k)));
+    }
+    for (int k = 0; k < 6; ++k) worst_stress = std::max(worst_stress, std::abs(stress[6 * j + k] - expected_stress[k]));
+    largest_u = std::max(largest_u, u.norm());
+    largest_stress = std::max(largest_stress, s.norm());
+  }
+  EXPECT_GT(largest_u, 1e-4);       // m: the state is visibly deformed
+  EXPECT_GT(largest_stress, 1e5);   // Pa
+  EXPECT_LT(worst_position, 4e-15);  // m: a few ulps of coordinates below 2 m (the same sums, ordered differently)
+  EXPECT_LT(worst_displacement, 1e-12 * largest_u);
+  EXPECT_LT(worst_stress, 1e-12 * largest_stress);
 }

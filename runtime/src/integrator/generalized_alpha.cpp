@@ -200,7 +200,7 @@ void GeneralizedAlpha::step() {
   // A kept matrix slowly goes stale as the bodies rotate away from where it was built: steps then need a third
   // or fourth iteration. Once such extra iterations add up to about the cost of building a new matrix (a build is
   // ~10 iterations' work: the elastic tangent and ~20 core products against 2-3 per iteration), rebuild it.
-  extra_iterations_ += std::max(0, iterations_ - 2);
+  if (!fresh_this_step) extra_iterations_ += std::max(0, iterations_ - 2);  // a fresh matrix is not stale
   if (extra_iterations_ >= kExtraIterationsPerRebuild) refresh_ = true;
   t_ = t1;
   ++steps_;

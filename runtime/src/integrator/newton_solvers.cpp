@@ -56,12 +56,13 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
       for (Eigen::Index g = 0; g < n_f; ++g) core.block<3, 3>(3 * f, 3 * g).diagonal().array() += model.mass_matrix(4 + f, 4 + g);
     const Eigen::LLT<Eigen::MatrixXd> factor(core);
     if (n_f > 0 && factor.info() != Eigen::Success)
-      throw std::runtime_error("body '" + system.body_name(b) + "': the constant Newton core G_ff x I3 + K_hat/beta' is "
-                               "not positive definite");
+      throw std::runtime_error("body '" + system.body_name(b) + "': the constant Newton core G_ff x I3 + (K_hat + "
+                               "gamma' D_hat)/beta' is not positive definite");
     // C⁻¹ explicitly: one matrix-vector product per solve instead of two triangular solves, which Eigen runs
     // several times slower (measured: bench/README.md). C is symmetric positive definite and well conditioned
-    // (G_ff = I for a body file's M_s-orthonormal fields, so cond C ≤ 1 + ω_max²/β'), so the inverse loses
-    // only cond(C)·ε.
+    // (G_ff = I for a body file's M_s-orthonormal fields, so cond C ≤ 1 + λ_max(K̂ + γ'D̂)/β', with λ_max(K̂) the
+    // stiffest shape of the 3 n_f-dimensional field space, above the kept modes' ω²), so the inverse loses only
+    // about cond(C)·ε.
     inverses_.push_back(n_f > 0 ? Eigen::MatrixXd(factor.solve(Eigen::MatrixXd::Identity(3 * n_f, 3 * n_f)))
                                 : Eigen::MatrixXd());
   }

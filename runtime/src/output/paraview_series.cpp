@@ -40,6 +40,8 @@ std::string frame_name(const std::string& name, std::size_t frame) {
 
 ParaViewSeries::ParaViewSeries(std::filesystem::path directory, std::string name, const BodyModel& model, bool stresses)
     : directory_(std::move(directory)), name_(std::move(name)) {
+  if (name_.empty() || name_.find_first_of("/\\") != std::string::npos || name_ == "." || name_ == "..")
+    throw std::invalid_argument("ParaView series '" + name_ + "': the name must be a plain file name");
   collection_ = directory_ / (name_ + ".pvd");
   if (model.surface_triangles.rows() == 0)
     throw std::invalid_argument(model.source + ": the body has no surface triangles to draw");

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -23,8 +24,8 @@ namespace flexbody::runtime {
 /// up to the last frame written, also after a run that stopped.
 class ParaViewSeries {
  public:
-  /// `stresses`: write them. Throws std::invalid_argument naming the body if the model has no surface
-  /// triangles, or if stresses are asked of a flexible body whose recovery regions leave surface nodes out
+  /// `stresses`: write them. Throws std::invalid_argument if `name` is not a plain file name, or naming the body
+  /// if the model has no surface triangles, or if stresses are asked of a flexible body whose recovery regions leave surface nodes out
   /// (a rigid body's stresses are zero and are not written).
   ParaViewSeries(std::filesystem::path directory, std::string name, const BodyModel& model, bool stresses);
 
@@ -33,6 +34,9 @@ class ParaViewSeries {
   void write(double t, const Eigen::VectorXd& q_b);
 
   [[nodiscard]] const std::filesystem::path& collection() const { return collection_; }
+  [[nodiscard]] std::size_t frame_count() const { return frames_.size(); }
+  /// The time of the last frame written (−inf before the first).
+  [[nodiscard]] double last_time() const { return frames_.empty() ? -std::numeric_limits<double>::infinity() : frames_.back().first; }
   [[nodiscard]] Eigen::Index surface_node_count() const { return nodes_.rows(); }
   [[nodiscard]] bool writes_stresses() const { return stress_modes_.rows() > 0; }
 

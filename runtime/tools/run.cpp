@@ -87,7 +87,7 @@ Eigen::VectorXd values_of(const Scene& scene, const Sensor& s, const runtime::Ge
         const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> fields_xi(xi_bar.data(), 3, model.field_count());
         Eigen::VectorXd u(3 * region.nodes.size());
         for (Eigen::Index j = 0; j < region.nodes.size(); ++j)
-          u.segment<3>(3 * j) = fields_xi * model.fields.row(region.nodes(j)).transpose();
+          u.segment<3>(3 * j) = fields_xi * runtime::field_row(model, region.nodes(j)).transpose();
         push(u);
       }
     }

@@ -10,6 +10,58 @@ Eigen::Index fields_of_first_modes(const format::Gcms& gcms, Eigen::Index k) {
   return n;
 }
 
+Eigen::VectorXd mass_times(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& x_b) {
+  const Eigen::Index columns = 4 + model.field_count();
+  if (x_b.size() != 3 * columns)
+    throw std::invalid_argument(model.source + ": " + std::to_string(x_b.size()) + " coordinates for a body of " +
+                                std::to_string(3 * columns));
+  Eigen::VectorXd y(x_b.size());
+  using Strided = Eigen::InnerStride<3>;
+  // (G ⊗ I3) x = per direction d, G times the d-th entries of the 3-blocks (GEMM's packing does not pay off for
+  // three rows: measured twice the instructions).
+  for (int d = 0; d < 3; ++d) {
+    const Eigen::Map<const Eigen::VectorXd, 0, Strided> x_d(x_b.data() + d, columns);
+    Eigen::Map<Eigen::VectorXd, 0, Strided> y_d(y.data() + d, columns);
+    if (!model.sparse) {
+      y_d.noalias() = model.mass_matrix * x_d;
+      continue;
+    }
+    const SparseFieldBlocks& s = *model.sparse;  // [G_rr G_rf; G_fr M_s] with G_fr = G_rfᵀ
+    const Eigen::VectorXd x_f = x_d.tail(columns - 4);
+    y_d.head<4>().noalias() = s.border * Eigen::VectorXd(x_d);
+    y_d.tail(columns - 4).noalias() = s.border.rightCols(columns - 4).transpose() * x_d.head<4>() + s.mass * x_f;
+  }
+  return y;
+}
+
+double field_mass_norm_squared(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& xi) {
+  const Eigen::Index n_f = model.field_count();
+  double squared = 0.0;
+  for (int d = 0; d < 3; ++d) {
+    const Eigen::VectorXd x_d = Eigen::Map<const Eigen::VectorXd, 0, Eigen::InnerStride<3>>(xi.data() + d, n_f);
+    squared += model.sparse ? x_d.dot(model.sparse->mass * x_d)
+                            : x_d.dot(model.mass_matrix.bottomRightCorner(n_f, n_f) * x_d);
+  }
+  return squared;
+}
+
+Eigen::RowVectorXd field_row(const BodyModel& model, Eigen::Index node) {
+  if (!model.sparse) return model.fields.row(node);
+  Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(model.field_count());  // Ῡ' = I: node i is field i
+  row(node) = 1.0;
+  return row;
+}
+
+ElasticForces body_elastic_forces(const BodyModel& model, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+  return model.sparse ? elastic_forces(model.sparse->stiffness, a, xi) : elastic_forces(model.stiffness, a, xi);
+}
+
+ElasticTangent body_elastic_tangent(const BodyModel& model, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+                                    bool with_xi_xi) {
+  return model.sparse ? elastic_tangent(model.sparse->stiffness, a, xi, with_xi_xi)
+                      : elastic_tangent(model.stiffness, a, xi, with_xi_xi);
+}
+
 BodyModel make_body_model(const format::BodyData& body, std::optional<Eigen::Index> modes, const std::string& source) {
   const Eigen::Index available = body.modes.count();
   const Eigen::Index k = modes.value_or(available);

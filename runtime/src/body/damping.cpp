@@ -7,7 +7,16 @@
 
 namespace flexbody::runtime {
 
+namespace {
+
+void refuse_full_order(const BodyModel& model) {
+  if (model.sparse) throw std::invalid_argument(model.source + ": the full-order reference body takes no damping");
+}
+
+}  // namespace
+
 Eigen::MatrixXd modal_damping(const BodyModel& model, const Eigen::VectorXd& ratios) {
+  refuse_full_order(model);
   if (ratios.size() != model.modes)
     throw std::invalid_argument(model.source + ": " + std::to_string(ratios.size()) + " modal damping ratios for " +
                                 std::to_string(model.modes) + " modes");
@@ -26,6 +35,7 @@ Eigen::MatrixXd modal_damping(const BodyModel& model, const Eigen::VectorXd& rat
 }
 
 Eigen::MatrixXd rayleigh_damping(const BodyModel& model, double alpha, double beta) {
+  refuse_full_order(model);
   if (!(alpha >= 0.0) || !(beta >= 0.0) || !std::isfinite(alpha) || !std::isfinite(beta))
     throw std::invalid_argument(model.source + ": Rayleigh damping needs alpha, beta >= 0");
   const Eigen::Index n_f = model.field_count();

@@ -4,25 +4,31 @@
 
 namespace flexbody::runtime {
 
-BodyModel full_order_model(const Eigen::MatrixXd& stiffness, const Eigen::MatrixXd& scalar_mass,
+BodyModel full_order_model(const Eigen::SparseMatrix<double>& stiffness, const Eigen::SparseMatrix<double>& scalar_mass,
                            const format::RowMatrixX3d& nodes, const std::string& source) {
   const Eigen::Index n_n = nodes.rows();
   if (scalar_mass.rows() != n_n || scalar_mass.cols() != n_n || stiffness.rows() != 3 * n_n || stiffness.cols() != 3 * n_n)
     throw std::invalid_argument(source + ": K must be 3 n_n square and M_s n_n square for " + std::to_string(n_n) + " nodes");
-  // Y = [1, X̄, I]: G = Yᵀ M_s Y (Eq. 66 with Ῡ = I).
-  Eigen::MatrixXd y(n_n, 4 + n_n);
-  y << Eigen::VectorXd::Ones(n_n), nodes, Eigen::MatrixXd::Identity(n_n, n_n);
+  // Y = [Y_r, I] with Y_r = [1, X̄]: G = Yᵀ M_s Y (Eq. 66 with Ῡ = I) has the dense border rows
+  // [Y_rᵀ M_s Y_r, Y_rᵀ M_s] and the sparse field block M_s.
+  Eigen::MatrixXd y_r(n_n, 4);
+  y_r << Eigen::VectorXd::Ones(n_n), nodes;
+  const Eigen::MatrixXd m_y = scalar_mass * y_r;  // n_n x 4
+  auto blocks = std::make_shared<SparseFieldBlocks>();
+  blocks->mass = scalar_mass;
+  blocks->stiffness = stiffness;
+  blocks->border.resize(4, 4 + n_n);
+  blocks->border.leftCols<4>() = y_r.transpose() * m_y;
+  blocks->border.rightCols(n_n) = m_y.transpose();
   BodyModel model;
   model.source = source;
-  model.mass_matrix = y.transpose() * scalar_mass * y;
-  model.mass = model.mass_matrix(0, 0);
-  if (model.mass_matrix.row(0).segment<3>(1).norm() > 1e-9 * model.mass * std::max(1.0, nodes.cwiseAbs().maxCoeff()))
+  model.mass = blocks->border(0, 0);
+  if (blocks->border.block<1, 3>(0, 1).norm() > 1e-9 * model.mass * std::max(1.0, nodes.cwiseAbs().maxCoeff()))
     throw std::invalid_argument(source + ": the nodes must be in the body frame (centre of mass at the origin)");
-  model.stiffness = stiffness;
-  model.tisserand = model.mass_matrix.block(1, 4, 3, n_n);
-  model.fields = Eigen::MatrixXd::Identity(n_n, n_n);
+  model.tisserand = blocks->border.block(1, 4, 3, n_n);
   model.nodes = nodes;
   model.mode_coefficients.resize(n_n, 0);
+  model.sparse = std::move(blocks);
   return model;
 }
 

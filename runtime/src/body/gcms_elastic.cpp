@@ -6,7 +6,8 @@
 namespace flexbody::runtime {
 namespace {
 
-void check_sizes(const Eigen::MatrixXd& k_hat, const Eigen::VectorXd& xi) {
+template <class Stiffness>
+void check_sizes(const Stiffness& k_hat, const Eigen::VectorXd& xi) {
   if (k_hat.rows() != k_hat.cols() || k_hat.rows() % 3 != 0 || xi.size() != k_hat.rows())
     throw std::invalid_argument("GCMS elastic forces: K_hat is " + std::to_string(k_hat.rows()) + " x " +
                                 std::to_string(k_hat.cols()) + " and xi has " + std::to_string(xi.size()) +
@@ -29,7 +30,10 @@ Eigen::VectorXd body_frame_coordinates(const Eigen::Matrix3d& a, const Eigen::Ve
   return xi_bar;
 }
 
-ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+namespace {
+
+template <class Stiffness>
+ElasticForces forces_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
   check_sizes(k_hat, xi);
   const Eigen::Index n_f = xi.size() / 3;
   const Eigen::VectorXd xi_bar = body_frame_coordinates(a, xi);
@@ -46,26 +50,48 @@ ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d
   return out;
 }
 
-ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
-                               bool with_xi_xi) {
+template <class Stiffness>
+ElasticTangent tangent_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi, bool with_xi_xi) {
   check_sizes(k_hat, xi);
   const Eigen::Index n = xi.size(), n_f = n / 3;
   const Eigen::Matrix<double, Eigen::Dynamic, 9> d = body_frame_coordinates_derivative(xi);
   const Eigen::VectorXd h = k_hat * body_frame_coordinates(a, xi);
-  // K̂ Âᵀ: column block g of K̂ times Aᵀ.
-  Eigen::MatrixXd k_at(n, n);
-  for (Eigen::Index g = 0; g < n_f; ++g) k_at.middleCols<3>(3 * g) = k_hat.middleCols<3>(3 * g) * a.transpose();
   ElasticTangent t;
-  const Eigen::Matrix<double, Eigen::Dynamic, 9> k_d = k_hat * d;
+  // K̂ D once: U_aa = Dᵀ (K̂ D) and, K̂ being symmetric, Dᵀ K̂ Âᵀ = (Â (K̂ D))ᵀ.
+  Eigen::Matrix<double, Eigen::Dynamic, 9> k_d = k_hat * d;
   t.aa = d.transpose() * k_d;
-  t.a_xi = d.transpose() * k_at;
+  for (Eigen::Index f = 0; f < n_f; ++f) k_d.middleRows<3>(3 * f) = a * k_d.middleRows<3>(3 * f);
+  t.a_xi = k_d.transpose();
   for (Eigen::Index f = 0; f < n_f; ++f)
     for (int j = 0; j < 3; ++j)
       for (int i = 0; i < 3; ++i) t.a_xi(3 * j + i, 3 * f + i) += h(3 * f + j);
   if (!with_xi_xi) return t;
+  // Â K̂ Âᵀ: column block g of K̂ times Aᵀ, then row block f times A.
+  Eigen::MatrixXd k_at(n, n);
+  for (Eigen::Index g = 0; g < n_f; ++g) k_at.middleCols<3>(3 * g) = k_hat.middleCols(3 * g, 3) * a.transpose();
   t.xi_xi.resize(n, n);
   for (Eigen::Index f = 0; f < n_f; ++f) t.xi_xi.middleRows<3>(3 * f) = a * k_at.middleRows<3>(3 * f);
   return t;
+}
+
+}  // namespace
+
+ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+  return forces_of(k_hat, a, xi);
+}
+
+ElasticForces elastic_forces(const Eigen::SparseMatrix<double>& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+  return forces_of(k_hat, a, xi);
+}
+
+ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+                               bool with_xi_xi) {
+  return tangent_of(k_hat, a, xi, with_xi_xi);
+}
+
+ElasticTangent elastic_tangent(const Eigen::SparseMatrix<double>& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+                               bool with_xi_xi) {
+  return tangent_of(k_hat, a, xi, with_xi_xi);
 }
 
 }  // namespace flexbody::runtime

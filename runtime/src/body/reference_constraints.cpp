@@ -83,15 +83,15 @@ Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, c
   return out;
 }
 
-Eigen::MatrixXd reference_hessian(const TisserandMatrix& g, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
-                                  const Eigen::Matrix<double, 9, 1>& lambda) {
+Eigen::Matrix<double, 9, Eigen::Dynamic> reference_hessian_a_rows(const TisserandMatrix& g, const Eigen::VectorXd& xi,
+                                                                  const Eigen::Matrix<double, 9, 1>& lambda) {
   check_sizes(g, xi);
-  const Eigen::Index n_f = g.cols(), n = 9 + 3 * n_f;
-  Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(n, n);
-  for (int k = 0; k < kOrthogonalityRows; ++k) {
+  const Eigen::Index n_f = g.cols();
+  Eigen::Matrix<double, 9, Eigen::Dynamic> rows = Eigen::Matrix<double, 9, Eigen::Dynamic>::Zero(9, 9 + 3 * n_f);
+  for (int k = 0; k < kOrthogonalityRows; ++k) {  // λ_k a_i·a_j
     const auto [i, j] = kPairs[static_cast<std::size_t>(k)];
-    hessian.block<3, 3>(3 * i, 3 * j) += lambda(k) * Eigen::Matrix3d::Identity();
-    hessian.block<3, 3>(3 * j, 3 * i) += lambda(k) * Eigen::Matrix3d::Identity();
+    rows.block<3, 3>(3 * i, 3 * j).diagonal().array() += lambda(k);
+    rows.block<3, 3>(3 * j, 3 * i).diagonal().array() += lambda(k);
   }
   // λ · (g_f × Aᵀ x_f) = x_fᵀ A c_f with c_f = λ_T × g_f: the (A, x_f) cross derivative is
   // ∂²/∂A(i, l) ∂x_f(i) = c_f(l).
@@ -99,12 +99,19 @@ Eigen::MatrixXd reference_hessian(const TisserandMatrix& g, const Eigen::Matrix3
   for (Eigen::Index f = 0; f < n_f; ++f) {
     const Eigen::Vector3d c = lambda_t.cross(g.col(f));
     for (int l = 0; l < 3; ++l)
-      for (int i = 0; i < 3; ++i) {
-        hessian(3 * l + i, 9 + 3 * f + i) += c(l);
-        hessian(9 + 3 * f + i, 3 * l + i) += c(l);
-      }
+      for (int i = 0; i < 3; ++i) rows(3 * l + i, 9 + 3 * f + i) += c(l);
   }
-  (void)a;
+  return rows;
+}
+
+Eigen::MatrixXd reference_hessian(const TisserandMatrix& g, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+                                  const Eigen::Matrix<double, 9, 1>& lambda) {
+  (void)a;  // the rows are bilinear in (A, ξ) and quadratic in A: the Hessian does not depend on the point
+  const Eigen::Index n = 9 + 3 * g.cols();
+  const Eigen::Matrix<double, 9, Eigen::Dynamic> rows = reference_hessian_a_rows(g, xi, lambda);
+  Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(n, n);  // the ξξ block is zero
+  hessian.topRows<9>() = rows;
+  hessian.bottomLeftCorner(n - 9, 9) = rows.rightCols(n - 9).transpose();
   return hessian;
 }
 

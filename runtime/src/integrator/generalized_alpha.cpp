@@ -2,7 +2,8 @@
 
 #include "newton_solvers.hpp"
 
-#include <Eigen/LU>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
 
 #include <cmath>
 #include <limits>
@@ -33,13 +34,7 @@ void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) con
     if (model.rigid()) continue;
     // ∫|ū|² dm = ξ̄ᵀ (G_ff ⊗ I3) ξ̄, and |ξ̄| = |ξ| for orthogonal A: the RMS displacement without rotating.
     const Eigen::VectorXd q_b = system_.body_coordinates(q, b);
-    const Eigen::Index n_f = model.field_count();
-    const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> xi(q_b.data() + 12, 3, n_f);
-    double squared = 0.0;  // Σ_d x_dᵀ G_ff x_d over the three directions' rows x_d of ξ
-    for (int d = 0; d < 3; ++d) {
-      const Eigen::VectorXd x_d = xi.row(d).transpose();
-      squared += x_d.dot(model.mass_matrix.bottomRightCorner(n_f, n_f) * x_d);
-    }
+    const double squared = field_mass_norm_squared(model, q_b.tail(q_b.size() - 12));
     const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
     const double size = body_sizes_[static_cast<std::size_t>(b)];
     if (rms > options_.deformation_limit * size) {
@@ -68,7 +63,6 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   beta_ = 0.25 * (gamma_ + 0.5) * (gamma_ + 0.5);
   q_ = system.initial_coordinates();
   v_ = system.initial_velocities();
-  const Eigen::MatrixXd mass = system.mass_matrix();
   for (int b = 0; b < system.body_count(); ++b) {  // bounding-box diagonals, for the deformation limit
     const format::RowMatrixX3d& nodes = system.model(b).nodes;
     body_sizes_.push_back(nodes.rows() ? (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm() : 0.0);
@@ -78,12 +72,30 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   for (Eigen::Index k = 0; k < m; ++k)
     if (std::abs(phi(k)) > 1e-8)
       throw std::invalid_argument("initial state violates " + system.constraint_name(k) + " by " + std::to_string(phi(k)));
-  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
+  // [M Φ_qᵀ; Φ_q 0], sparse: M is block diagonal and the full-order body's blocks have the mesh's sparsity.
   const Eigen::MatrixXd jac = system.constraint_jacobian(t_, q_);
-  kkt.topLeftCorner(n, n) = mass;
-  kkt.topRightCorner(n, m) = jac.transpose();
-  kkt.bottomLeftCorner(m, n) = jac;
-  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(kkt);
+  const Eigen::SparseMatrix<double> mass = system.sparse_mass_matrix();
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(static_cast<std::size_t>(mass.nonZeros()));
+  for (Eigen::Index k = 0; k < mass.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(mass, k); it; ++it) entries.emplace_back(it.row(), it.col(), it.value());
+  for (Eigen::Index i = 0; i < m; ++i)
+    for (Eigen::Index j = 0; j < n; ++j)
+      if (jac(i, j) != 0.0) {
+        entries.emplace_back(n + i, j, jac(i, j));
+        entries.emplace_back(j, n + i, jac(i, j));
+      }
+  Eigen::SparseMatrix<double> kkt(n + m, n + m);
+  kkt.setFromTriplets(entries.begin(), entries.end());
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
+  lu.compute(kkt);
+  auto refuse = [&] {
+    const Eigen::Index redundant = system.first_redundant_constraint(t_, q_);
+    throw std::invalid_argument(redundant >= 0 ? system.constraint_name(redundant) + " is redundant: it repeats what "
+                                                     "the constraints before it already impose"
+                                               : std::string("initial accelerations: the matrix [M J^T; J 0] is singular"));
+  };
+  if (lu.info() != Eigen::Success) refuse();
   // Consistent velocities: the M-nearest v with Φ_q v + Φ_t = 0 (a driven joint that starts moving, or initial
   // velocities that fight a joint, would otherwise give a velocity jump and a spike in the multipliers).
   {
@@ -98,12 +110,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   Eigen::VectorXd rhs(n + m);
   rhs << system.forces(t_, q_, v_), -constraint_curvature(system, t_, q_, v_);
   const Eigen::VectorXd x = lu.solve(rhs);
-  if (!x.allFinite() || (kkt * x - rhs).norm() > 1e-8 * std::max(1.0, rhs.norm())) {
-    const Eigen::Index redundant = system.first_redundant_constraint(t_, q_);
-    throw std::invalid_argument(redundant >= 0 ? system.constraint_name(redundant) + " is redundant: it repeats what "
-                                                     "the constraints before it already impose"
-                                               : std::string("initial accelerations: the matrix [M J^T; J 0] is singular"));
-  }
+  if (!x.allFinite() || (kkt * x - rhs).norm() > 1e-8 * std::max(1.0, rhs.norm())) refuse();
   qdd_ = x.head(n);
   lambda_ = x.tail(m);
   a_ = qdd_;

@@ -49,28 +49,46 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
   for (int b = 0; b < system.body_count(); ++b) {
     const BodyModel& model = system.model(b);
     const Eigen::Index n_f = model.field_count();
+    const std::string not_definite = "body '" + system.body_name(b) + "': the constant Newton core G_ff x I3 + "
+                                     "(K_hat + gamma' D_hat)/beta' is not positive definite";
+    inverses_.emplace_back();
+    sparse_cores_.emplace_back();
+    if (model.sparse) {  // the full-order body: C = M_s ⊗ I3 + K̄/β', factorized sparse (no damping)
+      std::vector<Eigen::Triplet<double>> entries;
+      const Eigen::SparseMatrix<double>& m_s = model.sparse->mass;
+      for (Eigen::Index k = 0; k < m_s.outerSize(); ++k)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(m_s, k); it; ++it)
+          for (int d = 0; d < 3; ++d) entries.emplace_back(3 * it.row() + d, 3 * it.col() + d, it.value());
+      Eigen::SparseMatrix<double> core(3 * n_f, 3 * n_f);
+      core.setFromTriplets(entries.begin(), entries.end());
+      core += model.sparse->stiffness / beta_prime;
+      auto factor = std::make_unique<Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>>(core);
+      if (factor->info() != Eigen::Success) throw std::runtime_error(not_definite);
+      sparse_cores_.back() = std::move(factor);
+      continue;
+    }
+    if (n_f == 0) continue;
     // C = G_ff ⊗ I3 + (K̂ + γ' D̂) / β' (FORMULATION.md section 5).
     Eigen::MatrixXd core = model.stiffness / beta_prime;
     if (model.damping.size() > 0) core += gamma_prime / beta_prime * model.damping;
     for (Eigen::Index f = 0; f < n_f; ++f)
       for (Eigen::Index g = 0; g < n_f; ++g) core.block<3, 3>(3 * f, 3 * g).diagonal().array() += model.mass_matrix(4 + f, 4 + g);
     const Eigen::LLT<Eigen::MatrixXd> factor(core);
-    if (n_f > 0 && factor.info() != Eigen::Success)
-      throw std::runtime_error("body '" + system.body_name(b) + "': the constant Newton core G_ff x I3 + (K_hat + "
-                               "gamma' D_hat)/beta' is not positive definite");
+    if (factor.info() != Eigen::Success) throw std::runtime_error(not_definite);
     // C⁻¹ explicitly: one matrix-vector product per solve instead of two triangular solves, which Eigen runs
     // several times slower (measured: bench/README.md). C is symmetric positive definite and well conditioned
     // (G_ff = I for a body file's M_s-orthonormal fields, so cond C ≤ 1 + λ_max(K̂ + γ'D̂)/β', with λ_max(K̂) the
     // stiffest shape of the 3 n_f-dimensional field space, above the kept modes' ω²), so the inverse loses only
     // about cond(C)·ε.
-    inverses_.push_back(n_f > 0 ? Eigen::MatrixXd(factor.solve(Eigen::MatrixXd::Identity(3 * n_f, 3 * n_f)))
-                                : Eigen::MatrixXd());
+    inverses_.back() = factor.solve(Eigen::MatrixXd::Identity(3 * n_f, 3 * n_f));
   }
   eliminated_.resize(static_cast<std::size_t>(system.body_count()));
 }
 
 Eigen::MatrixXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) const {
-  return rotate(a, inverses_[static_cast<std::size_t>(body)] * rotate(a.transpose(), x));  // S_ff⁻¹ = Â C⁻¹ Âᵀ
+  const auto k = static_cast<std::size_t>(body);
+  if (sparse_cores_[k]) return rotate(a, sparse_cores_[k]->solve(rotate(a.transpose(), x)));
+  return rotate(a, inverses_[k] * rotate(a.transpose(), x));  // S_ff⁻¹ = Â C⁻¹ Âᵀ
 }
 
 void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
@@ -84,22 +102,21 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
     const Eigen::VectorXd q_b = q.segment(o, 12 + n_xi);
     const Eigen::Matrix3d a = orientation_of(q_b);
     const Eigen::VectorXd xi = q_b.tail(n_xi);
-    const Eigen::MatrixXd& g = model.mass_matrix;
     // S_rr = G[0:4, 0:4] ⊗ I3 + (K_aa + H_aa) / β';  S_rf = G[0:4, 4:] ⊗ I3 + (K_aξ + H_aξ) / β'.
     Eigen::MatrixXd s_rr = Eigen::MatrixXd::Zero(12, 12), s_rf = Eigen::MatrixXd::Zero(12, n_xi);
     for (int r = 0; r < 4; ++r) {
-      for (int c = 0; c < 4; ++c) s_rr.block<3, 3>(3 * r, 3 * c).diagonal().setConstant(g(r, c));
-      for (Eigen::Index f = 0; f < n_f; ++f) s_rf.block<3, 3>(3 * r, 3 * f).diagonal().setConstant(g(r, 4 + f));
+      for (int c = 0; c < 4; ++c) s_rr.block<3, 3>(3 * r, 3 * c).diagonal().setConstant(model.g_border(r, c));
+      for (Eigen::Index f = 0; f < n_f; ++f) s_rf.block<3, 3>(3 * r, 3 * f).diagonal().setConstant(model.g_border(r, 4 + f));
     }
     const Eigen::Index ref_rows = model.rigid() ? 6 : 9;  // rows with curvature (Eq. 77's rows are linear)
     Eigen::Matrix<double, 9, 1> lambda = Eigen::Matrix<double, 9, 1>::Zero();
     lambda.head(ref_rows) = beta_prime_ * mu.segment(system_.reference_row(b), ref_rows);
-    const Eigen::MatrixXd h = reference_hessian(model.tisserand, a, xi, lambda);  // over [a; ξ]
-    s_rr.bottomRightCorner<9, 9>() += h.topLeftCorner<9, 9>() / beta_prime_;
+    const Eigen::Matrix<double, 9, Eigen::Dynamic> h = reference_hessian_a_rows(model.tisserand, xi, lambda);  // a rows
+    s_rr.bottomRightCorner<9, 9>() += h.leftCols<9>() / beta_prime_;
     if (n_xi > 0) {
-      const ElasticTangent t = elastic_tangent(model.stiffness, a, xi, /*with_xi_xi=*/false);
+      const ElasticTangent t = body_elastic_tangent(model, a, xi, /*with_xi_xi=*/false);
       s_rr.bottomRightCorner<9, 9>() += t.aa / beta_prime_;
-      s_rf.bottomRows<9>() += (t.a_xi + h.topRightCorner(9, n_xi)) / beta_prime_;
+      s_rf.bottomRows<9>() += (t.a_xi + h.rightCols(n_xi)) / beta_prime_;
     }
     reduced.block(12 * b, 12 * b, 12, 12) = s_rr;
     reduced.block(12 * b, n_r, 12, m) = jacobian.middleCols(o, 12).transpose();

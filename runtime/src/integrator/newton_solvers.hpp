@@ -15,6 +15,9 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/LU>
+#include <Eigen/SparseCholesky>
+
+#include <memory>
 
 #include <vector>
 
@@ -61,7 +64,9 @@ class ConstantCoreNewton final : public NewtonSolver {
 
   const System& system_;
   double beta_prime_;
-  std::vector<Eigen::MatrixXd> inverses_;  ///< C⁻¹ per body; empty for rigid bodies
+  std::vector<Eigen::MatrixXd> inverses_;  ///< C⁻¹ per body; empty for rigid and full-order bodies
+  /// The sparse factor of C for the full-order body (null for the others).
+  std::vector<std::unique_ptr<Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>>> sparse_cores_;
   std::vector<Eliminated> eliminated_;
   Eigen::PartialPivLU<Eigen::MatrixXd> reduced_;
 };

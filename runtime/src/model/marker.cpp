@@ -46,7 +46,7 @@ Marker node_marker(const BodyModel& model, int body, const std::string& body_nam
                                 std::to_string(model.nodes.rows()) + " nodes)");
   Marker m = point_marker(model, body, body_name, model.nodes.row(node).transpose());
   m.name = body_name + "/node " + std::to_string(node);
-  m.y.tail(model.field_count()) = model.fields.row(node).transpose();
+  m.y.tail(model.field_count()) = field_row(model, node).transpose();
   return m;
 }
 

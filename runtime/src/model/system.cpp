@@ -43,6 +43,8 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
   if (state.xi.size() != n_xi || state.xi_dot.size() != n_xi)
     throw std::invalid_argument("body '" + name + "': xi and xi_dot need 3 n_f = " + std::to_string(n_xi) + " entries");
   const Eigen::MatrixXd& d = model.damping;
+  if (model.sparse && d.size() > 0)
+    throw std::invalid_argument("body '" + name + "': the full-order reference body takes no damping");
   if (d.size() > 0 && (d.rows() != n_xi || d.cols() != n_xi))
     throw std::invalid_argument("body '" + name + "': the damping matrix must be 3 n_f square (" + std::to_string(n_xi) + ")");
   if ((state.orientation.transpose() * state.orientation - Eigen::Matrix3d::Identity()).norm() > 1e-12 ||
@@ -131,25 +133,52 @@ Eigen::VectorXd System::body_coordinates(const Eigen::VectorXd& q, int body) con
 Eigen::MatrixXd System::mass_matrix() const {
   Eigen::MatrixXd m = Eigen::MatrixXd::Zero(coordinates_, coordinates_);
   for (const Body& b : bodies_) {
-    const Eigen::MatrixXd& g = b.model.mass_matrix;  // M_b = G ⊗ I3 (Eq. 66)
-    for (Eigen::Index r = 0; r < g.rows(); ++r)
-      for (Eigen::Index c = 0; c < g.cols(); ++c) m.block<3, 3>(b.offset + 3 * r, b.offset + 3 * c).diagonal().setConstant(g(r, c));
+    const Eigen::Index columns = 4 + b.model.field_count();
+    Eigen::MatrixXd g = b.model.sparse ? Eigen::MatrixXd::Zero(columns, columns) : b.model.mass_matrix;
+    if (b.model.sparse) {  // G = [border; border_fᵀ M_s]
+      g.topRows<4>() = b.model.sparse->border;
+      g.bottomLeftCorner(columns - 4, 4) = b.model.sparse->border.rightCols(columns - 4).transpose();
+      g.bottomRightCorner(columns - 4, columns - 4) = Eigen::MatrixXd(b.model.sparse->mass);
+    }
+    for (Eigen::Index r = 0; r < columns; ++r)  // M_b = G ⊗ I3 (Eq. 66)
+      for (Eigen::Index c = 0; c < columns; ++c) m.block<3, 3>(b.offset + 3 * r, b.offset + 3 * c).diagonal().setConstant(g(r, c));
   }
+  return m;
+}
+
+Eigen::SparseMatrix<double> System::sparse_mass_matrix() const {
+  std::vector<Eigen::Triplet<double>> entries;
+  auto add = [&entries](Eigen::Index offset, Eigen::Index r, Eigen::Index c, double value) {
+    if (value != 0.0)
+      for (int d = 0; d < 3; ++d) entries.emplace_back(offset + 3 * r + d, offset + 3 * c + d, value);
+  };
+  for (const Body& b : bodies_) {
+    const BodyModel& model = b.model;
+    const Eigen::Index columns = 4 + model.field_count();
+    if (!model.sparse) {
+      for (Eigen::Index r = 0; r < columns; ++r)
+        for (Eigen::Index c = 0; c < columns; ++c) add(b.offset, r, c, model.mass_matrix(r, c));
+      continue;
+    }
+    for (int r = 0; r < 4; ++r)
+      for (Eigen::Index c = 0; c < columns; ++c) {
+        add(b.offset, r, c, model.sparse->border(r, c));
+        if (c >= 4) add(b.offset, c, r, model.sparse->border(r, c));
+      }
+    const Eigen::SparseMatrix<double>& m_s = model.sparse->mass;
+    for (Eigen::Index k = 0; k < m_s.outerSize(); ++k)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(m_s, k); it; ++it) add(b.offset, 4 + it.row(), 4 + it.col(), it.value());
+  }
+  Eigen::SparseMatrix<double> m(coordinates_, coordinates_);
+  m.setFromTriplets(entries.begin(), entries.end());
   return m;
 }
 
 Eigen::VectorXd System::mass_product(const Eigen::VectorXd& x) const {
   Eigen::VectorXd y(coordinates_);
-  using Strided = Eigen::InnerStride<3>;
   for (const Body& b : bodies_) {
-    const Eigen::Index columns = b.model.mass_matrix.rows();
-    // (G ⊗ I3) x = per direction d, G times the d-th entries of the 3-blocks: three matrix-vector products (GEMM's
-    // packing does not pay off for three rows: measured twice the instructions).
-    for (int d = 0; d < 3; ++d) {
-      const Eigen::Map<const Eigen::VectorXd, 0, Strided> x_d(x.data() + b.offset + d, columns);
-      Eigen::Map<Eigen::VectorXd, 0, Strided> y_d(y.data() + b.offset + d, columns);
-      y_d.noalias() = b.model.mass_matrix * x_d;
-    }
+    const Eigen::Index n = b.model.coordinate_count();
+    y.segment(b.offset, n) = mass_times(b.model, x.segment(b.offset, n));
   }
   return y;
 }
@@ -159,11 +188,10 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
     auto f_b = f.segment(b.offset, n);
-    const Eigen::MatrixXd& g = b.model.mass_matrix;  // gravity: (G[:, 0] ⊗ I3) g
-    for (Eigen::Index k = 0; k < g.rows(); ++k) f_b.segment<3>(3 * k) += g(k, 0) * gravity_;
+    for (Eigen::Index k = 0; k < n / 3; ++k) f_b.segment<3>(3 * k) += b.model.g_border(0, k) * gravity_;  // (G[:, 0] ⊗ I3) g
     if (!b.model.rigid()) {
       const Eigen::VectorXd q_b = q.segment(b.offset, n);
-      const ElasticForces elastic = elastic_forces(b.model.stiffness, orientation_of(q_b), q_b.tail(n - 12));
+      const ElasticForces elastic = body_elastic_forces(b.model, orientation_of(q_b), q_b.tail(n - 12));
       f_b.segment<9>(3) -= elastic.grad_a;   // Eq. 86
       f_b.tail(n - 12) -= elastic.grad_xi;   // Eq. 87
       if (b.model.damping.size() > 0) {      // R = ½ ξ̄̇ᵀ D̂ ξ̄̇, ξ̄̇_f = Ȧᵀ ξ_f + Aᵀ ξ̇_f
@@ -221,7 +249,7 @@ Eigen::MatrixXd System::stiffness(const Eigen::VectorXd& q) const {
     if (b.model.rigid()) continue;
     const Eigen::Index n = b.model.coordinate_count(), n_xi = n - 12;
     const Eigen::VectorXd q_b = q.segment(b.offset, n);
-    const ElasticTangent t = elastic_tangent(b.model.stiffness, orientation_of(q_b), q_b.tail(n_xi));
+    const ElasticTangent t = body_elastic_tangent(b.model, orientation_of(q_b), q_b.tail(n_xi), true);
     k.block<9, 9>(b.offset + 3, b.offset + 3) = t.aa;
     k.block(b.offset + 3, b.offset + 12, 9, n_xi) = t.a_xi;
     k.block(b.offset + 12, b.offset + 3, n_xi, 9) = t.a_xi.transpose();
@@ -240,7 +268,7 @@ Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
     phi.segment(row, std::min<Eigen::Index>(9, reference_rows(b))) = ref.head(std::min<Eigen::Index>(9, reference_rows(b)));
     if (reference_rows(b) == 12) {  // Eq. 77: Σ_f G[0, 4 + f] ξ_f
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      for (Eigen::Index f = 0; f < b.model.field_count(); ++f) sum += b.model.mass_matrix(0, 4 + f) * q_b.segment<3>(12 + 3 * f);
+      for (Eigen::Index f = 0; f < b.model.field_count(); ++f) sum += b.model.g_border(0, 4 + f) * q_b.segment<3>(12 + 3 * f);
       phi.segment<3>(row + 9) = sum;
     }
     row += reference_rows(b);
@@ -265,7 +293,7 @@ Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) 
         ref.topRows(std::min<Eigen::Index>(9, reference_rows(b)));
     if (reference_rows(b) == 12)
       for (Eigen::Index f = 0; f < b.model.field_count(); ++f)
-        jac.block<3, 3>(row + 9, b.offset + 12 + 3 * f).diagonal().setConstant(b.model.mass_matrix(0, 4 + f));
+        jac.block<3, 3>(row + 9, b.offset + 12 + 3 * f).diagonal().setConstant(b.model.g_border(0, 4 + f));
     row += reference_rows(b);
   }
   for (const Joint& j : joints_) {
@@ -291,7 +319,7 @@ Eigen::VectorXd System::constraint_jacobian_transpose_product(double t, const Ei
     out.segment(b.offset + 3, n - 3) = reference_jacobian_transpose_product(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12), mu_b);
     if (reference_rows(b) == 12)
       for (Eigen::Index f = 0; f < b.model.field_count(); ++f)
-        out.segment<3>(b.offset + 12 + 3 * f) += b.model.mass_matrix(0, 4 + f) * mu.segment<3>(row + 9);
+        out.segment<3>(b.offset + 12 + 3 * f) += b.model.g_border(0, 4 + f) * mu.segment<3>(row + 9);
     row += reference_rows(b);
   }
   for (const Joint& j : joints_) {
@@ -368,13 +396,10 @@ Energies System::energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) co
   Energies e;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
-    const Eigen::MatrixXd& g = b.model.mass_matrix;
     const Eigen::VectorXd q_b = q.segment(b.offset, n), v_b = v.segment(b.offset, n);
-    // T = ½ v_bᵀ (G ⊗ I3) v_b = ½ Σ_rc G_rc v_r · v_c with v_r the 3-blocks.
-    const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> blocks(v_b.data(), 3, n / 3);
-    e.kinetic += 0.5 * (blocks.transpose() * blocks).cwiseProduct(g).sum();
-    for (Eigen::Index k = 0; k < g.rows(); ++k) e.gravity -= g(k, 0) * gravity_.dot(q_b.segment<3>(3 * k));
-    if (!b.model.rigid()) e.elastic += elastic_forces(b.model.stiffness, orientation_of(q_b), q_b.tail(n - 12)).energy;
+    e.kinetic += 0.5 * v_b.dot(mass_times(b.model, v_b));  // T = ½ v_bᵀ (G ⊗ I3) v_b
+    for (Eigen::Index k = 0; k < n / 3; ++k) e.gravity -= b.model.g_border(0, k) * gravity_.dot(q_b.segment<3>(3 * k));
+    if (!b.model.rigid()) e.elastic += body_elastic_forces(b.model, orientation_of(q_b), q_b.tail(n - 12)).energy;
   }
   for (const SpringDamper& s : springs_) {
     const double stretch = (marker_position(s.second, body_coordinates(q, s.second.body)) -

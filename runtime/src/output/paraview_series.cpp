@@ -59,7 +59,7 @@ ParaViewSeries::ParaViewSeries(std::filesystem::path directory, std::string name
   for (Eigen::Index j = 0; j < n_s; ++j) {
     local[static_cast<std::size_t>(node_index_(j))] = j;
     nodes_.row(j) = model.nodes.row(node_index_(j));
-    fields_.row(j) = model.fields.row(node_index_(j));
+    fields_.row(j) = field_row(model, node_index_(j));
   }
   triangles_.reserve(static_cast<std::size_t>(model.surface_triangles.size()));
   for (Eigen::Index t = 0; t < model.surface_triangles.rows(); ++t)

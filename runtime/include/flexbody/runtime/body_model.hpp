@@ -7,14 +7,27 @@
 // (Eqs. 87, 96). A rigid body is the same with n_f = 0: one code path.
 
 #include "flexbody/format/body_data.hpp"
+#include "flexbody/runtime/gcms_elastic.hpp"
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
+#include <algorithm>
+#include <cmath>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace flexbody::runtime {
+
+/// The field blocks of the full-order reference body (full_order.hpp), kept sparse: G_ff = M_s and K̂ = K̄ have
+/// the mesh's sparsity, while G's first four rows (the rigid rows and their coupling to the fields) are dense.
+struct SparseFieldBlocks {
+  Eigen::SparseMatrix<double> mass;             ///< G_ff = M_s (n_f square, symmetric)
+  Eigen::SparseMatrix<double> stiffness;        ///< K̂ = K̄ (3 n_f square, symmetric, node-interleaved)
+  Eigen::Matrix<double, 4, Eigen::Dynamic> border;  ///< G[0:4, :] (4 x (4 + n_f))
+};
 
 /// One body's constant blocks. The GCMS fields are an M_s-orthonormal basis of the modes' fields built in mode
 /// order (SCHEMA.md), so the first k modes are exactly the fields with field_mode < k and the leading blocks
@@ -38,15 +51,23 @@ struct BodyModel {
   Eigen::MatrixXd damping;
   format::RowMatrixX3d nodes;                     ///< X̄ (body frame) [m]
   format::RowMatrixX3i surface_triangles;         ///< the mesh's boundary, for pictures (paraview_series.hpp)
+  /// Set for the full-order reference body only: its G and K̂ live here, sparse, and `mass_matrix`,
+  /// `stiffness` and `fields` (Ῡ' = I) are empty. Use the accessors below rather than the dense members.
+  std::shared_ptr<const SparseFieldBlocks> sparse;
 
   /// G[0, 4:] (n_f): zero when every field is M-orthogonal to translations (every body file); otherwise (the
   /// full-order reference, full_order.hpp) the translational Tisserand rows Σ_f G[0, 4 + f] ξ_f = 0 (Eq. 77) are
   /// imposed too.
   [[nodiscard]] bool needs_translational_tisserand() const {
-    return field_count() > 0 && mass_matrix.row(0).tail(field_count()).cwiseAbs().maxCoeff() > 1e-12 * mass;
+    if (field_count() == 0) return false;
+    double largest = 0.0;
+    for (Eigen::Index f = 0; f < field_count(); ++f) largest = std::max(largest, std::abs(g_border(0, 4 + f)));
+    return largest > 1e-12 * mass;
   }
-  [[nodiscard]] Eigen::Index field_count() const { return stiffness.rows() / 3; }
-  [[nodiscard]] Eigen::Index coordinate_count() const { return 12 + stiffness.rows(); }
+  [[nodiscard]] Eigen::Index field_count() const { return sparse ? sparse->mass.rows() : stiffness.rows() / 3; }
+  /// G(r, c) for one of G's first four rows (r < 4), dense or sparse body alike.
+  [[nodiscard]] double g_border(int r, Eigen::Index c) const { return sparse ? sparse->border(r, c) : mass_matrix(r, c); }
+  [[nodiscard]] Eigen::Index coordinate_count() const { return 12 + 3 * field_count(); }
   [[nodiscard]] bool rigid() const { return field_count() == 0; }
 };
 
@@ -54,6 +75,17 @@ struct BodyModel {
 /// Throws std::invalid_argument naming the file if `modes` is negative or exceeds the modes it holds.
 [[nodiscard]] BodyModel make_body_model(const format::BodyData& body, std::optional<Eigen::Index> modes,
                                         const std::string& source = "body");
+
+/// (G ⊗ I3) x_b for one body's coordinates x_b (12 + 3 n_f), as three products with G, one per direction.
+[[nodiscard]] Eigen::VectorXd mass_times(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& x_b);
+/// ξᵀ (G_ff ⊗ I3) ξ = ∫|u|² dm of the fields' displacement ξ (3 n_f) [kg m²].
+[[nodiscard]] double field_mass_norm_squared(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& xi);
+/// Row `node` of Ῡ' (n_f): the node's weights of the fields.
+[[nodiscard]] Eigen::RowVectorXd field_row(const BodyModel& model, Eigen::Index node);
+/// The elastic energy and forces (gcms_elastic.hpp) of the body's K̂, dense or sparse.
+[[nodiscard]] ElasticForces body_elastic_forces(const BodyModel& model, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi);
+[[nodiscard]] ElasticTangent body_elastic_tangent(const BodyModel& model, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+                                                  bool with_xi_xi);
 
 /// How many GCMS fields the first k modes have (the fields with field_mode < k).
 [[nodiscard]] Eigen::Index fields_of_first_modes(const format::Gcms& gcms, Eigen::Index k);

@@ -1,20 +1,23 @@
 #pragma once
 // flexbody/runtime/full_order.hpp: the unreduced improved ACF as a reference body (FORMULATION.md section 5: the
 // same structure with Ῡ = I, so ξ are the nodal displacements, K̂ = K̄ and G_ff = M_s). It measures what a reduced
-// body's modes leave out. Dense here (for the small meshes such comparisons use: its Newton core is factorized
-// once, O((3 n_n)³)); its fields are not M-orthogonal to the rigid motions, so the body also carries the
-// translational Tisserand rows (Eq. 77).
+// body's modes leave out. Sparse: K̄ and M_s keep the mesh's sparsity (BodyModel::sparse), its constant Newton
+// core M_s ⊗ I3 + K̄/β' is factorized once by Eigen's sparse Cholesky, and each iteration costs products with the
+// mesh's matrices. Its fields are not M-orthogonal to the rigid motions, so the body also carries the
+// translational Tisserand rows (Eq. 77). Damping is not available for it.
 
 #include "flexbody/runtime/body_model.hpp"
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
 namespace flexbody::runtime {
 
-/// The full-order body of a mesh: K̄ (3 n_n square, node-interleaved) and the scalar mass M_s (n_n square), dense
-/// and symmetric, with the node positions X̄ in the body frame (origin at the centre of mass). Throws
-/// std::invalid_argument for inconsistent sizes or a mesh whose centre of mass is not at the origin.
-[[nodiscard]] BodyModel full_order_model(const Eigen::MatrixXd& stiffness, const Eigen::MatrixXd& scalar_mass,
+/// The full-order body of a mesh: K̄ (3 n_n square, node-interleaved) and the scalar mass M_s (n_n square), both
+/// symmetric with both triangles stored, and the node positions X̄ in the body frame (origin at the centre of mass).
+/// Throws std::invalid_argument for inconsistent sizes or a mesh whose centre of mass is not at the origin.
+[[nodiscard]] BodyModel full_order_model(const Eigen::SparseMatrix<double>& stiffness,
+                                         const Eigen::SparseMatrix<double>& scalar_mass,
                                          const format::RowMatrixX3d& nodes, const std::string& source = "full order");
 
 }  // namespace flexbody::runtime

@@ -10,6 +10,7 @@
 // Every call costs O((3 n_f)²): no n_n-sized work at run time.
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
 namespace flexbody::runtime {
 
@@ -36,13 +37,17 @@ struct ElasticTangent {
 /// D = ∂ξ̄/∂a (3 n_f x 9): row 3f + j, column 3j + i holds ξ_f[i] (ξ̄ is linear in a for fixed ξ).
 [[nodiscard]] Eigen::Matrix<double, Eigen::Dynamic, 9> body_frame_coordinates_derivative(const Eigen::VectorXd& xi);
 
-/// U and its gradient for K̂ (3 n_f square, symmetric), A and ξ (3 n_f).
+/// U and its gradient for K̂ (3 n_f square, symmetric; dense, or sparse for the full-order body), A and ξ (3 n_f).
 [[nodiscard]] ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a,
+                                           const Eigen::VectorXd& xi);
+[[nodiscard]] ElasticForces elastic_forces(const Eigen::SparseMatrix<double>& k_hat, const Eigen::Matrix3d& a,
                                            const Eigen::VectorXd& xi);
 
 /// The Hessian of U (the elastic tangent stiffness). Without `with_xi_xi` the ξξ block (Â K̂ Âᵀ, which the
 /// constant-core Newton solve never forms) is left empty.
 [[nodiscard]] ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a,
+                                             const Eigen::VectorXd& xi, bool with_xi_xi = true);
+[[nodiscard]] ElasticTangent elastic_tangent(const Eigen::SparseMatrix<double>& k_hat, const Eigen::Matrix3d& a,
                                              const Eigen::VectorXd& xi, bool with_xi_xi = true);
 
 }  // namespace flexbody::runtime

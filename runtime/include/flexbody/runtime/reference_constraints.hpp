@@ -35,6 +35,12 @@ using TisserandMatrix = Eigen::Matrix<double, 3, Eigen::Dynamic>;
                                                                    const Eigen::VectorXd& xi,
                                                                    const Eigen::Matrix<double, 9, 1>& mu);
 
+/// The first 9 rows (those of a) of Σ_k λ_k ∂²Φ_k/∂[a; ξ]² (9 x (9 + 3 n_f)): all of it that is not zero, since
+/// the ξξ block vanishes (Φ is linear in ξ for fixed A). O(n_f), for large bodies.
+[[nodiscard]] Eigen::Matrix<double, 9, Eigen::Dynamic> reference_hessian_a_rows(const TisserandMatrix& g,
+                                                                               const Eigen::VectorXd& xi,
+                                                                               const Eigen::Matrix<double, 9, 1>& lambda);
+
 /// Σ_k λ_k ∂²Φ_k/∂[a; ξ]² ((9 + 3 n_f) square, symmetric).
 [[nodiscard]] Eigen::MatrixXd reference_hessian(const TisserandMatrix& g, const Eigen::Matrix3d& a,
                                                 const Eigen::VectorXd& xi, const Eigen::Matrix<double, 9, 1>& lambda);

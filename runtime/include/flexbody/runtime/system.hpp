@@ -13,6 +13,7 @@
 #include "flexbody/runtime/marker.hpp"
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
 #include <functional>
 #include <string>
@@ -85,8 +86,10 @@ class System {
   /// The coordinates of one body (a copy); empty for kGround.
   [[nodiscard]] Eigen::VectorXd body_coordinates(const Eigen::VectorXd& q, int body) const;
 
-  /// M = diag(G_b ⊗ I3), dense.
+  /// M = diag(G_b ⊗ I3), dense (for the dense reference Newton solve and tests).
   [[nodiscard]] Eigen::MatrixXd mass_matrix() const;
+  /// The same, sparse: what the consistent initial accelerations factorize with the constraint Jacobian.
+  [[nodiscard]] Eigen::SparseMatrix<double> sparse_mass_matrix() const;
   /// M x without forming M: per body (G ⊗ I3) x_b = vec(X_b G) with X_b the 3 x (4 + n_f) blocks of x_b, a third of
   /// the dense product's work.
   [[nodiscard]] Eigen::VectorXd mass_product(const Eigen::VectorXd& x) const;

@@ -40,6 +40,7 @@ std::vector<std::string> columns_of(const Scene& scene, const Sensor& s) {
     if (q == "position") columns.insert(columns.end(), {"x [m]", "y [m]", "z [m]"});
     if (q == "velocity") columns.insert(columns.end(), {"vx [m/s]", "vy [m/s]", "vz [m/s]"});
     if (q == "reaction_force") columns.insert(columns.end(), {"fx [N]", "fy [N]", "fz [N]"});
+    if (q == "reaction_moment") columns.insert(columns.end(), {"mx [N m]", "my [N m]", "mz [N m]"});
     if (q == "orientation")  // the marker frame's rotation matrix, row by row
       for (int i = 1; i <= 3; ++i)
         for (int j = 1; j <= 3; ++j) columns.push_back(fmt::format("R{}{} [1]", i, j));
@@ -91,8 +92,11 @@ Eigen::VectorXd values_of(const Scene& scene, const Sensor& s, const runtime::Ge
         push(u);
       }
     }
-    if (q == "reaction_force")  // the force of the joint on marker 1: −λ of its position rows
-      push(-integrator.multipliers().segment<3>(system.joint_row(s.joint)));
+    if (q == "reaction_force" || q == "reaction_moment") {  // the joint's wrench on marker 1's body, at the marker
+      const runtime::JointReaction r =
+          system.joint_reaction(s.joint, integrator.time(), integrator.coordinates(), integrator.multipliers());
+      push(q == "reaction_force" ? r.force : r.moment);
+    }
     if (q == "modal_coordinates") {
       const runtime::BodyModel& model = system.model(s.body);
       const Eigen::VectorXd q_b = system.body_coordinates(integrator.coordinates(), s.body);

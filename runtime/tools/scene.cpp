@@ -332,10 +332,7 @@ Scene read_scene(const std::filesystem::path& file) {
         while (k < joints.size() && joints[k].name != joint) ++k;
         if (k == joints.size()) r.fail(o["joint"], fmt::format("{}: no joint '{}' in the scene", where, joint));
         s.joint = k;
-        if (joints[k].type == runtime::JointType::prismatic)
-          r.fail(o["joint"], fmt::format("{}: the reaction force of a prismatic joint is not available (it has no "
-                                         "position rows)", where));
-        allowed = {"reaction_force"};
+        allowed = {"reaction_force", "reaction_moment"};
       } else {
         const LoadedBody& body = body_of(r.required(o, "body", where), where);
         s.body = body.index;

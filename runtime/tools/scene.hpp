@@ -11,7 +11,7 @@
 
 namespace flexbody::fbsim {
 
-/// One output file: a marker's position, velocity or orientation, a joint's reaction force, a body's modal
+/// One output file: a marker's position, velocity or orientation, a joint's reaction force and moment, a body's modal
 /// coordinates, or an output region's elastic displacements and stresses.
 struct Sensor {
   enum class Kind { marker, joint, modal, region };
@@ -21,7 +21,7 @@ struct Sensor {
   std::size_t joint = 0;           ///< Kind::joint: index into System::joints()
   int body = 0;                    ///< Kind::modal and Kind::region (and the marker's body)
   std::size_t region = 0;          ///< Kind::region: index into the body model's recovery regions
-  /// marker: position, velocity, orientation; joint: reaction_force; modal: modal_coordinates;
+  /// marker: position, velocity, orientation; joint: reaction_force, reaction_moment; modal: modal_coordinates;
   /// region: displacement, stress
   std::vector<std::string> quantities;
 };

@@ -134,6 +134,7 @@ integrator: {step: 1.0e-3, end: 0.02}
 outputs:
   whole: {body: bar, region: body, quantities: [displacement, stress]}
   frame: {body: bar, interface: tip, quantities: [orientation]}
+  pin: {joint: pivot, quantities: [reaction_force, reaction_moment]}
 )");
   const CliRun run = run_fbsim(dir, "regions.yaml -o regions_out -q");
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -164,6 +165,14 @@ outputs:
   const auto frame = rows_of(dir / "regions_out" / "frame.csv");
   EXPECT_EQ(frame[0][1], "R11 [1]");
   for (int k = 0; k < 9; ++k) EXPECT_NEAR(std::stod(frame[1][1 + k]), k % 4 == 0 ? 1.0 : 0.0, 1e-12);
+  // The revolute joint's wrench: a force of the order of the bar's weight (19.6 kg · g), and no moment about its
+  // axis z, which it releases (the rbe3 root's moment has only x and y components).
+  const auto pin = rows_of(dir / "regions_out" / "pin.csv");
+  ASSERT_EQ(pin[0].size(), 7u);
+  EXPECT_EQ(pin[0][4], "mx [N m]");
+  const double force = std::hypot(std::stod(pin.back()[1]), std::stod(pin.back()[2]), std::stod(pin.back()[3]));
+  EXPECT_GT(force, 10.0);
+  EXPECT_LT(std::abs(std::stod(pin.back()[6])), 1e-8 * force);
 }
 
 namespace {

@@ -158,3 +158,62 @@ TEST(RigidBody, TorqueAndSpringActAsNewtonSays) {
     EXPECT_NEAR(system.energies(integrator.coordinates(), integrator.velocities()).total(), e0, 1e-7 * e0);
   }
 }
+
+TEST(JointReaction, FixedJointHoldsTheBarsWeightAndItsMoment) {
+  // The bar held horizontally at its left end by a fixed joint: at rest, q̈ = 0 and the joint carries the weight,
+  // F = −m g and M = −(r_cm − p) × m g = (0, 0, m g L/2) about the end. Exact statics: round-off only.
+  const fr::BodyModel model = rigid_bar();
+  fr::System system;
+  fr::BodyState state;
+  state.position = Eigen::Vector3d(kLength / 2, 0, 0);
+  const int bar = system.add_body("bar", model, state);
+  const fr::Marker end = fr::point_marker(model, bar, "bar", Eigen::Vector3d(-kLength / 2, 0, 0));
+  system.add_joint(fr::make_joint("clamp", fr::JointType::fixed, end, fr::ground_marker(Eigen::Vector3d::Zero()),
+                                  Eigen::Vector3d::UnitZ(), system.initial_coordinates(), Eigen::VectorXd()));
+  system.set_gravity(Eigen::Vector3d(0, -kGravity, 0));
+  fr::GeneralizedAlphaOptions options;
+  options.step = 1e-3;
+  fr::GeneralizedAlpha integrator(system, options);
+  const double weight = kMass * kGravity;
+  for (int k = 0; k < 2; ++k) {  // at t = 0 (consistent multipliers) and after a step (still at rest)
+    const fr::JointReaction r = system.joint_reaction(0, integrator.time(), integrator.coordinates(), integrator.multipliers());
+    EXPECT_LT((r.force - Eigen::Vector3d(0, weight, 0)).norm(), 1e-12 * weight);
+    EXPECT_LT((r.moment - Eigen::Vector3d(0, 0, weight * kLength / 2)).norm(), 1e-12 * weight * kLength);
+    integrator.step();
+  }
+}
+
+TEST(JointReaction, RevoluteAndSphericalJointsCarryNoMomentTheyRelease) {
+  // The swinging pendulum after 300 steps: the revolute joint's moment has no component along its axis (it
+  // releases that rotation), and a spherical joint in its place carries no moment at all about its point (its
+  // force passes through the point). Its force balances gravity and the centripetal and tangential inertia: checked
+  // against m (a_cm − g) with a_cm from the state.
+  const fr::BodyModel model = rigid_bar();
+  for (const fr::JointType type : {fr::JointType::revolute, fr::JointType::spherical}) {
+    SCOPED_TRACE(type == fr::JointType::revolute ? "revolute" : "spherical");
+    fr::System system;
+    fr::BodyState state;
+    state.position = Eigen::Vector3d(kLength / 2, 0, 0);
+    const int bar = system.add_body("bar", model, state);
+    const fr::Marker pin = fr::point_marker(model, bar, "bar", Eigen::Vector3d(-kLength / 2, 0, 0));
+    system.add_joint(fr::make_joint("pivot", type, pin, fr::ground_marker(Eigen::Vector3d::Zero()), Eigen::Vector3d::UnitZ(),
+                                    system.initial_coordinates(), Eigen::VectorXd()));
+    system.set_gravity(Eigen::Vector3d(0, -kGravity, 0));
+    fr::GeneralizedAlphaOptions options;
+    options.step = 1e-3;
+    options.rho_infinity = 0.9;
+    fr::GeneralizedAlpha integrator(system, options);
+    for (int k = 0; k < 300; ++k) integrator.step();
+    const fr::JointReaction r = system.joint_reaction(0, integrator.time(), integrator.coordinates(), integrator.multipliers());
+    const double weight = kMass * kGravity;
+    EXPECT_GT(r.force.norm(), 0.1 * weight);
+    if (type == fr::JointType::revolute) {
+      EXPECT_LT(std::abs(r.moment.z()), 1e-9 * weight * kLength);
+    } else {
+      EXPECT_LT(r.moment.norm(), 1e-12 * weight * kLength);
+    }
+    // Newton's second law for the centre of mass, with the integrator's accelerations: F + m g = m τ̈.
+    const Eigen::Vector3d expected = kMass * integrator.accelerations().head<3>() - kMass * Eigen::Vector3d(0, -kGravity, 0);
+    EXPECT_LT((r.force - expected).norm(), 1e-9 * weight);
+  }
+}

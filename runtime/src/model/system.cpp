@@ -392,6 +392,23 @@ Eigen::Index System::joint_row(std::size_t joint) const {
   return row;
 }
 
+JointReaction System::joint_reaction(std::size_t joint, double t, const Eigen::VectorXd& q,
+                                    const Eigen::VectorXd& lambda) const {
+  const Joint& j = joints_.at(joint);
+  if (j.first.body == kGround)
+    throw std::invalid_argument("joint '" + j.name + "': its reaction is reported on the first marker's body, which is ground");
+  const Eigen::VectorXd q1 = body_coordinates(q, j.first.body);
+  const JointEvaluation e = evaluate_joint(j, t, q1, body_coordinates(q, j.second.body));
+  const Eigen::VectorXd generalized = -e.jacobian_first.transpose() * lambda.segment(joint_row(joint), j.rows());
+  JointReaction r;
+  r.force = generalized.head<3>();
+  Eigen::Vector3d about_tau = Eigen::Vector3d::Zero();
+  for (Eigen::Index k = 1; k < q1.size() / 3; ++k)  // the columns a_j of A, then the fields ξ_f: 3-blocks after τ
+    about_tau += q1.segment<3>(3 * k).cross(generalized.segment<3>(3 * k));
+  r.moment = about_tau - (marker_position(j.first, q1) - q1.head<3>()).cross(r.force);
+  return r;
+}
+
 Energies System::energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   Energies e;
   for (const Body& b : bodies_) {

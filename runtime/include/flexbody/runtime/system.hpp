@@ -55,6 +55,13 @@ struct SpringDamper {
   double rest_length = 0.0;  ///< ℓ0 [m]
 };
 
+/// The wrench a joint applies to the body of its first marker, in world axes: the force [N] and the moment [N m]
+/// about the marker's current point.
+struct JointReaction {
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+};
+
 struct Energies {
   double kinetic = 0.0, elastic = 0.0, gravity = 0.0;  ///< [J]; gravity = −Σ m g·r_cm (zero at the origin)
   double springs = 0.0;                                ///< ½ k (ℓ − ℓ0)² of the spring-dampers [J]
@@ -112,6 +119,13 @@ class System {
   [[nodiscard]] Eigen::Index first_redundant_constraint(double t, const Eigen::VectorXd& q) const;
   /// What constraint row k is: "body 'bar': orthogonality", "body 'bar': Tisserand", "joint 'pivot'".
   [[nodiscard]] std::string constraint_name(Eigen::Index row) const;
+  /// The reaction of joint j on its first marker's body for multipliers λ (all rows, as the integrator holds them):
+  /// the joint's generalized force Q = −Φ_qᵀλ on that body, reduced to the marker's point. The force is Q_τ; the
+  /// moment about τ is Σ_j a_j × Q_a_j + Σ_f ξ_f × Q_ξ_f (the virtual work of a rigid rotation δθ of the whole
+  /// deformed body, δa_j = δθ × a_j and δξ_f = δθ × ξ_f), moved to the marker's point p by −(p − τ) × F. Any joint
+  /// type (for a prismatic joint too). Throws std::invalid_argument if the first marker is on ground.
+  [[nodiscard]] JointReaction joint_reaction(std::size_t joint, double t, const Eigen::VectorXd& q,
+                                             const Eigen::VectorXd& lambda) const;
   /// The first constraint row of joint j (its rows follow in the order of joint.hpp).
   [[nodiscard]] Eigen::Index joint_row(std::size_t joint) const;
   /// The first constraint row of body b's reference conditions (6 orthogonality, then 3 rotational Tisserand if

@@ -91,6 +91,17 @@ Eigen::MatrixXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& 
   return rotate(a, inverses_[k] * rotate(a.transpose(), x));  // S_ff⁻¹ = Â C⁻¹ Âᵀ
 }
 
+Eigen::VectorXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const Eigen::VectorXd& x) const {
+  // One right-hand side (every iteration): a matrix-vector product, which a one-column matrix would send through
+  // GEMM's packing (measured: 15 % of a 20-mode step).
+  const auto k = static_cast<std::size_t>(body);
+  Eigen::VectorXd rotated(x.size());
+  for (Eigen::Index f = 0; f < x.size() / 3; ++f) rotated.segment<3>(3 * f).noalias() = a.transpose() * x.segment<3>(3 * f);
+  Eigen::VectorXd y = sparse_cores_[k] ? Eigen::VectorXd(sparse_cores_[k]->solve(rotated)) : Eigen::VectorXd(inverses_[k] * rotated);
+  for (Eigen::Index f = 0; f < y.size() / 3; ++f) rotated.segment<3>(3 * f).noalias() = a * y.segment<3>(3 * f);
+  return rotated;
+}
+
 void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
   const int n_b = system_.body_count();
   const Eigen::Index m = jacobian.rows(), n_r = 12 * n_b;
@@ -160,7 +171,7 @@ Eigen::VectorXd ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen:
     const Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
     // S_ff⁻¹ r_f at the current A (the core is exact for any A; only the coupling blocks are from the factorization).
     const Eigen::Matrix3d a = orientation_of(system_.body_coordinates(q, b));
-    Eigen::VectorXd y = core_solve(b, a, residual.segment(o + 12, n_xi));
+    Eigen::VectorXd y = core_solve(b, a, Eigen::VectorXd(residual.segment(o + 12, n_xi)));
     rhs.segment(12 * b, 12) += e.s_rf * y;
     const Eigen::VectorXd j_yr = e.j_f * y;
     for (std::size_t i = 0; i < e.rows.size(); ++i) rhs(n_r + e.rows[i]) += j_yr(static_cast<Eigen::Index>(i));

@@ -61,6 +61,7 @@ class ConstantCoreNewton final : public NewtonSolver {
     std::vector<Eigen::Index> rows;
   };
   [[nodiscard]] Eigen::MatrixXd core_solve(int body, const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) const;
+  [[nodiscard]] Eigen::VectorXd core_solve(int body, const Eigen::Matrix3d& a, const Eigen::VectorXd& x) const;
 
   const System& system_;
   double beta_prime_;

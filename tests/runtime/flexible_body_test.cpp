@@ -531,3 +531,64 @@ TEST(FullOrderBody, OscillatesAtTheFiniteElementFrequency) {
   // measured (5.14e-6); the crossings' interpolation adds ~1e-7.
   EXPECT_NEAR(measured, period, 1e-4 * period);
 }
+
+TEST(FullOrderBody, SparseAndDenseMassMatricesAgree) {
+  // The sparse mass paths (KKT assembly, mass products) against the dense G ⊗ I3, for a system holding a body-file
+  // body and a full-order body: the same numbers.
+  const auto fe = flexbody::test::assemble(flexbody::test::box_mesh(0.5, 0.05, 0.05, 10, 2, 2), kSteel);
+  const flexbody::format::MassProperties mass = fp::mass_properties(fe.scalar_mass, fe.mesh.nodes);
+  const fp::RowMatrixX3d nodes = fe.mesh.nodes.rowwise() - mass.center_of_mass_input.transpose();
+  fr::System system;
+  system.add_body("reduced", fr::make_body_model(beam(), std::nullopt, "beam"), fr::BodyState{});
+  system.add_body("full", fr::full_order_model(fp::full_from_upper(fe.stiffness), fp::full_from_upper(fe.scalar_mass), nodes),
+                  fr::BodyState{});
+  const Eigen::MatrixXd dense = system.mass_matrix();
+  EXPECT_EQ((Eigen::MatrixXd(system.sparse_mass_matrix()) - dense).norm(), 0.0);
+  EXPECT_LT((dense - dense.transpose()).norm(), 1e-15 * dense.norm());  // the body file's G: symmetric to round-off
+  std::srand(3);
+  const Eigen::VectorXd x = Eigen::VectorXd::Random(system.coordinate_count());
+  EXPECT_LT((system.mass_product(x) - dense * x).norm(), 1e-13 * (dense * x).norm());
+  // An upper triangle alone (as the assembly stores it) is refused, not silently used.
+  EXPECT_THROW(static_cast<void>(fr::full_order_model(Eigen::SparseMatrix<double>(fe.stiffness),
+                                                      fp::full_from_upper(fe.scalar_mass), nodes)),
+               std::invalid_argument);
+}
+
+TEST(JointReaction, MomentumBalanceOfAFlexibleBodyOnAFixedJoint) {
+  // The 4-mode beam held at one end node by a fixed joint, vibrating under gravity. The joint's wrench closes the
+  // body's balance exactly: m τ̈ = m g + F (τ is the centre of mass: G[0, 1:] = 0), and the rate of its angular
+  // momentum about the origin, Σ_kl G_kl q_k × q̈_l, equals the moments of gravity (τ × m g) and of the joint
+  // (p × F + M). The elastic and reference forces have no net moment (U and Φ are invariant under a rigid rotation),
+  // so this tests the joint's moment with its ξ terms.
+  const fr::BodyModel model = fr::make_body_model(beam(), std::nullopt, "beam");
+  fr::System system;
+  const int b = system.add_body("beam", model, fr::BodyState{});
+  Eigen::Index end = 0;
+  model.nodes.col(0).minCoeff(&end);
+  const fr::Marker m = fr::node_marker(model, b, "beam", end);
+  const Eigen::VectorXd q0 = system.initial_coordinates();
+  system.add_joint(fr::make_joint("clamp", fr::JointType::fixed, m, fr::ground_marker(fr::marker_position(m, q0)),
+                                  Eigen::Vector3d::UnitZ(), q0, Eigen::VectorXd()));
+  const Eigen::Vector3d g(0, -9.81, 0);
+  system.set_gravity(g);
+  fr::GeneralizedAlphaOptions options;
+  options.step = 2e-5;
+  options.rho_infinity = 0.8;
+  options.tolerance = 1e-14;  // the balance holds to the Newton tolerance: converge to round-off
+  fr::GeneralizedAlpha integrator(system, options);
+  for (int k = 0; k < 200; ++k) integrator.step();
+  const Eigen::VectorXd& q = integrator.coordinates();
+  const Eigen::VectorXd& qdd = integrator.accelerations();
+  const fr::JointReaction r = system.joint_reaction(0, integrator.time(), q, integrator.multipliers());
+  const double weight = model.mass * g.norm();
+  EXPECT_LT((model.mass * qdd.head<3>() - model.mass * g - r.force).norm(), 1e-9 * weight);
+  const Eigen::MatrixXd& gm = model.mass_matrix;
+  Eigen::Vector3d rate = Eigen::Vector3d::Zero();
+  for (Eigen::Index k = 0; k < gm.rows(); ++k)
+    for (Eigen::Index l = 0; l < gm.cols(); ++l) rate += gm(k, l) * q.segment<3>(3 * k).cross(qdd.segment<3>(3 * l));
+  const Eigen::Vector3d p = fr::marker_position(m, q);
+  const Eigen::Vector3d moments = q.head<3>().cross(model.mass * g) + p.cross(r.force) + r.moment;
+  const double scale = weight * 0.5;  // N m: the weight at the beam's length
+  EXPECT_GT(r.moment.norm(), 0.1 * scale);  // the clamp carries the beam's weight as a moment
+  EXPECT_LT((rate - moments).norm(), 1e-9 * scale);
+}

@@ -217,3 +217,20 @@ TEST(JointReaction, RevoluteAndSphericalJointsCarryNoMomentTheyRelease) {
     EXPECT_LT((r.force - expected).norm(), 1e-9 * weight);
   }
 }
+
+TEST(JointReaction, RedundantJointsAreRefusedByTheIntegratorWithTheirName) {
+  // Two spherical joints at the same point repeat each other: the integrator names the second, not a singular matrix.
+  const fr::BodyModel model = rigid_bar();
+  fr::System system = pendulum(model);
+  const fr::Marker pin = fr::point_marker(model, 0, "bar", Eigen::Vector3d(-kLength / 2, 0, 0));
+  system.add_joint(fr::make_joint("again", fr::JointType::spherical, pin, fr::ground_marker(Eigen::Vector3d::Zero()),
+                                  Eigen::Vector3d::UnitZ(), system.initial_coordinates(), Eigen::VectorXd()));
+  fr::GeneralizedAlphaOptions options;
+  options.step = 1e-3;
+  try {
+    const fr::GeneralizedAlpha integrator(system, options);
+    ADD_FAILURE() << "a redundant joint was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "joint 'again' is redundant: it repeats what the constraints before it already impose");
+  }
+}

@@ -24,7 +24,9 @@ std::filesystem::path scratch_dir() {
   std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "flexbody";
   for (char& c : name)
     if (c == '/') c = '_';
-  const auto dir = std::filesystem::temp_directory_path() / ("flexbody-test-" + name);
+  // Under the build tree, named by the test: two build trees can run their suites at the same time (a CI clone
+  // beside a working build), and a failed test's files stay for a look until its next run.
+  const auto dir = std::filesystem::path(FLEXBODY_TEST_SCRATCH_DIR) / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

@@ -12,7 +12,7 @@ namespace flexbody::test {
 
 /// The tests' data directory (tests/data in the source tree).
 [[nodiscard]] std::filesystem::path data_dir();
-/// A fresh empty directory under the system's temporary directory, named after the running test.
+/// A fresh empty directory named after the running test, under the build tree (build/test-scratch/).
 [[nodiscard]] std::filesystem::path scratch_dir();
 
 /// A structured mesh of the box [0, lx] x [0, ly] x [0, lz] with nx x ny x nz cells, each split into

@@ -9,6 +9,13 @@ BodyModel full_order_model(const Eigen::SparseMatrix<double>& stiffness, const E
   const Eigen::Index n_n = nodes.rows();
   if (scalar_mass.rows() != n_n || scalar_mass.cols() != n_n || stiffness.rows() != 3 * n_n || stiffness.cols() != 3 * n_n)
     throw std::invalid_argument(source + ": K must be 3 n_n square and M_s n_n square for " + std::to_string(n_n) + " nodes");
+  // Both triangles stored: the sparse Cholesky reads one, the products read both (an upper triangle alone, as the
+  // assembly stores it, would be silently wrong).
+  for (const Eigen::SparseMatrix<double>* m : {&stiffness, &scalar_mass}) {
+    const Eigen::SparseMatrix<double> transposed = m->transpose();
+    if ((*m - transposed).norm() > 1e-12 * m->norm())
+      throw std::invalid_argument(source + ": K and M_s must be symmetric with both triangles stored");
+  }
   // Y = [Y_r, I] with Y_r = [1, X̄]: G = Yᵀ M_s Y (Eq. 66 with Ῡ = I) has the dense border rows
   // [Y_rᵀ M_s Y_r, Y_rᵀ M_s] and the sparse field block M_s.
   Eigen::MatrixXd y_r(n_n, 4);

@@ -104,7 +104,9 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
     if ((jac * v_ + phi_t).cwiseAbs().maxCoeff() > 1e-12 * std::max(1.0, v_.cwiseAbs().maxCoeff())) {
       Eigen::VectorXd rhs(n + m);
       rhs << mass * v_, -phi_t;
-      v_ = lu.solve(rhs).head(n);
+      const Eigen::VectorXd projected = lu.solve(rhs);
+      if (!projected.allFinite() || (kkt * projected - rhs).norm() > 1e-8 * std::max(1.0, rhs.norm())) refuse();
+      v_ = projected.head(n);
     }
   }
   Eigen::VectorXd rhs(n + m);

@@ -123,7 +123,9 @@ class System {
   /// the joint's generalized force Q = −Φ_qᵀλ on that body, reduced to the marker's point. The force is Q_τ; the
   /// moment about τ is Σ_j a_j × Q_a_j + Σ_f ξ_f × Q_ξ_f (the virtual work of a rigid rotation δθ of the whole
   /// deformed body, δa_j = δθ × a_j and δξ_f = δθ × ξ_f), moved to the marker's point p by −(p − τ) × F. Any joint
-  /// type (for a prismatic joint too). Throws std::invalid_argument if the first marker is on ground.
+  /// type (for a prismatic joint too). For a joint between two markers of the same body it is the first marker's
+  /// share (the wrench transmitted through the joint), not the net, which is zero. Throws std::invalid_argument if
+  /// the first marker is on ground.
   [[nodiscard]] JointReaction joint_reaction(std::size_t joint, double t, const Eigen::VectorXd& q,
                                              const Eigen::VectorXd& lambda) const;
   /// The first constraint row of joint j (its rows follow in the order of joint.hpp).

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 namespace fr = flexbody::runtime;
 
@@ -232,5 +233,45 @@ TEST(JointReaction, RedundantJointsAreRefusedByTheIntegratorWithTheirName) {
     ADD_FAILURE() << "a redundant joint was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(std::string(e.what()), "joint 'again' is redundant: it repeats what the constraints before it already impose");
+  }
+}
+
+TEST(RigidBody, StiffSpringsConvergeWithTheirTangentInTheNewtonMatrix) {
+  // A bar on a spring-damper to ground with k h² = 10 m, a stiff bushing at a coarse step. Without the spring's
+  // tangent in the Newton matrix the iteration contracts at about k h²/(4 m) and stops converging from k h² ≈ 3 m
+  // (measured before: 11 iterations per step at k h² = m). With it, a fresh matrix converges quadratically: two
+  // iterations per step at the centre of mass, 2.9 at the bar's end, where the spring also turns the bar at
+  // ω h ≈ 5 and the orthogonality rows' curvature counts. The kept matrix (the default) goes stale as the spring's
+  // direction turns (a rate of about 1e-3 against a first correction of the whole oscillation's amplitude):
+  // measured 3.1 and 4.1 iterations per step. Both Newton variants give the same solution.
+  const fr::BodyModel model = rigid_bar();
+  const double h = 1e-3;
+  for (const double offset : {0.0, kLength / 2}) {
+    SCOPED_TRACE(offset);
+    std::vector<Eigen::VectorXd> finals;
+    for (const fr::NewtonMatrix matrix : {fr::NewtonMatrix::constant_core, fr::NewtonMatrix::dense}) {
+      fr::System system;
+      fr::BodyState state;
+      state.velocity = Eigen::Vector3d(0.1, 0.05, 0);
+      state.angular_velocity = Eigen::Vector3d(0, 0, 0.3);
+      const int bar = system.add_body("bar", model, state);
+      fr::SpringDamper spring;
+      spring.name = "bushing";
+      spring.first = fr::point_marker(model, bar, "bar", Eigen::Vector3d(offset, 0, 0));
+      spring.second = fr::ground_marker(Eigen::Vector3d(offset + 0.1, 0.02, 0));
+      spring.stiffness = 10.0 * kMass / (h * h);
+      spring.damping = 50.0;
+      spring.rest_length = (spring.second.ground_point - Eigen::Vector3d(offset, 0, 0)).norm();  // no preload
+      system.add_spring(spring);
+      fr::GeneralizedAlphaOptions options;
+      options.step = h;
+      options.rho_infinity = 0.8;
+      options.newton_matrix = matrix;
+      fr::GeneralizedAlpha integrator(system, options);
+      for (int k = 0; k < 200; ++k) integrator.step();
+      EXPECT_LE(static_cast<double>(integrator.total_iterations()) / 200.0, offset == 0.0 ? 3.5 : 4.5);
+      finals.push_back(integrator.coordinates());
+    }
+    EXPECT_LT((finals[0] - finals[1]).cwiseAbs().maxCoeff(), 1e-8);  // the same solution to the Newton tolerance
   }
 }

@@ -154,7 +154,7 @@ void GeneralizedAlpha::step() {
                          system_.constraint_jacobian_transpose_product(t1, q, mu);
       residual.tail(m) = phi;
       if (refresh_ || !options_.reuse_newton_matrix) {
-        solver_->factor(q, mu, system_.constraint_jacobian(t1, q));
+        solver_->factor(q, v, mu, system_.constraint_jacobian(t1, q));
         refresh_ = false;
         extra_iterations_ = 0;
         fresh_this_step = true;

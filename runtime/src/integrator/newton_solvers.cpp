@@ -15,15 +15,38 @@ Eigen::MatrixXd rotate(const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) {
   return y;
 }
 
+// J_b of a spring for body b: −P_1 if its first marker is on b, plus P_2 if its second is (3 x n_b; empty if the
+// spring does not touch b).
+Eigen::MatrixXd spring_jacobian(const SpringTangent& t, int body, Eigen::Index columns) {
+  Eigen::MatrixXd j;
+  if (t.first != body && t.second != body) return j;
+  j = Eigen::MatrixXd::Zero(3, columns);
+  if (t.first == body) j -= t.p_first;
+  if (t.second == body) j += t.p_second;
+  return j;
+}
+
 }  // namespace
 
 DenseNewton::DenseNewton(const System& system, double beta_prime, double gamma_prime)
     : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime), mass_(system.mass_matrix()) {}
 
-void DenseNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
+void DenseNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
+                         const Eigen::MatrixXd& jacobian) {
   const Eigen::Index n = q.size(), m = jacobian.rows();
   Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
   kkt.topLeftCorner(n, n) = mass_ + (system_.stiffness(q) + system_.constraint_hessian(q, beta_prime_ * mu)) / beta_prime_;
+  for (const SpringTangent& t : system_.spring_tangents(q, v)) {  // Jᵀ (K + γ' C) J / β', every block
+    const Eigen::Matrix3d k = (t.stiffness + gamma_prime_ * t.damping) / beta_prime_;
+    for (int b = 0; b < system_.body_count(); ++b) {
+      const Eigen::MatrixXd j_b = spring_jacobian(t, b, system_.model(b).coordinate_count());
+      if (j_b.size() == 0) continue;
+      for (int c = 0; c < system_.body_count(); ++c) {
+        const Eigen::MatrixXd j_c = spring_jacobian(t, c, system_.model(c).coordinate_count());
+        if (j_c.size() > 0) kkt.block(system_.offset(b), system_.offset(c), j_b.cols(), j_c.cols()) += j_b.transpose() * k * j_c;
+      }
+    }
+  }
   for (int b = 0; b < system_.body_count(); ++b) {  // the damping's ξξ block Â D̂ Âᵀ, times γ'
     const BodyModel& model = system_.model(b);
     if (model.damping.size() == 0) continue;
@@ -45,7 +68,7 @@ Eigen::VectorXd DenseNewton::solve(const Eigen::VectorXd&, const Eigen::VectorXd
 }
 
 ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime)
-    : system_(system), beta_prime_(beta_prime) {
+    : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime) {
   for (int b = 0; b < system.body_count(); ++b) {
     const BodyModel& model = system.model(b);
     const Eigen::Index n_f = model.field_count();
@@ -102,9 +125,19 @@ Eigen::VectorXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& 
   return rotated;
 }
 
-void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
+void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
+                                const Eigen::MatrixXd& jacobian) {
   const int n_b = system_.body_count();
   const Eigen::Index m = jacobian.rows(), n_r = 12 * n_b;
+  // The springs' tangents: their rigid-rigid blocks (every pair of bodies) and, within a body, the rigid-ξ coupling
+  // enter; their ξξ blocks cannot (the core is the body's constant).
+  const std::vector<SpringTangent> springs = system_.spring_tangents(q, v);
+  std::vector<std::vector<Eigen::MatrixXd>> spring_j(springs.size());  // [spring][body] J_b
+  for (std::size_t s = 0; s < springs.size(); ++s)
+    for (int b = 0; b < n_b; ++b) spring_j[s].push_back(spring_jacobian(springs[s], b, system_.model(b).coordinate_count()));
+  auto spring_k = [&](std::size_t s) -> Eigen::Matrix3d {
+    return (springs[s].stiffness + gamma_prime_ * springs[s].damping) / beta_prime_;
+  };
   // The reduced matrix in [Δq_r (12 per body); Δμ] after eliminating every body's ξ.
   Eigen::MatrixXd reduced = Eigen::MatrixXd::Zero(n_r + m, n_r + m);
   for (int b = 0; b < n_b; ++b) {
@@ -128,6 +161,13 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
       const ElasticTangent t = body_elastic_tangent(model, a, xi, /*with_xi_xi=*/false);
       s_rr.bottomRightCorner<9, 9>() += t.aa / beta_prime_;
       s_rf.bottomRows<9>() += (t.a_xi + h.rightCols(n_xi)) / beta_prime_;
+    }
+    for (std::size_t s = 0; s < springs.size(); ++s) {
+      const Eigen::MatrixXd& j_b = spring_j[s][static_cast<std::size_t>(b)];
+      if (j_b.size() == 0) continue;
+      const Eigen::MatrixXd kj = spring_k(s) * j_b;
+      s_rr += j_b.leftCols<12>().transpose() * kj.leftCols<12>();
+      if (n_xi > 0) s_rf += j_b.leftCols<12>().transpose() * kj.rightCols(n_xi);
     }
     reduced.block(12 * b, 12 * b, 12, 12) = s_rr;
     reduced.block(12 * b, n_r, 12, m) = jacobian.middleCols(o, 12).transpose();
@@ -154,6 +194,14 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
       for (Eigen::Index l = 0; l < k_rows; ++l) reduced(n_r + e.rows[i], n_r + e.rows[l]) -= j_yj(i, l);
     }
   }
+  for (std::size_t s = 0; s < springs.size(); ++s)  // springs between two bodies: their rigid-rigid blocks
+    for (int b = 0; b < n_b; ++b)
+      for (int c = 0; c < n_b; ++c) {
+        const Eigen::MatrixXd& j_b = spring_j[s][static_cast<std::size_t>(b)];
+        const Eigen::MatrixXd& j_c = spring_j[s][static_cast<std::size_t>(c)];
+        if (b != c && j_b.size() > 0 && j_c.size() > 0)
+          reduced.block(12 * b, 12 * c, 12, 12) += j_b.leftCols<12>().transpose() * spring_k(s) * j_c.leftCols<12>();
+      }
   reduced_.compute(reduced);
 }
 

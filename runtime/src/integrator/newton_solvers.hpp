@@ -26,8 +26,9 @@ namespace flexbody::runtime::detail {
 class NewtonSolver {
  public:
   virtual ~NewtonSolver() = default;
-  /// Builds and factorizes the Newton matrix at (q, μ) with the constraint Jacobian J (μ = λ/β', scaled).
-  virtual void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) = 0;
+  /// Builds and factorizes the Newton matrix at (q, q̇, μ) with the constraint Jacobian J (μ = λ/β', scaled).
+  virtual void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
+                      const Eigen::MatrixXd& jacobian) = 0;
   /// [Δq; Δμ] for the scaled residual r and Φ with the last factorization (which may be from an earlier iterate:
   /// a modified Newton iteration; the constant core is always applied at the current A).
   [[nodiscard]] virtual Eigen::VectorXd solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual,
@@ -37,7 +38,8 @@ class NewtonSolver {
 class DenseNewton final : public NewtonSolver {
  public:
   DenseNewton(const System& system, double beta_prime, double gamma_prime);
-  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) override;
+  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
+              const Eigen::MatrixXd& jacobian) override;
   Eigen::VectorXd solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi) const override;
 
  private:
@@ -50,7 +52,8 @@ class DenseNewton final : public NewtonSolver {
 class ConstantCoreNewton final : public NewtonSolver {
  public:
   ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime);
-  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) override;
+  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
+              const Eigen::MatrixXd& jacobian) override;
   Eigen::VectorXd solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi) const override;
 
  private:
@@ -64,7 +67,7 @@ class ConstantCoreNewton final : public NewtonSolver {
   [[nodiscard]] Eigen::VectorXd core_solve(int body, const Eigen::Matrix3d& a, const Eigen::VectorXd& x) const;
 
   const System& system_;
-  double beta_prime_;
+  double beta_prime_, gamma_prime_;
   std::vector<Eigen::MatrixXd> inverses_;  ///< C⁻¹ per body; empty for rigid and full-order bodies
   /// The sparse factor of C for the full-order body (null for the others).
   std::vector<std::unique_ptr<Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>>> sparse_cores_;

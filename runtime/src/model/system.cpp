@@ -258,6 +258,31 @@ Eigen::MatrixXd System::stiffness(const Eigen::VectorXd& q) const {
   return k;
 }
 
+std::vector<SpringTangent> System::spring_tangents(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
+  std::vector<SpringTangent> tangents;
+  for (const SpringDamper& s : springs_) {
+    const Eigen::VectorXd q1 = body_coordinates(q, s.first.body), q2 = body_coordinates(q, s.second.body);
+    const Eigen::Vector3d d = marker_position(s.second, q2) - marker_position(s.first, q1);
+    const double length = d.norm();
+    if (!(length > 0.0)) continue;
+    SpringTangent t;
+    t.first = s.first.body;
+    t.second = s.second.body;
+    if (t.first != kGround) t.p_first = marker_position_jacobian(s.first);
+    if (t.second != kGround) t.p_second = marker_position_jacobian(s.second);
+    const Eigen::Vector3d e = d / length;
+    Eigen::Vector3d rate = Eigen::Vector3d::Zero();
+    if (t.second != kGround) rate += t.p_second * body_coordinates(v, s.second.body);
+    if (t.first != kGround) rate -= t.p_first * body_coordinates(v, s.first.body);
+    const double tension = s.stiffness * (length - s.rest_length) + s.damping * e.dot(rate);
+    const Eigen::Matrix3d along = e * e.transpose();
+    t.stiffness = s.stiffness * along + tension / length * (Eigen::Matrix3d::Identity() - along);
+    t.damping = s.damping * along;
+    tangents.push_back(std::move(t));
+  }
+  return tangents;
+}
+
 Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
   Eigen::VectorXd phi(constraint_count());
   Eigen::Index row = 0;

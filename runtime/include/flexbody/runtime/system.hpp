@@ -45,8 +45,9 @@ struct PointTorque {
 };
 
 /// A linear spring-damper between two markers (either may be on ground): the force F = k (ℓ − ℓ0) + c ℓ̇ pulls
-/// them together along the line between them. Its contribution to the Newton matrix is left out (it changes the
-/// convergence rate, not the solution).
+/// them together along the line between them. Its tangent enters the Newton matrix in full with the dense solve,
+/// and in its rigid-coordinate blocks with the constant core (whose ξξ block is the body's constant; see
+/// README "Known limits").
 struct SpringDamper {
   std::string name;
   Marker first, second;
@@ -60,6 +61,15 @@ struct SpringDamper {
 struct JointReaction {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+};
+
+/// The linearisation of one spring-damper for the Newton matrix: with J = [−P_1, P_2] (P_i = ∂r_i/∂q_i, the markers'
+/// position Jacobians, empty for ground) the stiffness is Jᵀ K J and the damping Jᵀ C J, K = k eeᵀ + (T/ℓ)(I − eeᵀ)
+/// and C = c eeᵀ (e the unit vector from marker 1 to marker 2, T the tension).
+struct SpringTangent {
+  int first = kGround, second = kGround;  ///< the markers' bodies
+  Eigen::MatrixXd p_first, p_second;      ///< P_1 (3 x n_1), P_2 (3 x n_2)
+  Eigen::Matrix3d stiffness = Eigen::Matrix3d::Zero(), damping = Eigen::Matrix3d::Zero();
 };
 
 struct Energies {
@@ -103,8 +113,10 @@ class System {
   /// Q − ∂U/∂q − ∂R/∂q̇: gravity (G[:, 0] ⊗ g), point forces ((y ⊗ I3) F), torques, spring-dampers, minus the
   /// elastic forces (Eqs. 86-87) and the bodies' structural damping (damping.hpp).
   [[nodiscard]] Eigen::VectorXd forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
-  /// ∂²U/∂q², dense (the applied forces here do not depend on q).
+  /// ∂²U/∂q², dense (the applied forces here do not depend on q; the springs' tangents are spring_tangents()).
   [[nodiscard]] Eigen::MatrixXd stiffness(const Eigen::VectorXd& q) const;
+  /// The spring-dampers' tangents at (q, q̇), one per spring with a defined direction (coincident markers have none).
+  [[nodiscard]] std::vector<SpringTangent> spring_tangents(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
   [[nodiscard]] Eigen::VectorXd constraints(double t, const Eigen::VectorXd& q) const;
   [[nodiscard]] Eigen::MatrixXd constraint_jacobian(double t, const Eigen::VectorXd& q) const;
   /// Φ_qᵀ μ without forming Φ_q (the reference rows in O(n_f) per body): what a Newton residual needs.

@@ -66,6 +66,52 @@ struct CholmodShiftSolve::Impl {
     cholmod_l_finish(&common);
   }
 
+  // Symbolic analysis of K̄ - sigma M̄ with a fill-reducing ordering of the node graph expanded to each
+  // node's three DOFs. Ordering the DOF graph instead, with 9x the entries, took 60 % of the analysis
+  // (3.0 s against 1.1 s at 193k DOFs, the same fill).
+  cholmod_factor* analyze_by_nodes() {
+    // The node graph from K's pattern (not M_s's: a lumped mass is diagonal): node i <= j is a neighbour
+    // of node j if K has a stored entry in DOF column 3j + 2, which holds every row of the 3x3 blocks.
+    const auto n_nodes = static_cast<std::size_t>(mass.rows());
+    std::vector<std::int64_t> node_start(n_nodes + 1, 0), node_rows;
+    node_rows.reserve(static_cast<std::size_t>(stiffness.nonZeros()) / 9 + n_nodes);
+    for (std::size_t j = 0; j < n_nodes; ++j) {
+      const auto column = static_cast<Eigen::Index>(3 * j + 2);
+      for (SparseMatrix::InnerIterator it(stiffness, column); it; ++it)
+        if (node_rows.size() == static_cast<std::size_t>(node_start[j]) || node_rows.back() != it.row() / 3)
+          node_rows.push_back(it.row() / 3);
+      node_start[j + 1] = static_cast<std::int64_t>(node_rows.size());
+    }
+    cholmod_sparse pattern{};
+    pattern.nrow = pattern.ncol = n_nodes;
+    pattern.nzmax = node_rows.size();
+    pattern.p = node_start.data();
+    pattern.i = node_rows.data();
+    pattern.stype = 1;
+    pattern.itype = CHOLMOD_LONG;
+    pattern.xtype = CHOLMOD_PATTERN;
+    pattern.dtype = CHOLMOD_DOUBLE;
+    pattern.sorted = 1;
+    pattern.packed = 1;
+    common.supernodal = CHOLMOD_SIMPLICIAL;  // only the ordering is wanted here
+    cholmod_factor* nodes = cholmod_l_analyze(&pattern, &common);
+    common.supernodal = CHOLMOD_SUPERNODAL;
+    if (nodes == nullptr) return nullptr;
+    std::vector<std::int64_t> dof_order(3 * n_nodes);
+    const auto* node_order = static_cast<const std::int64_t*>(nodes->Perm);
+    for (std::size_t k = 0; k < n_nodes; ++k)
+      for (int c = 0; c < 3; ++c) dof_order[3 * k + c] = 3 * node_order[k] + c;
+    cholmod_l_free_factor(&nodes, &common);
+    const int saved_methods = common.nmethods;
+    const int saved_ordering = common.method[0].ordering;
+    common.nmethods = 1;
+    common.method[0].ordering = CHOLMOD_GIVEN;
+    cholmod_factor* dofs = cholmod_l_analyze_p(matrix, dof_order.data(), nullptr, 0, &common);
+    common.nmethods = saved_methods;
+    common.method[0].ordering = saved_ordering;
+    return dofs;
+  }
+
   void locate_mass_entries() {
     mass_positions.reserve(3 * static_cast<std::size_t>(mass.nonZeros()));
     const std::int64_t* col = stiffness.outerIndexPtr();
@@ -106,7 +152,7 @@ CholmodShiftSolve::CholmodShiftSolve(const SparseMatrix& stiffness_upper, const 
   std::copy_n(stiffness_upper.innerIndexPtr(), nnz, static_cast<std::int64_t*>(impl_->matrix->i));
 
   const auto start = std::chrono::steady_clock::now();
-  impl_->factor = cholmod_l_analyze(impl_->matrix, &impl_->common);
+  impl_->factor = impl_->analyze_by_nodes();
   if (impl_->factor == nullptr) throw std::runtime_error("shift-invert: CHOLMOD analysis failed (out of memory?)");
   stats_.analyze_seconds = seconds_since(start);
 }
@@ -141,18 +187,22 @@ void CholmodShiftSolve::set_shift(double sigma) {
   stats_.factor_flops = impl_->common.fl;
 }
 
-void CholmodShiftSolve::perform_op(const double* x, double* y) {
+void CholmodShiftSolve::perform_op(const double* x, double* y) { perform_block(x, y, 1); }
+
+void CholmodShiftSolve::perform_block(const double* x, double* y, Eigen::Index columns) {
   const auto n = static_cast<std::size_t>(rows());
-  cholmod_dense rhs = dense_view(const_cast<double*>(x), n, 1);
+  cholmod_dense rhs = dense_view(const_cast<double*>(x), n, static_cast<std::size_t>(columns));
   const auto start = std::chrono::steady_clock::now();
   if (!cholmod_l_solve2(CHOLMOD_A, impl_->factor, &rhs, nullptr, &impl_->x, nullptr, &impl_->y, &impl_->e,
                         &impl_->common))
     throw std::runtime_error("shift-invert: CHOLMOD solve failed");
   stats_.solve_seconds += seconds_since(start);
-  ++stats_.solves;
-  Eigen::Map<Eigen::VectorXd> result(y, static_cast<Eigen::Index>(n));
-  result = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(impl_->x->x), static_cast<Eigen::Index>(n));
-  if (impl_->deflation.cols() > 0)  // y <- y - R (M̄ R)ᵀ y
+  stats_.solves += columns;
+  ++stats_.solve_passes;
+  Eigen::Map<Eigen::MatrixXd> result(y, static_cast<Eigen::Index>(n), columns);
+  result = Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(impl_->x->x), static_cast<Eigen::Index>(n),
+                                             columns);
+  if (impl_->deflation.cols() > 0)  // Y <- Y - R (M̄ R)ᵀ Y
     result.noalias() -= impl_->deflation * (impl_->mass_deflation.transpose() * result);
 }
 

@@ -154,6 +154,26 @@ TEST(FreeFreeModes, RefusesAMechanism) {
   }
 }
 
+TEST(FreeFreeModes, FillReducingOrderingComesFromTheStiffnessPattern) {
+  // The shift-invert factor is ordered on the node graph, read from K̄'s pattern: a lumped (diagonal)
+  // M_s must give the same ordering and fill as the consistent mass, whose pattern is the node graph too.
+  const fp::Material material{"steel", 210e9, 0.3, 7850.0};
+  const auto consistent = flexbody::test::assemble(flexbody::test::box_mesh(0.4, 0.1, 0.05, 16, 4, 2), material,
+                                                   fp::MassScheme::consistent);
+  const auto lumped = flexbody::test::assemble(consistent.mesh, material, fp::MassScheme::lumped);
+  ASSERT_LT(lumped.scalar_mass.nonZeros(), consistent.scalar_mass.nonZeros());  // diagonal
+  double nonzeros[2] = {};
+  int k = 0;
+  for (const auto* assembled : {&consistent, &lumped}) {
+    fp::CholmodShiftSolve op(assembled->stiffness, assembled->scalar_mass, Eigen::MatrixXd());
+    op.set_shift(fp::automatic_shift(assembled->mesh.nodes, material));
+    nonzeros[k++] = op.stats().factor_nonzeros;
+  }
+  // Same pattern, same ordering, same fill. Ordered on the lumped M_s pattern (the diagonal), this factor
+  // had 4.6x the entries (164952 against 35631).
+  EXPECT_EQ(nonzeros[0], nonzeros[1]);
+}
+
 TEST(FreeFreeModes, UpsilonHasTheListLayoutOfEq49) {
   Eigen::MatrixXd modes(6, 2);  // 2 nodes, 2 modes, node-interleaved
   modes << 1, 7, 2, 8, 3, 9, 4, 10, 5, 11, 6, 12;

@@ -80,6 +80,20 @@ TEST(Tet4Assembly, RowSumLumpedMassEqualsAbaqusExport) {
   EXPECT_NEAR(row_sums.sum(), 11600.0, 11600.0 * 1e-6);  // 4 m^3 x 2900 kg/m^3; coordinates are single precision
 }
 
+TEST(Tet4Assembly, VectorMassProductEqualsTheKroneckerMatrix) {
+  // apply_vector_mass reads M_s's upper triangle once: compare with the explicit symmetric M_s ⊗ I3.
+  const auto a = assemble(irregular_box(), kAbaqusSteel, fp::MassScheme::consistent);
+  const fp::SparseMatrix m = vector_mass(fp::full_from_upper(a.scalar_mass));
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  Eigen::VectorXd x(a.mesh.dof_count()), y(a.mesh.dof_count());
+  for (Eigen::Index i = 0; i < x.size(); ++i) x(i) = uniform(random);
+  fp::apply_vector_mass(a.scalar_mass, x, y);
+  const Eigen::VectorXd expected = m * x;
+  // The same products summed in another order: round-off of the largest entry.
+  EXPECT_LT((y - expected).cwiseAbs().maxCoeff(), 1e-14 * expected.cwiseAbs().maxCoeff());
+}
+
 TEST(Tet4Assembly, StiffnessAnnihilatesRigidBodyFields) {
   const auto a = assemble(irregular_box(), kAbaqusSteel, fp::MassScheme::consistent);
   const Eigen::MatrixXd rigid = fp::rigid_body_modes(a.mesh.nodes, a.scalar_mass);

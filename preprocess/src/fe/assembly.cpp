@@ -101,7 +101,8 @@ void apply_vector_mass(const SparseMatrix& scalar_mass_upper, const Eigen::Ref<c
                        Eigen::Ref<Eigen::VectorXd> y) {
   // One pass over the stored upper triangle: entry (i, j), i <= j, adds m x_j to y_i and, off the
   // diagonal, m x_i to y_j (x_i, y_i: node i's three components). Eigen's selfadjoint product with an
-  // n x 3 right-hand side made three strided passes, 4x slower; the eigen stage calls this per Lanczos step.
+  // n x 3 right-hand side made three strided passes: 6.7 ms against 4.1 ms at 193k DOFs, and the eigen
+  // stage calls this about 200 times.
   const Eigen::Index n = scalar_mass_upper.rows();
   const std::int64_t* start = scalar_mass_upper.outerIndexPtr();
   const std::int64_t* row = scalar_mass_upper.innerIndexPtr();

@@ -37,7 +37,8 @@ struct NodeGraph {
                                                 const std::vector<Tet4Geometry>& geometry,
                                                 double density, MassScheme scheme);
 
-/// y = (M_s ⊗ I3) x for node-interleaved vectors x, y of length 3 n_n (M_s stored upper).
+/// y = (M_s ⊗ I3) x for node-interleaved vectors x, y of length 3 n_n (M_s stored upper); x and y must
+/// not overlap.
 void apply_vector_mass(const SparseMatrix& scalar_mass_upper, const Eigen::Ref<const Eigen::VectorXd>& x,
                        Eigen::Ref<Eigen::VectorXd> y);
 

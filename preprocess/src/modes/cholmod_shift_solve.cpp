@@ -69,8 +69,8 @@ struct CholmodShiftSolve::Impl {
   // Symbolic analysis of K̄ - sigma M̄ with a fill-reducing ordering of the node graph expanded to each
   // node's three DOFs. Ordering the DOF graph instead, with 9x the entries, made the analysis 2.1-3.0 s
   // against 1.1-1.7 s at 193k DOFs, for the same fill. Both AMD and METIS are tried, always, and the one
-  // with less fill kept: CHOLMOD's default skips METIS when AMD's flops per entry of L are below 500,
-  // which on the node graph (a third of the DOF graph's ratio) would happen at sizes where METIS wins.
+  // with less fill kept: CHOLMOD's default skips METIS when AMD's flops per entry of L are below 500, and
+  // on the node graph that ratio is about a third of the DOF graph's, so METIS could be skipped where it wins.
   cholmod_factor* analyze_by_nodes() {
     // The node graph from K's pattern (not M_s's: a lumped mass is diagonal): node i <= j is a neighbour
     // of node j if K has a stored entry in DOF column 3j + 2, which holds every row of the 3x3 blocks.

@@ -73,3 +73,47 @@ TEST(BodyModel, RefusesMoreModesThanTheFileHolds) {
   }
   EXPECT_THROW((void)fr::make_body_model(body, -1), std::invalid_argument);
 }
+
+namespace {
+
+// (G ⊗ I3) x with G formed explicitly.
+Eigen::VectorXd explicit_mass_times(const Eigen::MatrixXd& g, const Eigen::VectorXd& x) {
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(3 * g.rows(), 3 * g.cols());
+  for (Eigen::Index r = 0; r < g.rows(); ++r)
+    for (Eigen::Index c = 0; c < g.cols(); ++c) m.block<3, 3>(3 * r, 3 * c).diagonal().setConstant(g(r, c));
+  return m * x;
+}
+
+}  // namespace
+
+// A body file's fields are M_s-orthonormal, so G_ff is I to round-off: the model makes it exactly I and its mass
+// products skip the n_f-square block. A G_ff that is not I keeps the general product.
+TEST(BodyModel, OrthonormalFieldsGiveTheShortMassProduct) {
+  ff::BodyData body = synthetic_body();
+  const Eigen::Index n_f = 6;
+  Eigen::MatrixXd g = Eigen::MatrixXd::Random(4 + n_f, 4 + n_f);
+  g = (g + g.transpose()).eval();
+  Eigen::MatrixXd noise = 1e-14 * Eigen::MatrixXd::Random(n_f, n_f);
+  g.bottomRightCorner(n_f, n_f) = Eigen::MatrixXd::Identity(n_f, n_f) + noise + noise.transpose();
+  body.gcms.mass_matrix = g;
+  const Eigen::VectorXd x = Eigen::VectorXd::Random(3 * (4 + n_f));
+  for (Eigen::Index k : {0, 2, 3}) {
+    SCOPED_TRACE(k);
+    const fr::BodyModel model = fr::make_body_model(body, k);
+    const Eigen::Index f = model.field_count(), n = 3 * (4 + f);
+    EXPECT_TRUE(model.unit_field_mass);
+    EXPECT_EQ(model.mass_matrix.bottomRightCorner(f, f), Eigen::MatrixXd::Identity(f, f));
+    EXPECT_EQ(model.mass_matrix.topRows(4), g.topLeftCorner(4, 4 + f));  // the rigid rows are untouched
+    // Sums of at most 4 + n_f products of entries below 2 in size: 1e-14 is a few hundred ε.
+    EXPECT_LE((fr::mass_times(model, x.head(n)) - explicit_mass_times(model.mass_matrix, x.head(n))).cwiseAbs().maxCoeff(), 1e-14);
+    EXPECT_NEAR(fr::field_mass_norm_squared(model, x.head(3 * f)), x.head(3 * f).squaredNorm(), 1e-14);
+  }
+  g.bottomRightCorner(n_f, n_f).diagonal().array() += 1e-6;  // no longer I to round-off: G is kept as it is
+  body.gcms.mass_matrix = g;
+  const fr::BodyModel model = fr::make_body_model(body, 3);
+  EXPECT_FALSE(model.unit_field_mass);
+  EXPECT_EQ(model.mass_matrix, g);
+  EXPECT_LE((fr::mass_times(model, x) - explicit_mass_times(g, x)).cwiseAbs().maxCoeff(), 1e-14);
+  const Eigen::VectorXd xi = x.tail(3 * n_f);
+  EXPECT_NEAR(fr::field_mass_norm_squared(model, xi), xi.dot(explicit_mass_times(g.bottomRightCorner(n_f, n_f), xi)), 1e-13);
+}

@@ -1,7 +1,10 @@
 #include "flexbody/runtime/gcms_elastic.hpp"
 
+#include "../kernels/dense_product.hpp"
+
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 namespace flexbody::runtime {
 namespace {
@@ -26,7 +29,8 @@ Eigen::Matrix<double, Eigen::Dynamic, 9> body_frame_coordinates_derivative(const
 
 Eigen::VectorXd body_frame_coordinates(const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
   Eigen::VectorXd xi_bar(xi.size());
-  for (Eigen::Index f = 0; f < xi.size() / 3; ++f) xi_bar.segment<3>(3 * f) = a.transpose() * xi.segment<3>(3 * f);
+  const Eigen::Index n_f = xi.size() / 3;  // as 3 x n_f matrices, one column per field: Ξ̄ = Aᵀ Ξ
+  Eigen::Map<Eigen::Matrix3Xd>(xi_bar.data(), 3, n_f).noalias() = a.transpose() * Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f);
   return xi_bar;
 }
 
@@ -38,15 +42,18 @@ ElasticForces forces_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const 
   const Eigen::Index n_f = xi.size() / 3;
   const Eigen::VectorXd xi_bar = body_frame_coordinates(a, xi);
   ElasticForces out;
-  out.h = k_hat * xi_bar;
+  if constexpr (std::is_same_v<Stiffness, Eigen::MatrixXd>) {  // every iteration: the dispatched kernel
+    out.h.resize(xi.size());
+    detail::dense_product(k_hat, xi_bar.data(), out.h.data());
+  } else {
+    out.h = k_hat * xi_bar;
+  }
   out.energy = 0.5 * xi_bar.dot(out.h);
   out.grad_xi.resize(xi.size());
-  Eigen::Matrix3d grad_a = Eigen::Matrix3d::Zero();
-  for (Eigen::Index f = 0; f < n_f; ++f) {
-    out.grad_xi.segment<3>(3 * f) = a * out.h.segment<3>(3 * f);                       // Eq. 87
-    grad_a += xi.segment<3>(3 * f) * out.h.segment<3>(3 * f).transpose();               // Eq. 86
-  }
-  out.grad_a = Eigen::Map<const Vector9d>(grad_a.data());
+  // With the 3-blocks as the columns of 3 x n_f matrices Ξ, H: ∂U/∂ξ = A H (Eq. 87), ∂U/∂A = Ξ Hᵀ (Eq. 86).
+  const Eigen::Map<const Eigen::Matrix3Xd> h(out.h.data(), 3, n_f);
+  Eigen::Map<Eigen::Matrix3Xd>(out.grad_xi.data(), 3, n_f).noalias() = a * h;
+  Eigen::Map<Eigen::Matrix3d>(out.grad_a.data()).noalias() = Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f) * h.transpose();
   return out;
 }
 

@@ -1,5 +1,7 @@
 #include "newton_solvers.hpp"
 
+#include "../kernels/dense_product.hpp"
+
 #include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
 
@@ -115,13 +117,17 @@ Eigen::MatrixXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& 
 }
 
 Eigen::VectorXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const Eigen::VectorXd& x) const {
-  // One right-hand side (every iteration): a matrix-vector product, which a one-column matrix would send through
-  // GEMM's packing (measured: 15 % of a 20-mode step).
+  // One right-hand side (every iteration): a matrix-vector product. The 3-blocks of x are the columns of a
+  // 3 x n_f matrix, so Âᵀ x is Aᵀ X.
   const auto k = static_cast<std::size_t>(body);
-  Eigen::VectorXd rotated(x.size());
-  for (Eigen::Index f = 0; f < x.size() / 3; ++f) rotated.segment<3>(3 * f).noalias() = a.transpose() * x.segment<3>(3 * f);
-  Eigen::VectorXd y = sparse_cores_[k] ? Eigen::VectorXd(sparse_cores_[k]->solve(rotated)) : Eigen::VectorXd(inverses_[k] * rotated);
-  for (Eigen::Index f = 0; f < y.size() / 3; ++f) rotated.segment<3>(3 * f).noalias() = a * y.segment<3>(3 * f);
+  const Eigen::Index n_f = x.size() / 3;
+  Eigen::VectorXd rotated(x.size()), y(x.size());
+  Eigen::Map<Eigen::Matrix3Xd>(rotated.data(), 3, n_f).noalias() = a.transpose() * Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, n_f);
+  if (sparse_cores_[k])
+    y = sparse_cores_[k]->solve(rotated);
+  else
+    dense_product(inverses_[k], rotated.data(), y.data());
+  Eigen::Map<Eigen::Matrix3Xd>(rotated.data(), 3, n_f).noalias() = a * Eigen::Map<const Eigen::Matrix3Xd>(y.data(), 3, n_f);
   return rotated;
 }
 
@@ -180,14 +186,13 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
     for (Eigen::Index k = 0; k < m; ++k)
       if (j_all.row(k).cwiseAbs().maxCoeff() > 0.0) e.rows.push_back(k);
     const auto k_rows = static_cast<Eigen::Index>(e.rows.size());
-    e.j_f = j_all(e.rows, Eigen::all);
-    e.s_rf = s_rf;
-    Eigen::MatrixXd columns(n_xi, 12 + k_rows);
-    columns << s_rf.transpose(), e.j_f.transpose();
-    e.y = core_solve(b, a, columns);
+    const Eigen::MatrixXd j_f = j_all(e.rows, Eigen::all);
+    e.coupling.resize(n_xi, 12 + k_rows);
+    e.coupling << s_rf.transpose(), j_f.transpose();
+    e.y = core_solve(b, a, e.coupling);
     reduced.block(12 * b, 12 * b, 12, 12) -= s_rf * e.y.leftCols(12);
-    const Eigen::MatrixXd s_rf_y = s_rf * e.y.rightCols(k_rows), j_y = e.j_f * e.y.leftCols(12);
-    const Eigen::MatrixXd j_yj = e.j_f * e.y.rightCols(k_rows);
+    const Eigen::MatrixXd s_rf_y = s_rf * e.y.rightCols(k_rows), j_y = j_f * e.y.leftCols(12);
+    const Eigen::MatrixXd j_yj = j_f * e.y.rightCols(k_rows);
     for (Eigen::Index i = 0; i < k_rows; ++i) {
       reduced.col(n_r + e.rows[i]).segment(12 * b, 12) -= s_rf_y.col(i);
       reduced.row(n_r + e.rows[i]).segment(12 * b, 12) -= j_y.row(i);
@@ -220,9 +225,9 @@ Eigen::VectorXd ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen:
     // S_ff⁻¹ r_f at the current A (the core is exact for any A; only the coupling blocks are from the factorization).
     const Eigen::Matrix3d a = orientation_of(system_.body_coordinates(q, b));
     Eigen::VectorXd y = core_solve(b, a, Eigen::VectorXd(residual.segment(o + 12, n_xi)));
-    rhs.segment(12 * b, 12) += e.s_rf * y;
-    const Eigen::VectorXd j_yr = e.j_f * y;
-    for (std::size_t i = 0; i < e.rows.size(); ++i) rhs(n_r + e.rows[i]) += j_yr(static_cast<Eigen::Index>(i));
+    const Eigen::VectorXd coupled = e.coupling.transpose() * y;  // [S_rf; J_f] y
+    rhs.segment(12 * b, 12) += coupled.head<12>();
+    for (std::size_t i = 0; i < e.rows.size(); ++i) rhs(n_r + e.rows[i]) += coupled(12 + static_cast<Eigen::Index>(i));
     y_r[static_cast<std::size_t>(b)] = std::move(y);
   }
   const Eigen::VectorXd x = reduced_.solve(rhs);
@@ -234,9 +239,11 @@ Eigen::VectorXd ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen:
     out.segment(o, 12) = x.segment(12 * b, 12);
     if (n_xi == 0) continue;
     const Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
-    const Eigen::VectorXd mu_rows = x.tail(m)(e.rows);
-    out.segment(o + 12, n_xi) = -(y_r[static_cast<std::size_t>(b)] + e.y.leftCols(12) * x.segment(12 * b, 12) +
-                                  e.y.rightCols(static_cast<Eigen::Index>(e.rows.size())) * mu_rows);
+    const auto k_rows = static_cast<Eigen::Index>(e.rows.size());
+    Eigen::VectorXd unknowns(12 + k_rows);  // [Δq_r; Δμ of the rows that touch ξ]
+    unknowns << x.segment(12 * b, 12), x.tail(m)(e.rows);
+    dense_product(e.y, unknowns.data(), out.data() + o + 12);
+    out.segment(o + 12, n_xi) = -(out.segment(o + 12, n_xi) + y_r[static_cast<std::size_t>(b)]);
   }
   return out;
 }

@@ -57,10 +57,10 @@ class ConstantCoreNewton final : public NewtonSolver {
   Eigen::VectorXd solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi) const override;
 
  private:
-  // One flexible body's part of the factorization: S_rf, the constraint rows that touch its ξ (their J_f), and
-  // S_ff⁻¹ [S_fr, J_fᵀ] at the factorization's A.
+  // One flexible body's part of the factorization: the constraint rows that touch its ξ, coupling = [S_fr, J_fᵀ]
+  // (S_fr = S_rfᵀ; J_f those rows' ξ columns) and y = S_ff⁻¹ coupling at the factorization's A.
   struct Eliminated {
-    Eigen::MatrixXd s_rf, j_f, y;
+    Eigen::MatrixXd coupling, y;
     std::vector<Eigen::Index> rows;
   };
   [[nodiscard]] Eigen::MatrixXd core_solve(int body, const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) const;

@@ -37,6 +37,10 @@ struct BodyModel {
   Eigen::Index modes = 0;           ///< modes kept (0: rigid)
   double mass = 0.0;                ///< [kg]
   Eigen::MatrixXd mass_matrix;      ///< G ((4 + n_f) square)
+  /// G_ff = I exactly, so that (G ⊗ I3) products skip the n_f-square block. make_body_model sets it for a body
+  /// file's M_s-orthonormal fields (SCHEMA.md), snapping G_ff to I where it is I to round-off; a model built by
+  /// hand leaves it false and takes the general product.
+  bool unit_field_mass = false;
   Eigen::MatrixXd stiffness;        ///< K̂ (3 n_f square) [s^-2]
   /// g_f = G[1:4, 4 + f] (3 x n_f) [kg^1/2 m]: the rotational Tisserand constraint is Σ_f g_f × ξ̄_f = 0 (Eq. 78).
   Eigen::Matrix<double, 3, Eigen::Dynamic> tisserand;

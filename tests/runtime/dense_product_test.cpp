@@ -1,0 +1,30 @@
+// The runtime's dispatched matrix-vector kernel (runtime/src/kernels) against Eigen's product.
+#include "kernels/dense_product.hpp"
+
+#include <Eigen/Core>
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <utility>
+
+namespace {
+
+// Shapes the runtime uses (3 n_f square; 3 n_f x (12 + constraint rows)) and ones that leave a remainder after
+// the kernel's blocks of four columns, down to empty.
+TEST(DenseProduct, AgreesWithEigenToTheRoundOffOfAReorderedSum) {
+  const std::pair<Eigen::Index, Eigen::Index> shapes[] = {{180, 180}, {180, 21}, {21, 180}, {7, 13}, {1, 1}, {5, 0}, {0, 3}};
+  for (const auto& [rows, cols] : shapes) {
+    SCOPED_TRACE(std::to_string(rows) + " x " + std::to_string(cols));
+    const Eigen::MatrixXd a = Eigen::MatrixXd::Random(rows, cols);
+    const Eigen::VectorXd x = Eigen::VectorXd::Random(cols);
+    Eigen::VectorXd y = Eigen::VectorXd::Constant(rows, std::numeric_limits<double>::quiet_NaN());  // must be overwritten
+    flexbody::runtime::detail::dense_product(a, x.data(), y.data());
+    const Eigen::VectorXd expected = a * x;
+    // Each entry is a sum of `cols` products in another order: the two differ by at most 2 cols ε Σ_j |a_ij x_j|.
+    const Eigen::VectorXd bound =
+        2.0 * static_cast<double>(cols) * std::numeric_limits<double>::epsilon() * (a.cwiseAbs() * x.cwiseAbs());
+    for (Eigen::Index i = 0; i < rows; ++i) EXPECT_LE(std::abs(y(i) - expected(i)), bound(i)) << "row " << i;
+  }
+}
+
+}  // namespace

@@ -20,9 +20,9 @@ Eigen::VectorXd mass_times(const BodyModel& model, const Eigen::Ref<const Eigen:
     const Eigen::Index n_f = columns - 4;
     const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> x(x_b.data(), 3, columns);
     Eigen::Map<Eigen::Matrix<double, 3, Eigen::Dynamic>> out(y.data(), 3, columns);  // column c: 3-block c of y
-    out.leftCols<4>().noalias() = x * model.mass_matrix.leftCols<4>();               // G symmetric: G[:, 0:4]
-    out.rightCols(n_f).noalias() = x.leftCols<4>() * model.mass_matrix.topRightCorner(4, n_f);
-    out.rightCols(n_f) += x.rightCols(n_f);
+    // Coefficient-wise products: for three rows GEMM's packing costs more than it saves.
+    out.leftCols<4>().noalias() = x.lazyProduct(model.mass_matrix.leftCols<4>());  // G symmetric: G[:, 0:4]
+    out.rightCols(n_f) = x.rightCols(n_f) + x.leftCols<4>().lazyProduct(model.mass_matrix.topRightCorner(4, n_f));
     return y;
   }
   using Strided = Eigen::InnerStride<3>;
@@ -62,11 +62,11 @@ Eigen::RowVectorXd field_row(const BodyModel& model, Eigen::Index node) {
   return row;
 }
 
-ElasticForces body_elastic_forces(const BodyModel& model, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+ElasticForces body_elastic_forces(const BodyModel& model, const Eigen::Matrix3d& a, const VectorRef& xi) {
   return model.sparse ? elastic_forces(model.sparse->stiffness, a, xi) : elastic_forces(model.stiffness, a, xi);
 }
 
-ElasticTangent body_elastic_tangent(const BodyModel& model, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+ElasticTangent body_elastic_tangent(const BodyModel& model, const Eigen::Matrix3d& a, const VectorRef& xi,
                                     bool with_xi_xi) {
   return model.sparse ? elastic_tangent(model.sparse->stiffness, a, xi, with_xi_xi)
                       : elastic_tangent(model.stiffness, a, xi, with_xi_xi);

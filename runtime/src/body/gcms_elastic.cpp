@@ -10,7 +10,7 @@ namespace flexbody::runtime {
 namespace {
 
 template <class Stiffness>
-void check_sizes(const Stiffness& k_hat, const Eigen::VectorXd& xi) {
+void check_sizes(const Stiffness& k_hat, const VectorRef& xi) {
   if (k_hat.rows() != k_hat.cols() || k_hat.rows() % 3 != 0 || xi.size() != k_hat.rows())
     throw std::invalid_argument("GCMS elastic forces: K_hat is " + std::to_string(k_hat.rows()) + " x " +
                                 std::to_string(k_hat.cols()) + " and xi has " + std::to_string(xi.size()) +
@@ -19,7 +19,7 @@ void check_sizes(const Stiffness& k_hat, const Eigen::VectorXd& xi) {
 
 }  // namespace
 
-Eigen::Matrix<double, Eigen::Dynamic, 9> body_frame_coordinates_derivative(const Eigen::VectorXd& xi) {
+Eigen::Matrix<double, Eigen::Dynamic, 9> body_frame_coordinates_derivative(const VectorRef& xi) {
   const Eigen::Index n_f = xi.size() / 3;
   Eigen::Matrix<double, Eigen::Dynamic, 9> d = Eigen::Matrix<double, Eigen::Dynamic, 9>::Zero(3 * n_f, 9);
   for (Eigen::Index f = 0; f < n_f; ++f)
@@ -27,7 +27,7 @@ Eigen::Matrix<double, Eigen::Dynamic, 9> body_frame_coordinates_derivative(const
   return d;
 }
 
-Eigen::VectorXd body_frame_coordinates(const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+Eigen::VectorXd body_frame_coordinates(const Eigen::Matrix3d& a, const VectorRef& xi) {
   Eigen::VectorXd xi_bar(xi.size());
   const Eigen::Index n_f = xi.size() / 3;  // as 3 x n_f matrices, one column per field: Ξ̄ = Aᵀ Ξ
   Eigen::Map<Eigen::Matrix3Xd>(xi_bar.data(), 3, n_f).noalias() = a.transpose() * Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f);
@@ -37,7 +37,7 @@ Eigen::VectorXd body_frame_coordinates(const Eigen::Matrix3d& a, const Eigen::Ve
 namespace {
 
 template <class Stiffness>
-ElasticForces forces_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+ElasticForces forces_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi) {
   check_sizes(k_hat, xi);
   const Eigen::Index n_f = xi.size() / 3;
   const Eigen::VectorXd xi_bar = body_frame_coordinates(a, xi);
@@ -53,12 +53,12 @@ ElasticForces forces_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const 
   // With the 3-blocks as the columns of 3 x n_f matrices Ξ, H: ∂U/∂ξ = A H (Eq. 87), ∂U/∂A = Ξ Hᵀ (Eq. 86).
   const Eigen::Map<const Eigen::Matrix3Xd> h(out.h.data(), 3, n_f);
   Eigen::Map<Eigen::Matrix3Xd>(out.grad_xi.data(), 3, n_f).noalias() = a * h;
-  Eigen::Map<Eigen::Matrix3d>(out.grad_a.data()).noalias() = Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f) * h.transpose();
+  Eigen::Map<Eigen::Matrix3d>(out.grad_a.data()).noalias() = Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f).lazyProduct(h.transpose());
   return out;
 }
 
 template <class Stiffness>
-ElasticTangent tangent_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi, bool with_xi_xi) {
+ElasticTangent tangent_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi, bool with_xi_xi) {
   check_sizes(k_hat, xi);
   const Eigen::Index n = xi.size(), n_f = n / 3;
   const Eigen::Matrix<double, Eigen::Dynamic, 9> d = body_frame_coordinates_derivative(xi);
@@ -83,20 +83,20 @@ ElasticTangent tangent_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, cons
 
 }  // namespace
 
-ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi) {
   return forces_of(k_hat, a, xi);
 }
 
-ElasticForces elastic_forces(const Eigen::SparseMatrix<double>& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+ElasticForces elastic_forces(const Eigen::SparseMatrix<double>& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi) {
   return forces_of(k_hat, a, xi);
 }
 
-ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi,
                                bool with_xi_xi) {
   return tangent_of(k_hat, a, xi, with_xi_xi);
 }
 
-ElasticTangent elastic_tangent(const Eigen::SparseMatrix<double>& k_hat, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+ElasticTangent elastic_tangent(const Eigen::SparseMatrix<double>& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi,
                                bool with_xi_xi) {
   return tangent_of(k_hat, a, xi, with_xi_xi);
 }

@@ -19,7 +19,7 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return s;
 }
 
-void check_sizes(const TisserandMatrix& g, const Eigen::VectorXd& xi) {
+void check_sizes(const TisserandMatrix& g, const VectorRef& xi) {
   if (xi.size() != 3 * g.cols())
     throw std::invalid_argument("reference constraints: xi has " + std::to_string(xi.size()) + " entries for " +
                                 std::to_string(g.cols()) + " fields (expected 3 n_f)");
@@ -28,7 +28,7 @@ void check_sizes(const TisserandMatrix& g, const Eigen::VectorXd& xi) {
 }  // namespace
 
 Eigen::Matrix<double, 9, 1> reference_residual(const TisserandMatrix& g, const Eigen::Matrix3d& a,
-                                               const Eigen::VectorXd& xi) {
+                                               const VectorRef& xi) {
   check_sizes(g, xi);
   Eigen::Matrix<double, 9, 1> phi;
   for (int k = 0; k < kOrthogonalityRows; ++k) {
@@ -41,7 +41,7 @@ Eigen::Matrix<double, 9, 1> reference_residual(const TisserandMatrix& g, const E
   return phi;
 }
 
-Eigen::MatrixXd reference_jacobian(const TisserandMatrix& g, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi) {
+Eigen::MatrixXd reference_jacobian(const TisserandMatrix& g, const Eigen::Matrix3d& a, const VectorRef& xi) {
   check_sizes(g, xi);
   const Eigen::Index n_f = g.cols();
   Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(9, 9 + 3 * n_f);
@@ -62,7 +62,7 @@ Eigen::MatrixXd reference_jacobian(const TisserandMatrix& g, const Eigen::Matrix
 }
 
 Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, const Eigen::Matrix3d& a,
-                                                     const Eigen::VectorXd& xi, const Eigen::Matrix<double, 9, 1>& mu) {
+                                                     const VectorRef& xi, const Eigen::Matrix<double, 9, 1>& mu) {
   check_sizes(g, xi);
   const Eigen::Index n_f = g.cols();
   Eigen::VectorXd out(9 + 3 * n_f);
@@ -83,7 +83,7 @@ Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, c
   return out;
 }
 
-Eigen::Matrix<double, 9, Eigen::Dynamic> reference_hessian_a_rows(const TisserandMatrix& g, const Eigen::VectorXd& xi,
+Eigen::Matrix<double, 9, Eigen::Dynamic> reference_hessian_a_rows(const TisserandMatrix& g, const VectorRef& xi,
                                                                   const Eigen::Matrix<double, 9, 1>& lambda) {
   check_sizes(g, xi);
   const Eigen::Index n_f = g.cols();
@@ -104,7 +104,7 @@ Eigen::Matrix<double, 9, Eigen::Dynamic> reference_hessian_a_rows(const Tisseran
   return rows;
 }
 
-Eigen::MatrixXd reference_hessian(const TisserandMatrix& g, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+Eigen::MatrixXd reference_hessian(const TisserandMatrix& g, const Eigen::Matrix3d& a, const VectorRef& xi,
                                   const Eigen::Matrix<double, 9, 1>& lambda) {
   (void)a;  // the rows are bilinear in (A, ξ) and quadratic in A: the Hessian does not depend on the point
   const Eigen::Index n = 9 + 3 * g.cols();

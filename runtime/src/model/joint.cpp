@@ -13,13 +13,13 @@ struct Direction {
   Eigen::Vector3d value;
   Eigen::MatrixXd jacobian;
 };
-Direction direction(const Marker& m, const Eigen::VectorXd& q, const Eigen::Vector3d& d) {
+Direction direction(const Marker& m, const VectorRef& q, const Eigen::Vector3d& d) {
   if (m.body == kGround) return {d, Eigen::MatrixXd(3, 0)};
   return {marker_direction(m, q, d), marker_direction_jacobian(m, q, d)};
 }
 
 // The frame of a marker's body: A for a body, identity for ground (directions are fixed in it at assembly).
-Eigen::Matrix3d frame_of(const Marker& m, const Eigen::VectorXd& q) {
+Eigen::Matrix3d frame_of(const Marker& m, const VectorRef& q) {
   return m.body == kGround ? Eigen::Matrix3d::Identity() : orientation_of(q);
 }
 
@@ -44,7 +44,7 @@ struct Rows {
 };
 
 // The three rows that keep two triads aligned: z1·y2, z1·x2, y1·x2.
-void orientation_rows(Rows& rows, const Joint& j, const Eigen::VectorXd& q1, const Eigen::VectorXd& q2) {
+void orientation_rows(Rows& rows, const Joint& j, const VectorRef& q1, const VectorRef& q2) {
   const Direction x2 = direction(j.second, q2, j.triad_second.col(0));
   const Direction y2 = direction(j.second, q2, j.triad_second.col(1));
   const Direction y1 = direction(j.first, q1, j.triad_first.col(1));
@@ -68,7 +68,7 @@ int Joint::rows() const {
 }
 
 Joint make_joint(const std::string& name, JointType type, Marker first, Marker second, const Eigen::Vector3d& axis,
-                 const Eigen::VectorXd& q1, const Eigen::VectorXd& q2, std::function<double(double)> angle) {
+                 const VectorRef& q1, const VectorRef& q2, std::function<double(double)> angle) {
   Joint j;
   j.name = name;
   j.type = type;
@@ -104,7 +104,7 @@ Joint make_joint(const std::string& name, JointType type, Marker first, Marker s
   return j;
 }
 
-JointEvaluation evaluate_joint(const Joint& j, double t, const Eigen::VectorXd& q1, const Eigen::VectorXd& q2) {
+JointEvaluation evaluate_joint(const Joint& j, double t, const VectorRef& q1, const VectorRef& q2) {
   const int n_rows = j.rows();
   JointEvaluation out;
   out.residual.resize(n_rows);

@@ -15,7 +15,7 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return s;
 }
 
-void check_coordinates(const Marker& m, const Eigen::VectorXd& q_b) {
+void check_coordinates(const Marker& m, const VectorRef& q_b) {
   if (q_b.size() != 3 * m.y.size())
     throw std::invalid_argument("marker " + m.name + ": " + std::to_string(q_b.size()) + " body coordinates, expected " +
                                 std::to_string(3 * m.y.size()));
@@ -54,7 +54,7 @@ Marker ground_marker(const Eigen::Vector3d& point) {
   return {kGround, "ground", Eigen::VectorXd(), Eigen::MatrixXd(), point};
 }
 
-Eigen::Vector3d marker_position(const Marker& m, const Eigen::VectorXd& q_b) {
+Eigen::Vector3d marker_position(const Marker& m, const VectorRef& q_b) {
   if (m.body == kGround) return m.ground_point;
   check_coordinates(m, q_b);
   Eigen::Vector3d r = Eigen::Vector3d::Zero();
@@ -68,21 +68,21 @@ Eigen::MatrixXd marker_position_jacobian(const Marker& m) {
   return jac;
 }
 
-Eigen::Vector3d marker_direction(const Marker& m, const Eigen::VectorXd& q_b, const Eigen::Vector3d& d) {
+Eigen::Vector3d marker_direction(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d) {
   if (m.body == kGround) return d;
   check_coordinates(m, q_b);
   const Eigen::Matrix3d a = orientation_of(q_b);
-  const Eigen::VectorXd xi = q_b.tail(q_b.size() - 12);
+  const auto xi = q_b.tail(q_b.size() - 12);
   if (xi.size() == 0) return a * d;
   return a * (d - skew(d) * (m.rotation * body_frame_coordinates(a, xi)));
 }
 
-Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const Eigen::VectorXd& q_b, const Eigen::Vector3d& d) {
+Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d) {
   if (m.body == kGround) return Eigen::MatrixXd(3, 0);
   check_coordinates(m, q_b);
   const Eigen::Index n = q_b.size(), n_xi = n - 12;
   const Eigen::Matrix3d a = orientation_of(q_b);
-  const Eigen::VectorXd xi = q_b.tail(n_xi);
+  const auto xi = q_b.tail(n_xi);
   Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(3, n);
   Eigen::Vector3d v = d;
   Eigen::Matrix<double, 3, 9> dv_da = Eigen::Matrix<double, 3, 9>::Zero();

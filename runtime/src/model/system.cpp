@@ -50,7 +50,8 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
   if ((state.orientation.transpose() * state.orientation - Eigen::Matrix3d::Identity()).norm() > 1e-12 ||
       state.orientation.determinant() < 0.0)
     throw std::invalid_argument("body '" + name + "': the initial orientation is not a rotation (A^T A = I, det A = 1)");
-  bodies_.push_back({name, std::move(model), state, coordinates_});
+  const Eigen::Index rows = model.rigid() ? 6 : (model.needs_translational_tisserand() ? 12 : 9);
+  bodies_.push_back({name, std::move(model), state, coordinates_, rows});
   coordinates_ += bodies_.back().model.coordinate_count();
   return static_cast<int>(bodies_.size()) - 1;
 }
@@ -124,6 +125,12 @@ Eigen::VectorXd System::initial_velocities() const {
   return v;
 }
 
+VectorRef System::body_view(const Eigen::VectorXd& q, int body) const {
+  if (body == kGround) return q.head(0);
+  const Body& b = bodies_.at(static_cast<std::size_t>(body));
+  return q.segment(b.offset, b.model.coordinate_count());
+}
+
 Eigen::VectorXd System::body_coordinates(const Eigen::VectorXd& q, int body) const {
   if (body == kGround) return {};
   const Body& b = bodies_.at(static_cast<std::size_t>(body));
@@ -190,13 +197,14 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
     auto f_b = f.segment(b.offset, n);
     for (Eigen::Index k = 0; k < n / 3; ++k) f_b.segment<3>(3 * k) += b.model.g_border(0, k) * gravity_;  // (G[:, 0] ⊗ I3) g
     if (!b.model.rigid()) {
-      const Eigen::VectorXd q_b = q.segment(b.offset, n);
+      const auto q_b = q.segment(b.offset, n);
       const ElasticForces elastic = body_elastic_forces(b.model, orientation_of(q_b), q_b.tail(n - 12));
       f_b.segment<9>(3) -= elastic.grad_a;   // Eq. 86
       f_b.tail(n - 12) -= elastic.grad_xi;   // Eq. 87
       if (b.model.damping.size() > 0) {      // R = ½ ξ̄̇ᵀ D̂ ξ̄̇, ξ̄̇_f = Ȧᵀ ξ_f + Aᵀ ξ̇_f
-        const Eigen::VectorXd v_b = v.segment(b.offset, n);
-        const Eigen::VectorXd xi = q_b.tail(n - 12), xi_dot = v_b.tail(n - 12);
+        const auto v_b = v.segment(b.offset, n);
+        const auto xi = q_b.tail(n - 12);
+        const auto xi_dot = v_b.tail(n - 12);
         const Eigen::Matrix3d a = orientation_of(q_b), a_dot = orientation_of(v_b);
         Eigen::VectorXd rate(n - 12);
         for (Eigen::Index i = 0; i < (n - 12) / 3; ++i)
@@ -226,8 +234,8 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
     }
   }
   for (const SpringDamper& s : springs_) {
-    const Eigen::VectorXd q1 = body_coordinates(q, s.first.body), q2 = body_coordinates(q, s.second.body);
-    const Eigen::VectorXd v1 = body_coordinates(v, s.first.body), v2 = body_coordinates(v, s.second.body);
+    const VectorRef q1 = body_view(q, s.first.body), q2 = body_view(q, s.second.body);
+    const VectorRef v1 = body_view(v, s.first.body), v2 = body_view(v, s.second.body);
     const Eigen::Vector3d d = marker_position(s.second, q2) - marker_position(s.first, q1);
     const double length = d.norm();
     if (!(length > 0.0)) continue;  // coincident markers: no direction, no force
@@ -248,7 +256,7 @@ Eigen::MatrixXd System::stiffness(const Eigen::VectorXd& q) const {
   for (const Body& b : bodies_) {
     if (b.model.rigid()) continue;
     const Eigen::Index n = b.model.coordinate_count(), n_xi = n - 12;
-    const Eigen::VectorXd q_b = q.segment(b.offset, n);
+    const auto q_b = q.segment(b.offset, n);
     const ElasticTangent t = body_elastic_tangent(b.model, orientation_of(q_b), q_b.tail(n_xi), true);
     k.block<9, 9>(b.offset + 3, b.offset + 3) = t.aa;
     k.block(b.offset + 3, b.offset + 12, 9, n_xi) = t.a_xi;
@@ -261,7 +269,7 @@ Eigen::MatrixXd System::stiffness(const Eigen::VectorXd& q) const {
 std::vector<SpringTangent> System::spring_tangents(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   std::vector<SpringTangent> tangents;
   for (const SpringDamper& s : springs_) {
-    const Eigen::VectorXd q1 = body_coordinates(q, s.first.body), q2 = body_coordinates(q, s.second.body);
+    const VectorRef q1 = body_view(q, s.first.body), q2 = body_view(q, s.second.body);
     const Eigen::Vector3d d = marker_position(s.second, q2) - marker_position(s.first, q1);
     const double length = d.norm();
     if (!(length > 0.0)) continue;
@@ -272,8 +280,8 @@ std::vector<SpringTangent> System::spring_tangents(const Eigen::VectorXd& q, con
     if (t.second != kGround) t.p_second = marker_position_jacobian(s.second);
     const Eigen::Vector3d e = d / length;
     Eigen::Vector3d rate = Eigen::Vector3d::Zero();
-    if (t.second != kGround) rate += t.p_second * body_coordinates(v, s.second.body);
-    if (t.first != kGround) rate -= t.p_first * body_coordinates(v, s.first.body);
+    if (t.second != kGround) rate += t.p_second * body_view(v, s.second.body);
+    if (t.first != kGround) rate -= t.p_first * body_view(v, s.first.body);
     const double tension = s.stiffness * (length - s.rest_length) + s.damping * e.dot(rate);
     const Eigen::Matrix3d along = e * e.transpose();
     t.stiffness = s.stiffness * along + tension / length * (Eigen::Matrix3d::Identity() - along);
@@ -288,7 +296,7 @@ Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
   Eigen::Index row = 0;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
-    const Eigen::VectorXd q_b = q.segment(b.offset, n);
+    const auto q_b = q.segment(b.offset, n);
     const Eigen::Matrix<double, 9, 1> ref = reference_residual(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12));
     phi.segment(row, std::min<Eigen::Index>(9, reference_rows(b))) = ref.head(std::min<Eigen::Index>(9, reference_rows(b)));
     if (reference_rows(b) == 12) {  // Eq. 77: Σ_f G[0, 4 + f] ξ_f
@@ -300,7 +308,7 @@ Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
   }
   for (const Joint& j : joints_) {
     const JointEvaluation e =
-        evaluate_joint(j, t, body_coordinates(q, j.first.body), body_coordinates(q, j.second.body));
+        evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
     phi.segment(row, j.rows()) = e.residual;
     row += j.rows();
   }
@@ -312,7 +320,7 @@ Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) 
   Eigen::Index row = 0;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
-    const Eigen::VectorXd q_b = q.segment(b.offset, n);
+    const auto q_b = q.segment(b.offset, n);
     const Eigen::MatrixXd ref = reference_jacobian(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12));
     jac.block(row, b.offset + 3, std::min<Eigen::Index>(9, reference_rows(b)), n - 3) =
         ref.topRows(std::min<Eigen::Index>(9, reference_rows(b)));
@@ -323,7 +331,7 @@ Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) 
   }
   for (const Joint& j : joints_) {
     const JointEvaluation e =
-        evaluate_joint(j, t, body_coordinates(q, j.first.body), body_coordinates(q, j.second.body));
+        evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
     if (j.first.body != kGround) jac.block(row, offset(j.first.body), j.rows(), e.jacobian_first.cols()) += e.jacobian_first;
     if (j.second.body != kGround)
       jac.block(row, offset(j.second.body), j.rows(), e.jacobian_second.cols()) += e.jacobian_second;
@@ -338,7 +346,7 @@ Eigen::VectorXd System::constraint_jacobian_transpose_product(double t, const Ei
   Eigen::Index row = 0;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count(), rows = std::min<Eigen::Index>(9, reference_rows(b));
-    const Eigen::VectorXd q_b = q.segment(b.offset, n);
+    const auto q_b = q.segment(b.offset, n);
     Eigen::Matrix<double, 9, 1> mu_b = Eigen::Matrix<double, 9, 1>::Zero();
     mu_b.head(rows) = mu.segment(row, rows);
     out.segment(b.offset + 3, n - 3) = reference_jacobian_transpose_product(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12), mu_b);
@@ -348,7 +356,7 @@ Eigen::VectorXd System::constraint_jacobian_transpose_product(double t, const Ei
     row += reference_rows(b);
   }
   for (const Joint& j : joints_) {
-    const JointEvaluation e = evaluate_joint(j, t, body_coordinates(q, j.first.body), body_coordinates(q, j.second.body));
+    const JointEvaluation e = evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
     const auto mu_j = mu.segment(row, j.rows());
     if (j.first.body != kGround) out.segment(offset(j.first.body), e.jacobian_first.cols()) += e.jacobian_first.transpose() * mu_j;
     if (j.second.body != kGround)
@@ -363,7 +371,7 @@ Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen
   Eigen::Index row = 0;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
-    const Eigen::VectorXd q_b = q.segment(b.offset, n);
+    const auto q_b = q.segment(b.offset, n);
     Eigen::Matrix<double, 9, 1> l = Eigen::Matrix<double, 9, 1>::Zero();
     l.head(std::min<Eigen::Index>(9, reference_rows(b))) = lambda.segment(row, std::min<Eigen::Index>(9, reference_rows(b)));
     h.block(b.offset + 3, b.offset + 3, n - 3, n - 3) =
@@ -438,7 +446,8 @@ Energies System::energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) co
   Energies e;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
-    const Eigen::VectorXd q_b = q.segment(b.offset, n), v_b = v.segment(b.offset, n);
+    const auto q_b = q.segment(b.offset, n);
+    const auto v_b = v.segment(b.offset, n);
     e.kinetic += 0.5 * v_b.dot(mass_times(b.model, v_b));  // T = ½ v_bᵀ (G ⊗ I3) v_b
     for (Eigen::Index k = 0; k < n / 3; ++k) e.gravity -= b.model.g_border(0, k) * gravity_.dot(q_b.segment<3>(3 * k));
     if (!b.model.rigid()) e.elastic += body_elastic_forces(b.model, orientation_of(q_b), q_b.tail(n - 12)).energy;

@@ -87,8 +87,8 @@ struct BodyModel {
 /// Row `node` of Ῡ' (n_f): the node's weights of the fields.
 [[nodiscard]] Eigen::RowVectorXd field_row(const BodyModel& model, Eigen::Index node);
 /// The elastic energy and forces (gcms_elastic.hpp) of the body's K̂, dense or sparse.
-[[nodiscard]] ElasticForces body_elastic_forces(const BodyModel& model, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi);
-[[nodiscard]] ElasticTangent body_elastic_tangent(const BodyModel& model, const Eigen::Matrix3d& a, const Eigen::VectorXd& xi,
+[[nodiscard]] ElasticForces body_elastic_forces(const BodyModel& model, const Eigen::Matrix3d& a, const VectorRef& xi);
+[[nodiscard]] ElasticTangent body_elastic_tangent(const BodyModel& model, const Eigen::Matrix3d& a, const VectorRef& xi,
                                                   bool with_xi_xi);
 
 /// How many GCMS fields the first k modes have (the fields with field_mode < k).

@@ -9,6 +9,8 @@
 //   U_aa = Dᵀ K̂ D,   U_aξ = Dᵀ K̂ Âᵀ + [h_0 ⊗ I3 … h_{n_f−1} ⊗ I3],   U_ξξ = Â K̂ Âᵀ  (Â = I ⊗ A).
 // Every call costs O((3 n_f)²): no n_n-sized work at run time.
 
+#include "flexbody/runtime/vector_ref.hpp"
+
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
@@ -32,22 +34,22 @@ struct ElasticTangent {
 };
 
 /// ξ̄ = Âᵀ ξ.
-[[nodiscard]] Eigen::VectorXd body_frame_coordinates(const Eigen::Matrix3d& a, const Eigen::VectorXd& xi);
+[[nodiscard]] Eigen::VectorXd body_frame_coordinates(const Eigen::Matrix3d& a, const VectorRef& xi);
 
 /// D = ∂ξ̄/∂a (3 n_f x 9): row 3f + j, column 3j + i holds ξ_f[i] (ξ̄ is linear in a for fixed ξ).
-[[nodiscard]] Eigen::Matrix<double, Eigen::Dynamic, 9> body_frame_coordinates_derivative(const Eigen::VectorXd& xi);
+[[nodiscard]] Eigen::Matrix<double, Eigen::Dynamic, 9> body_frame_coordinates_derivative(const VectorRef& xi);
 
 /// U and its gradient for K̂ (3 n_f square, symmetric; dense, or sparse for the full-order body), A and ξ (3 n_f).
 [[nodiscard]] ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a,
-                                           const Eigen::VectorXd& xi);
+                                           const VectorRef& xi);
 [[nodiscard]] ElasticForces elastic_forces(const Eigen::SparseMatrix<double>& k_hat, const Eigen::Matrix3d& a,
-                                           const Eigen::VectorXd& xi);
+                                           const VectorRef& xi);
 
 /// The Hessian of U (the elastic tangent stiffness). Without `with_xi_xi` the ξξ block (Â K̂ Âᵀ, which the
 /// constant-core Newton solve never forms) is left empty.
 [[nodiscard]] ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a,
-                                             const Eigen::VectorXd& xi, bool with_xi_xi = true);
+                                             const VectorRef& xi, bool with_xi_xi = true);
 [[nodiscard]] ElasticTangent elastic_tangent(const Eigen::SparseMatrix<double>& k_hat, const Eigen::Matrix3d& a,
-                                             const Eigen::VectorXd& xi, bool with_xi_xi = true);
+                                             const VectorRef& xi, bool with_xi_xi = true);
 
 }  // namespace flexbody::runtime

@@ -48,7 +48,7 @@ struct Joint {
 /// prismatic, driven revolute; ignored otherwise). Throws std::invalid_argument naming the joint for a zero axis
 /// or markers apart for a joint that ties their positions.
 [[nodiscard]] Joint make_joint(const std::string& name, JointType type, Marker first, Marker second,
-                               const Eigen::Vector3d& axis, const Eigen::VectorXd& q1, const Eigen::VectorXd& q2,
+                               const Eigen::Vector3d& axis, const VectorRef& q1, const VectorRef& q2,
                                std::function<double(double)> angle = {});
 
 /// Residuals, and Jacobians with respect to each marker's body coordinates (rows x n_b; 0 columns for ground).
@@ -56,7 +56,7 @@ struct JointEvaluation {
   Eigen::VectorXd residual;
   Eigen::MatrixXd jacobian_first, jacobian_second;
 };
-[[nodiscard]] JointEvaluation evaluate_joint(const Joint& joint, double t, const Eigen::VectorXd& q1,
-                                             const Eigen::VectorXd& q2);
+[[nodiscard]] JointEvaluation evaluate_joint(const Joint& joint, double t, const VectorRef& q1,
+                                             const VectorRef& q2);
 
 }  // namespace flexbody::runtime

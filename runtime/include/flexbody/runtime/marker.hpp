@@ -35,17 +35,17 @@ struct Marker {
 [[nodiscard]] Marker ground_marker(const Eigen::Vector3d& point);
 
 /// The marker's position for the body coordinates q_b (12 + 3 n_f); a ground marker ignores q_b.
-[[nodiscard]] Eigen::Vector3d marker_position(const Marker& m, const Eigen::VectorXd& q_b);
+[[nodiscard]] Eigen::Vector3d marker_position(const Marker& m, const VectorRef& q_b);
 /// ∂r/∂q_b = yᵀ ⊗ I3 (3 x (12 + 3 n_f)), constant.
 [[nodiscard]] Eigen::MatrixXd marker_position_jacobian(const Marker& m);
 /// A body-fixed direction d (body frame) at the marker, in the global frame: A (d − [d]× R ξ̄).
-[[nodiscard]] Eigen::Vector3d marker_direction(const Marker& m, const Eigen::VectorXd& q_b, const Eigen::Vector3d& d);
+[[nodiscard]] Eigen::Vector3d marker_direction(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d);
 /// Its Jacobian (3 x (12 + 3 n_f)); zero columns for τ.
-[[nodiscard]] Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const Eigen::VectorXd& q_b,
+[[nodiscard]] Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const VectorRef& q_b,
                                                         const Eigen::Vector3d& d);
 
 /// A = mat(a) of body coordinates q_b.
-[[nodiscard]] inline Eigen::Matrix3d orientation_of(const Eigen::VectorXd& q_b) {
+[[nodiscard]] inline Eigen::Matrix3d orientation_of(const VectorRef& q_b) {
   return Eigen::Map<const Eigen::Matrix3d>(q_b.data() + 3);
 }
 

@@ -11,6 +11,8 @@
 // Derivatives are with respect to [a; ξ] (9 + 3 n_f), exact: the rows are quadratic (orthogonality) and bilinear
 // (Tisserand), so the λ-weighted Hessian is constant in q for fixed λ.
 
+#include "flexbody/runtime/vector_ref.hpp"
+
 #include <Eigen/Core>
 
 namespace flexbody::runtime {
@@ -22,27 +24,27 @@ using TisserandMatrix = Eigen::Matrix<double, 3, Eigen::Dynamic>;
 
 /// The 9 residuals (6 orthogonality, 3 Tisserand).
 [[nodiscard]] Eigen::Matrix<double, 9, 1> reference_residual(const TisserandMatrix& g, const Eigen::Matrix3d& a,
-                                                             const Eigen::VectorXd& xi);
+                                                             const VectorRef& xi);
 
 /// ∂Φ/∂[a; ξ] (9 x (9 + 3 n_f)).
 [[nodiscard]] Eigen::MatrixXd reference_jacobian(const TisserandMatrix& g, const Eigen::Matrix3d& a,
-                                                 const Eigen::VectorXd& xi);
+                                                 const VectorRef& xi);
 
 /// Jᵀ μ for the 9 rows (Jacobian over [a; ξ], 9 + 3 n_f) without forming J: O(n_f). With c_f = μ_T × g_f,
 /// the Tisserand rows give ∂/∂A = Σ_f ξ_f c_fᵀ and ∂/∂ξ_f = A c_f; the orthogonality rows μ_k (a_i·a_j − δ_ij)
 /// give μ_k a_j on a_i and μ_k a_i on a_j.
 [[nodiscard]] Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, const Eigen::Matrix3d& a,
-                                                                   const Eigen::VectorXd& xi,
+                                                                   const VectorRef& xi,
                                                                    const Eigen::Matrix<double, 9, 1>& mu);
 
 /// The first 9 rows (those of a) of Σ_k λ_k ∂²Φ_k/∂[a; ξ]² (9 x (9 + 3 n_f)): all of it that is not zero, since
 /// the ξξ block vanishes (Φ is linear in ξ for fixed A). O(n_f), for large bodies.
 [[nodiscard]] Eigen::Matrix<double, 9, Eigen::Dynamic> reference_hessian_a_rows(const TisserandMatrix& g,
-                                                                               const Eigen::VectorXd& xi,
+                                                                               const VectorRef& xi,
                                                                                const Eigen::Matrix<double, 9, 1>& lambda);
 
 /// Σ_k λ_k ∂²Φ_k/∂[a; ξ]² ((9 + 3 n_f) square, symmetric).
 [[nodiscard]] Eigen::MatrixXd reference_hessian(const TisserandMatrix& g, const Eigen::Matrix3d& a,
-                                                const Eigen::VectorXd& xi, const Eigen::Matrix<double, 9, 1>& lambda);
+                                                const VectorRef& xi, const Eigen::Matrix<double, 9, 1>& lambda);
 
 }  // namespace flexbody::runtime

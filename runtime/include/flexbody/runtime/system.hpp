@@ -153,10 +153,11 @@ class System {
     BodyModel model;
     BodyState initial;
     Eigen::Index offset = 0;
+    Eigen::Index reference_rows = 0;  ///< 6 (rigid), 9, or 12 with the translational Tisserand rows
   };
-  [[nodiscard]] Eigen::Index reference_rows(const Body& b) const {
-    return b.model.rigid() ? 6 : (b.model.needs_translational_tisserand() ? 12 : 9);
-  }
+  [[nodiscard]] static Eigen::Index reference_rows(const Body& b) { return b.reference_rows; }
+  /// Body `body`'s slice of q without a copy (empty for ground); valid while q is.
+  [[nodiscard]] VectorRef body_view(const Eigen::VectorXd& q, int body) const;
   void check_marker(const Marker& m, const std::string& what) const;
   std::vector<Body> bodies_;
   std::vector<Joint> joints_;

@@ -132,8 +132,8 @@ void GeneralizedAlpha::step() {
   const double t1 = t0_ + static_cast<double>(steps_ + 1) * h;
   const double beta_prime = (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_));
   const double gamma_prime = gamma_ / (beta_ * h);
-  Eigen::VectorXd qdd, a, v, q, mu;
-  Eigen::VectorXd residual(n + m);
+  Eigen::VectorXd qdd, a, v, q, mu, dx;
+  Eigen::VectorXd residual(n);  // the dynamic rows, scaled by 1/β'; the constraint rows are Φ
   // A Newton matrix kept from earlier iterations and steps (modified Newton) is refreshed when the corrections
   // stop shrinking fast (ratio > 1/4); a step that does not converge with a kept matrix is retried with a fresh one.
   bool fresh_this_step = false;
@@ -150,9 +150,7 @@ void GeneralizedAlpha::step() {
     for (iterations_ = 1; iterations_ <= options_.max_iterations; ++iterations_) {
       const Eigen::VectorXd phi = system_.constraints(t1, q);
       const Eigen::VectorXd inertia = system_.mass_product(qdd);
-      residual.head(n) = (inertia - system_.forces(t1, q, v)) / beta_prime +
-                         system_.constraint_jacobian_transpose_product(t1, q, mu);
-      residual.tail(m) = phi;
+      residual = (inertia - system_.forces(t1, q, v)) / beta_prime + system_.constraint_jacobian_transpose_product(t1, q, mu);
       if (refresh_ || !options_.reuse_newton_matrix) {
         solver_->factor(q, v, mu, system_.constraint_jacobian(t1, q));
         refresh_ = false;
@@ -160,7 +158,7 @@ void GeneralizedAlpha::step() {
         fresh_this_step = true;
         ++factorizations_;
       }
-      const Eigen::VectorXd dx = solver_->solve(q, residual.head(n), phi);
+      solver_->solve(q, residual, phi, dx);
       if (!dx.allFinite()) {
         std::ostringstream why;
         Eigen::Index worst = 0;
@@ -176,7 +174,7 @@ void GeneralizedAlpha::step() {
       const double correction = dx.head(n).cwiseAbs().maxCoeff();
       const double force_scale = 1.0 + inertia.cwiseAbs().maxCoeff() / beta_prime;
       if (correction <= options_.tolerance * q_scale &&
-          residual.head(n).cwiseAbs().maxCoeff() <= 1e3 * options_.tolerance * force_scale) {
+          residual.cwiseAbs().maxCoeff() <= 1e3 * options_.tolerance * force_scale) {
         converged = true;
         break;
       }

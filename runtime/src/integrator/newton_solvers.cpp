@@ -5,6 +5,7 @@
 #include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace flexbody::runtime::detail {
@@ -63,10 +64,11 @@ void DenseNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, con
   lu_.compute(kkt);
 }
 
-Eigen::VectorXd DenseNewton::solve(const Eigen::VectorXd&, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi) const {
+void DenseNewton::solve(const Eigen::VectorXd&, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
+                        Eigen::VectorXd& dx) {
   Eigen::VectorXd rhs(residual.size() + phi.size());
   rhs << -residual, -phi;
-  return lu_.solve(rhs);
+  dx = lu_.solve(rhs);
 }
 
 ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime)
@@ -108,6 +110,10 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
     inverses_.back() = factor.solve(Eigen::MatrixXd::Identity(3 * n_f, 3 * n_f));
   }
   eliminated_.resize(static_cast<std::size_t>(system.body_count()));
+  Eigen::Index largest = 0;
+  for (int b = 0; b < system.body_count(); ++b) largest = std::max(largest, 3 * system.model(b).field_count());
+  rotated_.resize(largest);
+  core_y_.resize(largest);
 }
 
 Eigen::MatrixXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) const {
@@ -116,19 +122,18 @@ Eigen::MatrixXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& 
   return rotate(a, inverses_[k] * rotate(a.transpose(), x));  // S_ff⁻¹ = Â C⁻¹ Âᵀ
 }
 
-Eigen::VectorXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const Eigen::VectorXd& x) const {
+void ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const double* x, double* y) {
   // One right-hand side (every iteration): a matrix-vector product. The 3-blocks of x are the columns of a
   // 3 x n_f matrix, so Âᵀ x is Aᵀ X.
   const auto k = static_cast<std::size_t>(body);
-  const Eigen::Index n_f = x.size() / 3;
-  Eigen::VectorXd rotated(x.size()), y(x.size());
-  Eigen::Map<Eigen::Matrix3Xd>(rotated.data(), 3, n_f).noalias() = a.transpose() * Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, n_f);
+  const Eigen::Index n_f = system_.model(body).field_count();
+  Eigen::Map<Eigen::Matrix3Xd> rotated(rotated_.data(), 3, n_f), core_y(core_y_.data(), 3, n_f);
+  rotated.noalias() = a.transpose() * Eigen::Map<const Eigen::Matrix3Xd>(x, 3, n_f);
   if (sparse_cores_[k])
-    y = sparse_cores_[k]->solve(rotated);
+    core_y_.head(3 * n_f) = sparse_cores_[k]->solve(rotated_.head(3 * n_f));
   else
-    dense_product(inverses_[k], rotated.data(), y.data());
-  Eigen::Map<Eigen::Matrix3Xd>(rotated.data(), 3, n_f).noalias() = a * Eigen::Map<const Eigen::Matrix3Xd>(y.data(), 3, n_f);
-  return rotated;
+    dense_product(inverses_[k], rotated_.data(), core_y_.data());
+  Eigen::Map<Eigen::Matrix3Xd>(y, 3, n_f).noalias() = a * core_y;
 }
 
 void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
@@ -210,42 +215,40 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
   reduced_.compute(reduced);
 }
 
-Eigen::VectorXd ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual,
-                                          const Eigen::VectorXd& phi) const {
+void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
+                               Eigen::VectorXd& dx) {
   const int n_b = system_.body_count();
   const Eigen::Index m = phi.size(), n_r = 12 * n_b;
-  Eigen::VectorXd rhs(n_r + m);
-  rhs.tail(m) = -phi;
-  std::vector<Eigen::VectorXd> y_r(static_cast<std::size_t>(n_b));
+  rhs_.resize(n_r + m);
+  rhs_.tail(m) = -phi;
   for (int b = 0; b < n_b; ++b) {
     const Eigen::Index o = system_.offset(b), n_xi = 3 * system_.model(b).field_count();
-    rhs.segment(12 * b, 12) = -residual.segment(o, 12);
+    rhs_.segment(12 * b, 12) = -residual.segment(o, 12);
     if (n_xi == 0) continue;
-    const Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
+    Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
     // S_ff⁻¹ r_f at the current A (the core is exact for any A; only the coupling blocks are from the factorization).
-    const Eigen::Matrix3d a = orientation_of(system_.body_coordinates(q, b));
-    Eigen::VectorXd y = core_solve(b, a, Eigen::VectorXd(residual.segment(o + 12, n_xi)));
-    const Eigen::VectorXd coupled = e.coupling.transpose() * y;  // [S_rf; J_f] y
-    rhs.segment(12 * b, 12) += coupled.head<12>();
-    for (std::size_t i = 0; i < e.rows.size(); ++i) rhs(n_r + e.rows[i]) += coupled(12 + static_cast<Eigen::Index>(i));
-    y_r[static_cast<std::size_t>(b)] = std::move(y);
+    e.residual_solution.resize(n_xi);
+    core_solve(b, orientation_of(q.segment(o, 12)), residual.data() + o + 12, e.residual_solution.data());
+    coupled_.noalias() = e.coupling.transpose() * e.residual_solution;  // [S_rf; J_f] S_ff⁻¹ r_f
+    rhs_.segment(12 * b, 12) += coupled_.head<12>();
+    for (std::size_t i = 0; i < e.rows.size(); ++i) rhs_(n_r + e.rows[i]) += coupled_(12 + static_cast<Eigen::Index>(i));
   }
-  const Eigen::VectorXd x = reduced_.solve(rhs);
+  reduced_solution_ = reduced_.solve(rhs_);
+  const Eigen::VectorXd& x = reduced_solution_;
   // Back-substitute: Δq_f = −S_ff⁻¹ (r_f + S_fr Δq_r + J_fᵀ Δμ).
-  Eigen::VectorXd out(q.size() + m);
-  out.tail(m) = x.tail(m);
+  dx.resize(q.size() + m);
+  dx.tail(m) = x.tail(m);
   for (int b = 0; b < n_b; ++b) {
     const Eigen::Index o = system_.offset(b), n_xi = 3 * system_.model(b).field_count();
-    out.segment(o, 12) = x.segment(12 * b, 12);
+    dx.segment(o, 12) = x.segment(12 * b, 12);
     if (n_xi == 0) continue;
     const Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
     const auto k_rows = static_cast<Eigen::Index>(e.rows.size());
-    Eigen::VectorXd unknowns(12 + k_rows);  // [Δq_r; Δμ of the rows that touch ξ]
-    unknowns << x.segment(12 * b, 12), x.tail(m)(e.rows);
-    dense_product(e.y, unknowns.data(), out.data() + o + 12);
-    out.segment(o + 12, n_xi) = -(out.segment(o + 12, n_xi) + y_r[static_cast<std::size_t>(b)]);
+    unknowns_.resize(12 + k_rows);  // [Δq_r; Δμ of the rows that touch ξ]
+    unknowns_ << x.segment(12 * b, 12), x.tail(m)(e.rows);
+    dense_product(e.y, unknowns_.data(), dx.data() + o + 12);
+    dx.segment(o + 12, n_xi) = -(dx.segment(o + 12, n_xi) + e.residual_solution);
   }
-  return out;
 }
 
 }  // namespace flexbody::runtime::detail

@@ -29,10 +29,11 @@ class NewtonSolver {
   /// Builds and factorizes the Newton matrix at (q, q̇, μ) with the constraint Jacobian J (μ = λ/β', scaled).
   virtual void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
                       const Eigen::MatrixXd& jacobian) = 0;
-  /// [Δq; Δμ] for the scaled residual r and Φ with the last factorization (which may be from an earlier iterate:
-  /// a modified Newton iteration; the constant core is always applied at the current A).
-  [[nodiscard]] virtual Eigen::VectorXd solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual,
-                                              const Eigen::VectorXd& phi) const = 0;
+  /// dx = [Δq; Δμ] for the scaled residual r and Φ with the last factorization (which may be from an earlier
+  /// iterate: a modified Newton iteration; the constant core is always applied at the current A). Not const:
+  /// the solvers keep their work vectors, so that an iteration allocates nothing here once sizes are set.
+  virtual void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
+                     Eigen::VectorXd& dx) = 0;
 };
 
 class DenseNewton final : public NewtonSolver {
@@ -40,7 +41,8 @@ class DenseNewton final : public NewtonSolver {
   DenseNewton(const System& system, double beta_prime, double gamma_prime);
   void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
               const Eigen::MatrixXd& jacobian) override;
-  Eigen::VectorXd solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi) const override;
+  void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
+             Eigen::VectorXd& dx) override;
 
  private:
   const System& system_;
@@ -54,7 +56,8 @@ class ConstantCoreNewton final : public NewtonSolver {
   ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime);
   void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
               const Eigen::MatrixXd& jacobian) override;
-  Eigen::VectorXd solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi) const override;
+  void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
+             Eigen::VectorXd& dx) override;
 
  private:
   // One flexible body's part of the factorization: the constraint rows that touch its ξ, coupling = [S_fr, J_fᵀ]
@@ -62,9 +65,12 @@ class ConstantCoreNewton final : public NewtonSolver {
   struct Eliminated {
     Eigen::MatrixXd coupling, y;
     std::vector<Eigen::Index> rows;
+    Eigen::VectorXd residual_solution;  ///< S_ff⁻¹ r_f of the current solve (work vector)
   };
+  /// S_ff⁻¹ x = Â C⁻¹ Âᵀ x at the orientation a: for a block of right-hand sides (factorization), and for one
+  /// (x and y of 3 n_f doubles, every iteration, through the work vectors).
   [[nodiscard]] Eigen::MatrixXd core_solve(int body, const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) const;
-  [[nodiscard]] Eigen::VectorXd core_solve(int body, const Eigen::Matrix3d& a, const Eigen::VectorXd& x) const;
+  void core_solve(int body, const Eigen::Matrix3d& a, const double* x, double* y);
 
   const System& system_;
   double beta_prime_, gamma_prime_;
@@ -73,6 +79,7 @@ class ConstantCoreNewton final : public NewtonSolver {
   std::vector<std::unique_ptr<Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>>> sparse_cores_;
   std::vector<Eliminated> eliminated_;
   Eigen::PartialPivLU<Eigen::MatrixXd> reduced_;
+  Eigen::VectorXd rotated_, core_y_, rhs_, coupled_, reduced_solution_, unknowns_;  ///< work vectors of solve()
 };
 
 }  // namespace flexbody::runtime::detail

@@ -12,6 +12,7 @@
 #include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
+#include "kernels/dense_product.hpp"
 
 #include <Eigen/Cholesky>
 
@@ -147,8 +148,14 @@ int main(int argc, char** argv) {
     std::printf("\n20 modes (3 n_f = %ld), one Newton iteration's kernels [us per call]:\n", static_cast<long>(n));
     std::printf("  elastic forces (K_hat xi_bar)            %8.1f\n",
                 per_call(4000, [&] { return fr::elastic_forces(model.stiffness, a, state.xi).energy; }));
-    std::printf("  core product C^-1 r (one right-hand side) %7.1f\n",
+    Eigen::VectorXd product(n);
+    std::printf("  core product C^-1 r, Eigen's product      %7.1f\n",
                 per_call(4000, [&] { return Eigen::VectorXd(core_inverse * rhs)(0); }));
+    std::printf("  core product C^-1 r, the runtime's kernel %7.1f  (runtime/src/kernels: the machine's widest vectors)\n",
+                per_call(4000, [&] {
+                  fr::detail::dense_product(core_inverse, rhs.data(), product.data());
+                  return product(0);
+                }));
     std::printf("  mass product (G x I3) qdd               %8.1f\n", per_call(4000, [&] { return system.mass_product(v)(0); }));
     std::printf("  all applied and elastic forces           %8.1f\n", per_call(4000, [&] { return system.forces(0.0, q, v)(0); }));
     std::printf("  elastic tangent without the xi-xi block  %8.1f  (a matrix rebuild)\n", per_call(500, [&] {

@@ -192,9 +192,9 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
       if (j_all.row(k).cwiseAbs().maxCoeff() > 0.0) e.rows.push_back(k);
     const auto k_rows = static_cast<Eigen::Index>(e.rows.size());
     const Eigen::MatrixXd j_f = j_all(e.rows, Eigen::all);
-    e.coupling.resize(n_xi, 12 + k_rows);
-    e.coupling << s_rf.transpose(), j_f.transpose();
-    e.y = core_solve(b, a, e.coupling);
+    e.coupling.resize(12 + k_rows, n_xi);
+    e.coupling << s_rf, j_f;
+    e.y = core_solve(b, a, e.coupling.transpose());
     reduced.block(12 * b, 12 * b, 12, 12) -= s_rf * e.y.leftCols(12);
     const Eigen::MatrixXd s_rf_y = s_rf * e.y.rightCols(k_rows), j_y = j_f * e.y.leftCols(12);
     const Eigen::MatrixXd j_yj = j_f * e.y.rightCols(k_rows);
@@ -229,7 +229,8 @@ void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& 
     // S_ff⁻¹ r_f at the current A (the core is exact for any A; only the coupling blocks are from the factorization).
     e.residual_solution.resize(n_xi);
     core_solve(b, orientation_of(q.segment(o, 12)), residual.data() + o + 12, e.residual_solution.data());
-    coupled_.noalias() = e.coupling.transpose() * e.residual_solution;  // [S_rf; J_f] S_ff⁻¹ r_f
+    coupled_.resize(e.coupling.rows());
+    dense_product(e.coupling, e.residual_solution.data(), coupled_.data());  // [S_rf; J_f] S_ff⁻¹ r_f
     rhs_.segment(12 * b, 12) += coupled_.head<12>();
     for (std::size_t i = 0; i < e.rows.size(); ++i) rhs_(n_r + e.rows[i]) += coupled_(12 + static_cast<Eigen::Index>(i));
   }

@@ -60,8 +60,8 @@ class ConstantCoreNewton final : public NewtonSolver {
              Eigen::VectorXd& dx) override;
 
  private:
-  // One flexible body's part of the factorization: the constraint rows that touch its ξ, coupling = [S_fr, J_fᵀ]
-  // (S_fr = S_rfᵀ; J_f those rows' ξ columns) and y = S_ff⁻¹ coupling at the factorization's A.
+  // One flexible body's part of the factorization: the constraint rows that touch its ξ, coupling = [S_rf; J_f]
+  // (J_f: those rows' ξ columns) and y = S_ff⁻¹ couplingᵀ at the factorization's A.
   struct Eliminated {
     Eigen::MatrixXd coupling, y;
     std::vector<Eigen::Index> rows;

@@ -212,7 +212,10 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
         if (b != c && j_b.size() > 0 && j_c.size() > 0)
           reduced.block(12 * b, 12 * c, 12, 12) += j_b.leftCols<12>().transpose() * spring_k(s) * j_c.leftCols<12>();
       }
-  reduced_.compute(reduced);
+  // Its inverse explicitly, like C⁻¹: a solve is then one product with a (12 n_b + m)-square matrix, where Eigen's
+  // blocked triangular solves took 0.4 µs each at 21 rows (7 % of a 20-mode step, two per iteration). A singular
+  // reduced matrix gives non-finite entries, which the integrator reports as a singular Newton matrix.
+  reduced_inverse_ = Eigen::PartialPivLU<Eigen::MatrixXd>(reduced).inverse();
 }
 
 void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
@@ -234,7 +237,8 @@ void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& 
     rhs_.segment(12 * b, 12) += coupled_.head<12>();
     for (std::size_t i = 0; i < e.rows.size(); ++i) rhs_(n_r + e.rows[i]) += coupled_(12 + static_cast<Eigen::Index>(i));
   }
-  reduced_solution_ = reduced_.solve(rhs_);
+  reduced_solution_.resize(rhs_.size());
+  dense_product(reduced_inverse_, rhs_.data(), reduced_solution_.data());
   const Eigen::VectorXd& x = reduced_solution_;
   // Back-substitute: Δq_f = −S_ff⁻¹ (r_f + S_fr Δq_r + J_fᵀ Δμ).
   dx.resize(q.size() + m);

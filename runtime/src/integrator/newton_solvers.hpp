@@ -78,7 +78,7 @@ class ConstantCoreNewton final : public NewtonSolver {
   /// The sparse factor of C for the full-order body (null for the others).
   std::vector<std::unique_ptr<Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>>> sparse_cores_;
   std::vector<Eliminated> eliminated_;
-  Eigen::PartialPivLU<Eigen::MatrixXd> reduced_;
+  Eigen::MatrixXd reduced_inverse_;  ///< of the matrix in [Δq_r; Δμ] left after eliminating every body's ξ
   Eigen::VectorXd rotated_, core_y_, rhs_, coupled_, reduced_solution_, unknowns_;  ///< work vectors of solve()
 };
 

@@ -19,11 +19,11 @@ Eigen::VectorXd mass_times(const BodyModel& model, const Eigen::Ref<const Eigen:
   if (model.unit_field_mass && !model.sparse) {  // G = [G_rr G_rf; G_rfᵀ I]: O(n_f) instead of O(n_f²)
     const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> x(x_b.data(), 3, columns);
     Eigen::Map<Eigen::Matrix<double, 3, Eigen::Dynamic>> out(y.data(), 3, columns);  // column c: 3-block c of y
-    // Column by column of G (contiguous), fixed-size 3 x 4 blocks: for three rows neither GEMM nor a
+    // Column by column of G (contiguous), fixed-size 4 x 3 blocks: for three rows neither GEMM nor a
     // coefficient-wise product over the strided rows of x pays off (measured: 4 % of a 20-mode step).
-    Eigen::Matrix<double, 3, 4> rigid = Eigen::Matrix<double, 3, 4>::Zero();  // Σ_c x_c G[c, 0:4]
-    for (Eigen::Index c = 0; c < columns; ++c) rigid.noalias() += x.col(c) * model.mass_matrix.col(c).head<4>().transpose();
-    out.leftCols<4>() = rigid;
+    Eigen::Matrix<double, 4, 3> rigid = Eigen::Matrix<double, 4, 3>::Zero();  // Σ_c G[0:4, c] x_cᵀ
+    for (Eigen::Index c = 0; c < columns; ++c) rigid.noalias() += model.mass_matrix.col(c).head<4>() * x.col(c).transpose();
+    out.leftCols<4>() = rigid.transpose();
     const Eigen::Matrix<double, 3, 4> x_r = x.leftCols<4>();
     for (Eigen::Index f = 4; f < columns; ++f) out.col(f) = x.col(f) + x_r * model.mass_matrix.col(f).head<4>();
     return y;

@@ -1,6 +1,7 @@
 #include "flexbody/runtime/gcms_elastic.hpp"
 
 #include "../kernels/dense_product.hpp"
+#include "../kernels/outer_sum.hpp"
 
 #include <stdexcept>
 #include <string>
@@ -53,7 +54,7 @@ ElasticForces forces_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const 
   // With the 3-blocks as the columns of 3 x n_f matrices Ξ, H: ∂U/∂ξ = A H (Eq. 87), ∂U/∂A = Ξ Hᵀ (Eq. 86).
   const Eigen::Map<const Eigen::Matrix3Xd> h(out.h.data(), 3, n_f);
   Eigen::Map<Eigen::Matrix3Xd>(out.grad_xi.data(), 3, n_f).noalias() = a * h;
-  Eigen::Map<Eigen::Matrix3d>(out.grad_a.data()).noalias() = Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f).lazyProduct(h.transpose());
+  Eigen::Map<Eigen::Matrix3d>(out.grad_a.data()) = detail::outer_sum(Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f), h);
   return out;
 }
 

@@ -1,5 +1,7 @@
 #include "flexbody/runtime/reference_constraints.hpp"
 
+#include "../kernels/outer_sum.hpp"
+
 #include <Eigen/Geometry>
 
 #include <array>
@@ -35,9 +37,10 @@ Eigen::Matrix<double, 9, 1> reference_residual(const TisserandMatrix& g, const E
     const auto [i, j] = kPairs[static_cast<std::size_t>(k)];
     phi(k) = a.col(i).dot(a.col(j)) - (i == j ? 1.0 : 0.0);  // Eq. 79
   }
-  Eigen::Vector3d tisserand = Eigen::Vector3d::Zero();
-  for (Eigen::Index f = 0; f < g.cols(); ++f) tisserand += g.col(f).cross(a.transpose() * xi.segment<3>(3 * f));  // Eq. 78
-  phi.tail<3>() = tisserand;
+  // Eq. 78: Σ_f g_f × ξ̄_f with ξ̄_f = Aᵀ ξ_f. A sum of cross products is the axial vector of the 3 x 3 matrix
+  // P = Σ_f g_f ξ̄_fᵀ = (Σ_f g_f ξ_fᵀ) A: Σ g × w = (P₁₂ − P₂₁, P₂₀ − P₀₂, P₀₁ − P₁₀).
+  const Eigen::Matrix3d p = detail::outer_sum(g, Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, g.cols())) * a;
+  phi.tail<3>() << p(1, 2) - p(2, 1), p(2, 0) - p(0, 2), p(0, 1) - p(1, 0);
   return phi;
 }
 
@@ -72,13 +75,11 @@ Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, c
     d_a.col(i) += mu(k) * a.col(j);
     d_a.col(j) += mu(k) * a.col(i);
   }
-  const Eigen::Vector3d mu_t = mu.tail<3>();
-  for (Eigen::Index f = 0; f < n_f; ++f) {
-    const Eigen::Vector3d c = mu_t.cross(g.col(f));
-    const Eigen::Vector3d x = xi.segment<3>(3 * f);
-    d_a.noalias() += x * c.transpose();
-    out.segment<3>(9 + 3 * f).noalias() = a * c;
-  }
+  // The Tisserand rows, with c_f = μ_T × g_f (C = [μ_T]× G): ∂/∂A += Σ_f ξ_f c_fᵀ = −(Σ_f ξ_f g_fᵀ) [μ_T]×,
+  // ∂/∂ξ_f = A c_f.
+  const Eigen::Matrix3d mu_t = skew(mu.tail<3>());
+  d_a.noalias() -= detail::outer_sum(Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f), g) * mu_t;
+  Eigen::Map<Eigen::Matrix3Xd>(out.data() + 9, 3, n_f).noalias() = (a * mu_t) * g;
   out.head<9>() = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(d_a.data());
   return out;
 }

@@ -1,9 +1,11 @@
 // Loading a body: all modes, the first k (prefix slicing of every block), or rigid.
 #include "flexbody/runtime/body_model.hpp"
+#include "flexbody/runtime/system.hpp"
 
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+#include <string>
 
 namespace fr = flexbody::runtime;
 namespace ff = flexbody::format;
@@ -116,4 +118,14 @@ TEST(BodyModel, OrthonormalFieldsGiveTheShortMassProduct) {
   EXPECT_LE((fr::mass_times(model, x) - explicit_mass_times(g, x)).cwiseAbs().maxCoeff(), 1e-14);
   const Eigen::VectorXd xi = x.tail(3 * n_f);
   EXPECT_NEAR(fr::field_mass_norm_squared(model, xi), xi.dot(explicit_mass_times(g.bottomRightCorner(n_f, n_f), xi)), 1e-13);
+  fr::BodyModel claimed = model;  // the flag set by hand on a G_ff that is not I: a system refuses the body
+  claimed.unit_field_mass = true;
+  fr::System system;
+  try {
+    system.add_body("bar", claimed, fr::BodyState{});
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("body 'bar': unit_field_mass is set, but G_ff is not exactly I"), std::string::npos)
+        << e.what();
+  }
 }

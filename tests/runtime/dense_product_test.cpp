@@ -27,4 +27,22 @@ TEST(DenseProduct, AgreesWithEigenToTheRoundOffOfAReorderedSum) {
   }
 }
 
+// The padded storage: every column starts on a 64-byte boundary, whatever the row count, and the product is the
+// same as on the plain matrix (the same sums in the same order: equal to the last bit).
+TEST(DenseProduct, PaddedMatrixGivesTheSameProduct) {
+  const std::pair<Eigen::Index, Eigen::Index> shapes[] = {{180, 180}, {21, 180}, {7, 13}, {9, 1}, {3, 0}};
+  for (const auto& [rows, cols] : shapes) {
+    SCOPED_TRACE(std::to_string(rows) + " x " + std::to_string(cols));
+    const Eigen::MatrixXd a = Eigen::MatrixXd::Random(rows, cols);
+    const Eigen::VectorXd x = Eigen::VectorXd::Random(cols);
+    const flexbody::runtime::detail::PaddedMatrix padded(a), copy = padded;
+    EXPECT_EQ(copy.rows(), rows);
+    EXPECT_EQ(copy.cols(), cols);
+    Eigen::VectorXd plain(rows), y(rows);
+    flexbody::runtime::detail::dense_product(a, x.data(), plain.data());
+    copy.multiply(x.data(), y.data());
+    EXPECT_EQ(y, plain);
+  }
+}
+
 }  // namespace

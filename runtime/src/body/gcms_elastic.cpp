@@ -1,5 +1,7 @@
 #include "flexbody/runtime/gcms_elastic.hpp"
 
+#include "gcms_elastic_padded.hpp"
+
 #include "../kernels/dense_product.hpp"
 #include "../kernels/outer_sum.hpp"
 
@@ -43,7 +45,10 @@ ElasticForces forces_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const 
   const Eigen::Index n_f = xi.size() / 3;
   const Eigen::VectorXd xi_bar = body_frame_coordinates(a, xi);
   ElasticForces out;
-  if constexpr (std::is_same_v<Stiffness, Eigen::MatrixXd>) {  // every iteration: the dispatched kernel
+  if constexpr (std::is_same_v<Stiffness, detail::PaddedMatrix>) {  // every iteration: the dispatched kernel
+    out.h.resize(xi.size());
+    k_hat.multiply(xi_bar.data(), out.h.data());
+  } else if constexpr (std::is_same_v<Stiffness, Eigen::MatrixXd>) {
     out.h.resize(xi.size());
     detail::dense_product(k_hat, xi_bar.data(), out.h.data());
   } else {
@@ -89,6 +94,10 @@ ElasticForces elastic_forces(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d
 }
 
 ElasticForces elastic_forces(const Eigen::SparseMatrix<double>& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi) {
+  return forces_of(k_hat, a, xi);
+}
+
+ElasticForces detail::elastic_forces(const PaddedMatrix& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi) {
   return forces_of(k_hat, a, xi);
 }
 

@@ -107,7 +107,7 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
     // (G_ff = I for a body file's M_s-orthonormal fields, so cond C ≤ 1 + λ_max(K̂ + γ'D̂)/β', with λ_max(K̂) the
     // stiffest shape of the 3 n_f-dimensional field space, above the kept modes' ω²), so the inverse loses only
     // about cond(C)·ε.
-    inverses_.back() = factor.solve(Eigen::MatrixXd::Identity(3 * n_f, 3 * n_f));
+    inverses_.back() = PaddedMatrix(factor.solve(Eigen::MatrixXd::Identity(3 * n_f, 3 * n_f)));
   }
   eliminated_.resize(static_cast<std::size_t>(system.body_count()));
   Eigen::Index largest = 0;
@@ -119,7 +119,10 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
 Eigen::MatrixXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) const {
   const auto k = static_cast<std::size_t>(body);
   if (sparse_cores_[k]) return rotate(a, sparse_cores_[k]->solve(rotate(a.transpose(), x)));
-  return rotate(a, inverses_[k] * rotate(a.transpose(), x));  // S_ff⁻¹ = Â C⁻¹ Âᵀ
+  const Eigen::MatrixXd rotated = rotate(a.transpose(), x);  // S_ff⁻¹ = Â C⁻¹ Âᵀ, column by column (factorization only)
+  Eigen::MatrixXd y(rotated.rows(), rotated.cols());
+  for (Eigen::Index c = 0; c < rotated.cols(); ++c) inverses_[k].multiply(rotated.col(c).data(), y.col(c).data());
+  return rotate(a, y);
 }
 
 void ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const double* x, double* y) {
@@ -132,7 +135,7 @@ void ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const do
   if (sparse_cores_[k])
     core_y_.head(3 * n_f) = sparse_cores_[k]->solve(rotated_.head(3 * n_f));
   else
-    dense_product(inverses_[k], rotated_.data(), core_y_.data());
+    inverses_[k].multiply(rotated_.data(), core_y_.data());
   Eigen::Map<Eigen::Matrix3Xd>(y, 3, n_f).noalias() = a * core_y;
 }
 
@@ -195,6 +198,8 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
     e.coupling.resize(12 + k_rows, n_xi);
     e.coupling << s_rf, j_f;
     e.y = core_solve(b, a, e.coupling.transpose());
+    e.coupling_kernel = PaddedMatrix(e.coupling);
+    e.y_kernel = PaddedMatrix(e.y);
     reduced.block(12 * b, 12 * b, 12, 12) -= s_rf * e.y.leftCols(12);
     const Eigen::MatrixXd s_rf_y = s_rf * e.y.rightCols(k_rows), j_y = j_f * e.y.leftCols(12);
     const Eigen::MatrixXd j_yj = j_f * e.y.rightCols(k_rows);
@@ -215,7 +220,7 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
   // Its inverse explicitly, like C⁻¹: a solve is then one product with a (12 n_b + m)-square matrix, where Eigen's
   // blocked triangular solves took 0.4 µs each at 21 rows (7 % of a 20-mode step, two per iteration). A singular
   // reduced matrix gives non-finite entries, which the integrator reports as a singular Newton matrix.
-  reduced_inverse_ = Eigen::PartialPivLU<Eigen::MatrixXd>(reduced).inverse();
+  reduced_inverse_ = PaddedMatrix(Eigen::PartialPivLU<Eigen::MatrixXd>(reduced).inverse());
 }
 
 void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
@@ -233,12 +238,12 @@ void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& 
     e.residual_solution.resize(n_xi);
     core_solve(b, orientation_of(q.segment(o, 12)), residual.data() + o + 12, e.residual_solution.data());
     coupled_.resize(e.coupling.rows());
-    dense_product(e.coupling, e.residual_solution.data(), coupled_.data());  // [S_rf; J_f] S_ff⁻¹ r_f
+    e.coupling_kernel.multiply(e.residual_solution.data(), coupled_.data());  // [S_rf; J_f] S_ff⁻¹ r_f
     rhs_.segment(12 * b, 12) += coupled_.head<12>();
     for (std::size_t i = 0; i < e.rows.size(); ++i) rhs_(n_r + e.rows[i]) += coupled_(12 + static_cast<Eigen::Index>(i));
   }
   reduced_solution_.resize(rhs_.size());
-  dense_product(reduced_inverse_, rhs_.data(), reduced_solution_.data());
+  reduced_inverse_.multiply(rhs_.data(), reduced_solution_.data());
   const Eigen::VectorXd& x = reduced_solution_;
   // Back-substitute: Δq_f = −S_ff⁻¹ (r_f + S_fr Δq_r + J_fᵀ Δμ).
   dx.resize(q.size() + m);
@@ -251,7 +256,7 @@ void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& 
     const auto k_rows = static_cast<Eigen::Index>(e.rows.size());
     unknowns_.resize(12 + k_rows);  // [Δq_r; Δμ of the rows that touch ξ]
     unknowns_ << x.segment(12 * b, 12), x.tail(m)(e.rows);
-    dense_product(e.y, unknowns_.data(), dx.data() + o + 12);
+    e.y_kernel.multiply(unknowns_.data(), dx.data() + o + 12);
     dx.segment(o + 12, n_xi) = -(dx.segment(o + 12, n_xi) + e.residual_solution);
   }
 }

@@ -12,6 +12,8 @@
 
 #include "flexbody/runtime/system.hpp"
 
+#include "../kernels/dense_product.hpp"
+
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/LU>
@@ -31,7 +33,8 @@ class NewtonSolver {
                       const Eigen::MatrixXd& jacobian) = 0;
   /// dx = [Δq; Δμ] for the scaled residual r and Φ with the last factorization (which may be from an earlier
   /// iterate: a modified Newton iteration; the constant core is always applied at the current A). Not const:
-  /// the solvers keep their work vectors, so that an iteration allocates nothing here once sizes are set.
+  /// the solvers keep their work vectors, so that an iteration allocates nothing here once sizes are set. dx must
+  /// not be one of the inputs.
   virtual void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
                      Eigen::VectorXd& dx) = 0;
 };
@@ -64,6 +67,7 @@ class ConstantCoreNewton final : public NewtonSolver {
   // (J_f: those rows' ξ columns) and y = S_ff⁻¹ couplingᵀ at the factorization's A.
   struct Eliminated {
     Eigen::MatrixXd coupling, y;
+    PaddedMatrix coupling_kernel, y_kernel;  ///< the same, stored for the product kernel
     std::vector<Eigen::Index> rows;
     Eigen::VectorXd residual_solution;  ///< S_ff⁻¹ r_f of the current solve (work vector)
   };
@@ -74,11 +78,11 @@ class ConstantCoreNewton final : public NewtonSolver {
 
   const System& system_;
   double beta_prime_, gamma_prime_;
-  std::vector<Eigen::MatrixXd> inverses_;  ///< C⁻¹ per body; empty for rigid and full-order bodies
+  std::vector<PaddedMatrix> inverses_;  ///< C⁻¹ per body; empty for rigid and full-order bodies
   /// The sparse factor of C for the full-order body (null for the others).
   std::vector<std::unique_ptr<Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>>> sparse_cores_;
   std::vector<Eliminated> eliminated_;
-  Eigen::MatrixXd reduced_inverse_;  ///< of the matrix in [Δq_r; Δμ] left after eliminating every body's ξ
+  PaddedMatrix reduced_inverse_;  ///< of the matrix in [Δq_r; Δμ] left after eliminating every body's ξ
   Eigen::VectorXd rotated_, core_y_, rhs_, coupled_, reduced_solution_, unknowns_;  ///< work vectors of solve()
 };
 

@@ -1,18 +1,36 @@
 #pragma once
 // dense_product.hpp (internal): y = A x for the runtime's per-iteration dense matrices, K̂ ξ̄ (Eq. 87) and
-// C⁻¹ r (FORMULATION.md section 5), both 3 n_f square.
+// C⁻¹ r (FORMULATION.md section 5), both 3 n_f square, and the small products of the Newton solve.
 //
 // Eigen picks its vector width when it is compiled: a portable build (no -march) runs these products with SSE2,
 // two doubles per instruction. This kernel is compiled for several instruction sets and the dynamic loader picks
 // the widest the machine has (GCC's target_clones), so a distribution build gets AVX2 or AVX-512 where they exist.
-// Measured on this project's machine at 3 n_f = 180 (bench/README.md, "runtime_bench"): Eigen 5.7-9 µs in the
-// portable build, 3.3 µs with -march=native; this kernel 3.0-3.5 µs in either.
+// It is fastest on a PaddedMatrix, whose columns start on 64-byte boundaries: at 180 square, 2.6-2.8 µs against
+// 3.7-5.1 µs for the same product on columns that straddle cache lines (bench/README.md, "runtime_bench").
 
 #include <Eigen/Core>
+
+#include <memory>
 
 namespace flexbody::runtime::detail {
 
 /// y = A x. x and y hold a.cols() and a.rows() doubles and must not overlap each other or A.
 void dense_product(const Eigen::MatrixXd& a, const double* x, double* y);
+
+/// An immutable dense matrix stored for dense_product: column-major, each column starting on a 64-byte boundary
+/// (the leading dimension rounded up to 8 doubles). Copies share the storage.
+class PaddedMatrix {
+ public:
+  PaddedMatrix() = default;
+  explicit PaddedMatrix(const Eigen::Ref<const Eigen::MatrixXd>& a);
+  [[nodiscard]] Eigen::Index rows() const { return rows_; }
+  [[nodiscard]] Eigen::Index cols() const { return cols_; }
+  /// y = A x, as dense_product.
+  void multiply(const double* x, double* y) const;
+
+ private:
+  Eigen::Index rows_ = 0, cols_ = 0, stride_ = 0;
+  std::shared_ptr<const double[]> data_;
+};
 
 }  // namespace flexbody::runtime::detail

@@ -1,5 +1,7 @@
 #include "flexbody/runtime/system.hpp"
 
+#include "../body/gcms_elastic_padded.hpp"
+
 #include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
 
@@ -47,11 +49,21 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
     throw std::invalid_argument("body '" + name + "': the full-order reference body takes no damping");
   if (d.size() > 0 && (d.rows() != n_xi || d.cols() != n_xi))
     throw std::invalid_argument("body '" + name + "': the damping matrix must be 3 n_f square (" + std::to_string(n_xi) + ")");
+  if (model.unit_field_mass && !model.sparse) {  // the short mass product reads neither G_ff nor G[4:, 0:4]
+    const Eigen::Index n_f = model.field_count();
+    const Eigen::MatrixXd& g = model.mass_matrix;
+    if (g.rows() != 4 + n_f || g.cols() != 4 + n_f || g.bottomRightCorner(n_f, n_f) != Eigen::MatrixXd::Identity(n_f, n_f) ||
+        g.bottomLeftCorner(n_f, 4) != g.topRightCorner(4, n_f).transpose())
+      throw std::invalid_argument("body '" + name + "': unit_field_mass is set, but G_ff is not exactly I or G is not "
+                                  "symmetric (make_body_model sets it only where both hold)");
+  }
   if ((state.orientation.transpose() * state.orientation - Eigen::Matrix3d::Identity()).norm() > 1e-12 ||
       state.orientation.determinant() < 0.0)
     throw std::invalid_argument("body '" + name + "': the initial orientation is not a rotation (A^T A = I, det A = 1)");
   const Eigen::Index rows = model.rigid() ? 6 : (model.needs_translational_tisserand() ? 12 : 9);
-  bodies_.push_back({name, std::move(model), state, coordinates_, rows});
+  std::shared_ptr<const detail::PaddedMatrix> stiffness;
+  if (!model.sparse && !model.rigid()) stiffness = std::make_shared<const detail::PaddedMatrix>(model.stiffness);
+  bodies_.push_back({name, std::move(model), state, coordinates_, rows, std::move(stiffness)});
   coordinates_ += bodies_.back().model.coordinate_count();
   return static_cast<int>(bodies_.size()) - 1;
 }
@@ -198,7 +210,8 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
     for (Eigen::Index k = 0; k < n / 3; ++k) f_b.segment<3>(3 * k) += b.model.g_border(0, k) * gravity_;  // (G[:, 0] ⊗ I3) g
     if (!b.model.rigid()) {
       const auto q_b = q.segment(b.offset, n);
-      const ElasticForces elastic = body_elastic_forces(b.model, orientation_of(q_b), q_b.tail(n - 12));
+      const ElasticForces elastic = b.stiffness ? detail::elastic_forces(*b.stiffness, orientation_of(q_b), q_b.tail(n - 12))
+                                                : body_elastic_forces(b.model, orientation_of(q_b), q_b.tail(n - 12));
       f_b.segment<9>(3) -= elastic.grad_a;   // Eq. 86
       f_b.tail(n - 12) -= elastic.grad_xi;   // Eq. 87
       if (b.model.damping.size() > 0) {      // R = ½ ξ̄̇ᵀ D̂ ξ̄̇, ξ̄̇_f = Ȧᵀ ξ_f + Aᵀ ξ̇_f

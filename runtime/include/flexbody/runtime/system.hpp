@@ -16,10 +16,15 @@
 #include <Eigen/SparseCore>
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace flexbody::runtime {
+
+namespace detail {
+class PaddedMatrix;
+}
 
 /// A body's initial state. ξ and ξ̇ are in the global frame (ξ_f = A ξ̄_f); empty means zero.
 struct BodyState {
@@ -154,6 +159,8 @@ class System {
     BodyState initial;
     Eigen::Index offset = 0;
     Eigen::Index reference_rows = 0;  ///< 6 (rigid), 9, or 12 with the translational Tisserand rows
+    /// K̂ as the runtime's product kernel reads it fastest (null for rigid and full-order bodies).
+    std::shared_ptr<const detail::PaddedMatrix> stiffness;
   };
   [[nodiscard]] static Eigen::Index reference_rows(const Body& b) { return b.reference_rows; }
   /// Body `body`'s slice of q without a copy (empty for ground); valid while q is.

@@ -1,0 +1,14 @@
+#pragma once
+// gcms_elastic_padded.hpp (internal): the elastic forces of gcms_elastic.hpp for a K̂ kept in the kernel's padded
+// storage (kernels/dense_product.hpp). System keeps each flexible body's K̂ that way: its columns start on
+// 64-byte boundaries, which makes K̂ ξ̄, the largest product of an iteration, about 1.5x faster.
+
+#include "flexbody/runtime/gcms_elastic.hpp"
+
+#include "../kernels/dense_product.hpp"
+
+namespace flexbody::runtime::detail {
+
+[[nodiscard]] ElasticForces elastic_forces(const PaddedMatrix& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi);
+
+}  // namespace flexbody::runtime::detail

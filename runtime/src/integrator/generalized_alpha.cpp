@@ -38,8 +38,7 @@ void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) con
     const BodyModel& model = system_.model(b);
     if (model.rigid()) continue;
     // ∫|ū|² dm = ξ̄ᵀ (G_ff ⊗ I3) ξ̄, and |ξ̄| = |ξ| for orthogonal A: the RMS displacement without rotating.
-    const Eigen::VectorXd q_b = system_.body_coordinates(q, b);
-    const double squared = field_mass_norm_squared(model, q_b.tail(q_b.size() - 12));
+    const double squared = field_mass_norm_squared(model, q.segment(system_.offset(b) + 12, model.coordinate_count() - 12));
     const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
     const double size = body_sizes_[static_cast<std::size_t>(b)];
     if (rms > options_.deformation_limit * size) {
@@ -137,8 +136,9 @@ void GeneralizedAlpha::step() {
   const double t1 = t0_ + static_cast<double>(steps_ + 1) * h;
   const double beta_prime = (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_));
   const double gamma_prime = gamma_ / (beta_ * h);
-  Eigen::VectorXd qdd, a, v, q, mu, dx;
-  Eigen::VectorXd residual(n);  // the dynamic rows, scaled by 1/β'; the constraint rows are Φ
+  // The iterate, kept as members so that their storage is reused from step to step.
+  Eigen::VectorXd &qdd = work_.qdd, &a = work_.a, &v = work_.v, &q = work_.q, &mu = work_.mu, &dx = work_.dx;
+  Eigen::VectorXd& residual = work_.residual;  // the dynamic rows, scaled by 1/β'; the constraint rows are Φ
   // A Newton matrix kept from earlier iterations and steps (modified Newton) is refreshed when the corrections
   // stop shrinking fast (ratio > 1/4); a step that does not converge with a kept matrix is retried with a fresh one.
   bool fresh_this_step = false;

@@ -92,6 +92,9 @@ class GeneralizedAlpha {
   double t0_ = 0.0, t_ = 0.0;
   long steps_ = 0;  ///< t = t0 + steps h: no accumulated rounding in the time
   Eigen::VectorXd q_, v_, qdd_, a_, lambda_;
+  struct Iterate {  // step()'s Newton iterate and its residual and correction: storage reused across steps
+    Eigen::VectorXd qdd, a, v, q, mu, dx, residual;
+  } work_;
   std::vector<double> body_sizes_;  ///< bounding-box diagonal of each body's mesh [m]
   std::unique_ptr<detail::NewtonSolver> solver_;
   int iterations_ = 0;

@@ -54,16 +54,19 @@ Timing time_steps(const fr::System& system, const Variant& variant, double step,
   fr::GeneralizedAlpha integrator(system, options);
   for (int i = 0; i < 5; ++i) integrator.step();  // warm-up (allocations, caches)
   const long before = integrator.total_iterations(), factors = integrator.factorizations();
-  // The fastest of three runs: the virtual machines this runs on lose time to their neighbours (top shows steal
-  // time), which only ever adds; the minimum is the code's own cost.
+  // The fastest of 12 chunks of steps/4 steps: the virtual machines this runs on lose time to their neighbours
+  // (top shows steal time) in bursts of milliseconds to seconds, which only ever add; the fastest chunk is the
+  // code's own cost. A chunk of 500 steps (5 to 20 modes) holds one or two of the kept matrix's rebuilds (about
+  // one per 350 steps), so the figures include them.
+  const int chunk = std::max(1, steps / 4), chunks = 4 * kRuns;
   double best = std::numeric_limits<double>::infinity();
-  for (int run = 0; run < kRuns; ++run) {
+  for (int run = 0; run < chunks; ++run) {
     const auto start = std::chrono::steady_clock::now();
-    for (int i = 0; i < steps; ++i) integrator.step();
+    for (int i = 0; i < chunk; ++i) integrator.step();
     best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
-  const double total = static_cast<double>(kRuns) * steps;
-  return {1e6 * best / steps, static_cast<double>(integrator.total_iterations() - before) / total,
+  const double total = static_cast<double>(chunks) * chunk;
+  return {1e6 * best / chunk, static_cast<double>(integrator.total_iterations() - before) / total,
           static_cast<double>(integrator.factorizations() - factors) / total};
 }
 
@@ -154,6 +157,12 @@ int main(int argc, char** argv) {
     std::printf("  core product C^-1 r, the runtime's kernel %7.1f  (runtime/src/kernels: the machine's widest vectors)\n",
                 per_call(4000, [&] {
                   fr::detail::dense_product(core_inverse, rhs.data(), product.data());
+                  return product(0);
+                }));
+    const fr::detail::PaddedMatrix padded(core_inverse);
+    std::printf("  the same on 64-byte-aligned columns      %8.1f  (PaddedMatrix, as the runtime keeps C^-1 and K_hat)\n",
+                per_call(4000, [&] {
+                  padded.multiply(rhs.data(), product.data());
                   return product(0);
                 }));
     std::printf("  mass product (G x I3) qdd               %8.1f\n", per_call(4000, [&] { return system.mass_product(v)(0); }));

@@ -1,7 +1,7 @@
 #pragma once
 // gcms_elastic_padded.hpp (internal): the elastic forces of gcms_elastic.hpp for a K̂ kept in the kernel's padded
 // storage (kernels/dense_product.hpp). System keeps each flexible body's K̂ that way: its columns start on
-// 64-byte boundaries, which makes K̂ ξ̄, the largest product of an iteration, about 1.5x faster.
+// 64-byte boundaries, which makes K̂ ξ̄, one of the two largest products of an iteration, 1.2-1.6x faster.
 
 #include "flexbody/runtime/gcms_elastic.hpp"
 

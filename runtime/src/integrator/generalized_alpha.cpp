@@ -157,7 +157,6 @@ void GeneralizedAlpha::step() {
       const Eigen::VectorXd inertia = system_.mass_product(qdd);
       residual = (inertia - system_.forces(t1, q, v)) * (1.0 / beta_prime) +  // a product: a division per entry costs
                  system_.constraint_jacobian_transpose_product(t1, q, mu);   // more than the rest of this line
-
       if (refresh_ || !options_.reuse_newton_matrix) {
         solver_->factor(q, v, mu, system_.constraint_jacobian(t1, q));
         refresh_ = false;

@@ -50,7 +50,6 @@ FLEXBODY_CLONES void product_kernel(std::ptrdiff_t rows, std::ptrdiff_t cols, st
   }
 }
 
-
 }  // namespace
 
 void dense_product(const Eigen::MatrixXd& a, const double* x, double* y) {

@@ -5,8 +5,8 @@
 // Eigen picks its vector width when it is compiled: a portable build (no -march) runs these products with SSE2,
 // two doubles per instruction. This kernel is compiled for several instruction sets and the dynamic loader picks
 // the widest the machine has (GCC's target_clones), so a distribution build gets AVX2 or AVX-512 where they exist.
-// It is fastest on a PaddedMatrix, whose columns start on 64-byte boundaries: at 180 square, 2.6-2.8 µs against
-// 3.7-5.1 µs for the same product on columns that straddle cache lines (bench/README.md, "runtime_bench").
+// It is fastest on a PaddedMatrix, whose columns start on 64-byte boundaries: at 180 square, 2.6-3.4 µs against
+// 3.4-5.1 µs for the same product on columns that straddle cache lines (bench/README.md, "runtime_bench").
 
 #include <Eigen/Core>
 
@@ -23,6 +23,9 @@ class PaddedMatrix {
  public:
   PaddedMatrix() = default;
   explicit PaddedMatrix(const Eigen::Ref<const Eigen::MatrixXd>& a);
+  // Copies only (they share the storage): a move would leave an object with sizes and no storage.
+  PaddedMatrix(const PaddedMatrix&) = default;
+  PaddedMatrix& operator=(const PaddedMatrix&) = default;
   [[nodiscard]] Eigen::Index rows() const { return rows_; }
   [[nodiscard]] Eigen::Index cols() const { return cols_; }
   /// y = A x, as dense_product.

@@ -47,6 +47,8 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
   const Eigen::MatrixXd& d = model.damping;
   if (model.sparse && d.size() > 0)
     throw std::invalid_argument("body '" + name + "': the full-order reference body takes no damping");
+  if (!model.sparse && (model.stiffness.rows() != n_xi || model.stiffness.cols() != n_xi))
+    throw std::invalid_argument("body '" + name + "': K_hat must be 3 n_f square (" + std::to_string(n_xi) + ")");
   if (d.size() > 0 && (d.rows() != n_xi || d.cols() != n_xi))
     throw std::invalid_argument("body '" + name + "': the damping matrix must be 3 n_f square (" + std::to_string(n_xi) + ")");
   if (model.unit_field_mass && !model.sparse) {  // the short mass product reads neither G_ff nor G[4:, 0:4]

@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <deque>
 #include <functional>
 #include <memory>
 #include <string>
@@ -95,6 +96,8 @@ class System {
   void set_gravity(const Eigen::Vector3d& gravity) { gravity_ = gravity; }
 
   [[nodiscard]] int body_count() const { return static_cast<int>(bodies_.size()); }
+  /// Body `body`'s model. The reference stays valid for the System's lifetime: adding bodies does not move the ones
+  /// already added (a simulator may keep it, as fbsim's outputs and ParaView series do).
   [[nodiscard]] const BodyModel& model(int body) const { return bodies_.at(static_cast<std::size_t>(body)).model; }
   [[nodiscard]] const std::string& body_name(int body) const { return bodies_.at(static_cast<std::size_t>(body)).name; }
   [[nodiscard]] int body_index(const std::string& name) const;  ///< throws std::invalid_argument if unknown
@@ -166,7 +169,7 @@ class System {
   /// Body `body`'s slice of q without a copy (empty for ground); valid while q is.
   [[nodiscard]] VectorRef body_view(const Eigen::VectorXd& q, int body) const;
   void check_marker(const Marker& m, const std::string& what) const;
-  std::vector<Body> bodies_;
+  std::deque<Body> bodies_;  ///< a deque: add_body never moves a body, so references to its model stay valid
   std::vector<Joint> joints_;
   std::vector<PointForce> forces_;
   std::vector<PointTorque> torques_;

@@ -30,6 +30,31 @@ Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen
 // which is no state to go on from either.)
 bool all_finite(const Eigen::VectorXd& x) { return std::isfinite(x.sum()); }
 
+// Round-off floor of Newton's corrections, relative to |q_i| + scale_i: a constraint row's residual is a sum of a few
+// products of coordinates, so its rounding is a few ε |q|, and so is the correction it asks for. Measured: the
+// corrections of a flexible pendulum stagnate at 1-2 ε (|q_i| + scale_i); 8 ε stops there without a false stop.
+constexpr double kRoundOffFloor = 8.0 * std::numeric_limits<double>::epsilon();
+
+// The length scale of each of one body's coordinates (GeneralizedAlphaOptions::tolerance): the radius of gyration
+// r = √(tr J / m) for τ, 1 for vec(A) (δa moves a point at distance r by r δa, as δτ = r δa would), and for a field
+// coordinate the amplitude whose largest nodal displacement is r: r / max_i |Ῡ'(i, f)|. The full-order body's fields
+// are the nodal displacements themselves (Ῡ' = I); a model built without its fields takes the RMS displacement,
+// r √(m / G_ff(f, f)).
+void append_scales(const BodyModel& model, Eigen::VectorXd& scales, Eigen::Index offset) {
+  const double trace = model.g_border(1, 1) + model.g_border(2, 2) + model.g_border(3, 3);
+  const double r = std::sqrt(std::max(trace, 0.0) / model.mass);
+  scales.segment(offset, 3).setConstant(r);
+  scales.segment(offset + 3, 9).setConstant(1.0);
+  for (Eigen::Index f = 0; f < model.field_count(); ++f) {
+    double scale = r;
+    if (!model.sparse && model.fields.cols() == model.field_count() && model.fields.rows() > 0)
+      scale = r / model.fields.col(f).cwiseAbs().maxCoeff();
+    else if (!model.sparse)
+      scale = r * std::sqrt(model.mass / model.mass_matrix(4 + f, 4 + f));
+    scales.segment(offset + 12 + 3 * f, 3).setConstant(scale);
+  }
+}
+
 }  // namespace
 
 void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) const {
@@ -52,6 +77,38 @@ void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) con
   }
 }
 
+// Why a step may have failed, from the last converged state (the failed iterate says nothing reliable): the body
+// that turned most per step, and the one closest to the deformation limit.
+std::string GeneralizedAlpha::last_state_diagnosis() const {
+  const double h = options_.step;
+  int fastest = -1, most_deformed = -1;
+  double largest_turn = 0.0, largest_share = 0.0, rms_of_most = 0.0;
+  for (int b = 0; b < system_.body_count(); ++b) {
+    const Eigen::Index o = system_.offset(b);
+    const Eigen::Matrix3d a = orientation_of(q_.segment(o, 12)), a_dot = orientation_of(v_.segment(o, 12));
+    const Eigen::Matrix3d w = a_dot * a.transpose();  // [ω]×
+    const double turn = Eigen::Vector3d(w(2, 1) - w(1, 2), w(0, 2) - w(2, 0), w(1, 0) - w(0, 1)).norm() / 2 * h;
+    if (turn > largest_turn) largest_turn = turn, fastest = b;
+    const BodyModel& model = system_.model(b);
+    const double size = body_sizes_[static_cast<std::size_t>(b)];
+    if (model.rigid() || !(size > 0.0)) continue;
+    const double squared = field_mass_norm_squared(model, q_.segment(o + 12, model.coordinate_count() - 12));
+    const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
+    if (rms / size >= largest_share) largest_share = rms / size, most_deformed = b, rms_of_most = rms;
+  }
+  std::ostringstream out;
+  out << "; at the last converged step, t = " << t_ << " s,";
+  if (fastest >= 0)
+    out << " body '" << system_.body_name(fastest) << "' turned " << largest_turn << " rad per step"
+        << (largest_turn > 0.1 ? " (more than 0.1 rad per step: try a smaller step)" : "");
+  if (most_deformed >= 0)
+    out << (fastest >= 0 ? " and" : "") << " body '" << system_.body_name(most_deformed) << "' had an RMS elastic "
+        << "displacement of " << rms_of_most << " m = " << 100.0 * largest_share << " % of its size (limit "
+        << 100.0 * options_.deformation_limit << " %)";
+  if (fastest < 0 && most_deformed < 0) out << " every body was at rest and undeformed";
+  return out.str();
+}
+
 GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaOptions& options, double t0)
     : system_(system), options_(options), t0_(t0), t_(t0) {
   const double rho = options.rho_infinity;
@@ -67,6 +124,11 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   beta_ = 0.25 * (gamma_ + 0.5) * (gamma_ + 0.5);
   q_ = system.initial_coordinates();
   v_ = system.initial_velocities();
+  scales_.resize(q_.size());
+  for (int b = 0; b < system.body_count(); ++b) append_scales(system.model(b), scales_, system.offset(b));
+  if (!scales_.allFinite() || !(scales_.minCoeff() > 0.0))
+    throw std::invalid_argument("generalized-alpha: a body has no length scale for Newton's stopping test (zero or "
+                                "non-finite radius of gyration, or a field that displaces no node)");
   for (int b = 0; b < system.body_count(); ++b) {  // bounding-box diagonals, for the deformation limit
     const format::RowMatrixX3d& nodes = system.model(b).nodes;
     body_sizes_.push_back(nodes.rows() ? (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm() : 0.0);
@@ -149,8 +211,9 @@ void GeneralizedAlpha::step() {
     v = v_ + h * (1.0 - gamma_) * a_ + h * gamma_ * a;
     q = q_ + h * v_ + h * h * (0.5 - beta_) * a_ + h * h * beta_ * a;
     mu = lambda_ / beta_prime;  // the scaled multipliers
-    const double q_scale = 1.0 + q.cwiseAbs().maxCoeff();
+    work_.predicted = q;
     double previous_correction = std::numeric_limits<double>::infinity();
+    double rate = last_rate_;  // before a second iteration has measured it, the last step's contraction
     bool converged = false;
     for (iterations_ = 1; iterations_ <= options_.max_iterations; ++iterations_) {
       const Eigen::VectorXd phi = system_.constraints(t1, q);
@@ -170,18 +233,29 @@ void GeneralizedAlpha::step() {
         Eigen::Index worst = 0;
         if (m > 0) phi.cwiseAbs().maxCoeff(&worst);
         why << "t = " << t1 << " s: the Newton matrix is singular or the state is not finite (largest constraint "
-            << "residual in " << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")";
+            << "residual in " << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")"
+            << last_state_diagnosis();
         throw StepFailure(why.str());
       }
       q += dx.head(n);
       v += gamma_prime * dx.head(n);
       qdd += beta_prime * dx.head(n);
       mu += dx.tail(m);
-      const double correction = dx.head(n).cwiseAbs().maxCoeff();
-      const double force_scale = 1.0 + inertia.cwiseAbs().maxCoeff() / beta_prime;
-      if (correction <= options_.tolerance * q_scale &&
-          residual.cwiseAbs().maxCoeff() <= 1e3 * options_.tolerance * force_scale) {
+      // The stopping test (GeneralizedAlphaOptions::tolerance), in each coordinate's length scale: the remaining
+      // error ρ/(1 − ρ) |Δq| against tolerance × |q − q_pred|, or |Δq| at the coordinates' round-off.
+      const Eigen::Index n_q = n;
+      double correction = 0.0, distance = 0.0, above_floor = 0.0;
+      for (Eigen::Index i = 0; i < n_q; ++i) {
+        const double step_i = std::abs(dx(i)), inverse = 1.0 / scales_(i);
+        correction = std::max(correction, step_i * inverse);
+        distance = std::max(distance, std::abs(q(i) - work_.predicted(i)) * inverse);
+        above_floor = std::max(above_floor, step_i / (kRoundOffFloor * (std::abs(q(i)) + scales_(i))));
+      }
+      if (iterations_ > 1 && previous_correction > 0.0) rate = correction / previous_correction;
+      const double remaining = rate < 1.0 ? correction * rate / (1.0 - rate) : std::numeric_limits<double>::infinity();
+      if (above_floor <= 1.0 || remaining <= options_.tolerance * distance) {
         converged = true;
+        if (iterations_ > 1) last_rate_ = std::max(rate, 1e-3);
         break;
       }
       if (correction > 0.25 * previous_correction) refresh_ = true;
@@ -192,14 +266,13 @@ void GeneralizedAlpha::step() {
       refresh_ = true;
       continue;
     }
-    check_deformation(t1, q);  // a diverging linear model: say so rather than "did not converge"
     Eigen::Index worst = 0;
     const Eigen::VectorXd now = system_.constraints(t1, q);
     if (m > 0) now.cwiseAbs().maxCoeff(&worst);
     std::ostringstream why;
     why << "t = " << t1 << " s: Newton did not converge in " << options_.max_iterations
         << " iterations (largest constraint residual " << (m > 0 ? now.cwiseAbs().maxCoeff() : 0.0) << " in "
-        << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")";
+        << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")" << last_state_diagnosis();
     throw StepFailure(why.str());
   }
   if (!all_finite(q) || !all_finite(v) || !all_finite(qdd)) throw StepFailure("t = " + std::to_string(t1) + " s: non-finite state");

@@ -150,6 +150,8 @@ Provenance read_provenance(const Location& root) {
   p.source_sha256 = detail::read_string_attribute(root, "source_sha256");
   p.input_unit = detail::read_string_attribute(root, "input_unit");
   p.unit_reason = detail::read_string_attribute(root, "unit_reason");
+  if (detail::has_attribute(root, "/", "declared_unit"))  // optional: absent in older files
+    p.declared_unit = detail::read_string_attribute(root, "declared_unit");
   const Location options = detail::open_group(detail::open_group(root, "provenance"), "options");
   for (const std::string& name : names_in_order(detail::read_string_attribute(options, "order")))
     p.options.emplace_back(name, detail::read_string_attribute(options, name));

@@ -36,6 +36,7 @@ void write_root(const Location& root, const Provenance& p) {
   detail::write_string_attribute(root, "source_sha256", p.source_sha256);
   detail::write_string_attribute(root, "input_unit", p.input_unit);
   detail::write_string_attribute(root, "unit_reason", p.unit_reason);
+  detail::write_string_attribute(root, "declared_unit", p.declared_unit);
 }
 
 void write_provenance(const Location& root, const Provenance& p) {

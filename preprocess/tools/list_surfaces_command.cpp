@@ -23,8 +23,8 @@ int list_surfaces_command(int argc, char** argv) {
   double mesh_size = 0.0;
   bool json = false;
   app.add_option("INPUT", input, "STEP/STP, IGES/IGS, BREP, gmsh .geo or .msh")->required();
-  app.add_option("--unit", unit_text, "length unit of INPUT, as for fbprep");
-  app.add_option("--mesh-size", mesh_size, "element size in --unit, as for fbprep");
+  app.add_option("--unit", unit_text, "unit of INPUT's coordinates, as for fbprep");
+  app.add_option("--mesh-size", mesh_size, "element size in the input's unit, as for fbprep");
   app.add_flag("--json", json, "print one JSON object on stdout instead of the table");
   try {
     app.parse(argc, argv);
@@ -44,6 +44,10 @@ int list_surfaces_command(int argc, char** argv) {
     if (json) {
       nlohmann::ordered_json j;
       j["input"] = input;
+      j["length_unit"] = std::string(to_string(imported.unit));
+      j["length_unit_reason"] = imported.unit_reason;
+      j["declared_unit"] = imported.declared_unit ? nlohmann::ordered_json(std::string(to_string(*imported.declared_unit)))
+                                                  : nlohmann::ordered_json(nullptr);
       j["surfaces"] = nlohmann::ordered_json::array();
       for (const auto& s : imported.surfaces)
         j["surfaces"].push_back({{"tag", s.tag},

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 namespace fp = flexbody::preprocess;
 
@@ -32,11 +33,11 @@ int prep_command(int argc, char** argv) {
   app.add_option("INPUT", input, "STEP/STP, IGES/IGS, BREP, gmsh .geo, gmsh .msh with tetrahedra, or a body spec "
                                  "(.yaml: see README; the flags below override it)")->required();
   app.add_option("-o,--output", output, "body file to write (default: INPUT's name with .fbh5, here)");
-  app.add_option("--unit", unit_text, "length unit of INPUT: mm|cm|m|in (required for BREP/.geo/.msh; STEP and "
-                                      "IGES declare their own: then only the unit of --mesh-size, default the "
-                                      "STEP's declared unit, mm for IGES)");
-  app.add_option("--mesh-size", mesh_size, "largest element size in --unit (default: bounding-box diagonal / 25; "
-                                           "a .msh is used as it is)");
+  app.add_option("--unit", unit_text, "unit of INPUT's coordinates: mm|cm|m|in; overrides the unit a STEP file "
+                                      "declares (default: the declared one); required for BREP/.geo/.msh; refused "
+                                      "for IGES. --mesh-size and a spec's lengths are in it");
+  app.add_option("--mesh-size", mesh_size, "largest element size in the input's unit (default: bounding-box "
+                                           "diagonal / 25; a .msh is used as it is)");
   app.add_option("--order", order, "element order: 1 (linear tetrahedra)");
   app.add_option("--material", material_text, "steel|aluminium|titanium or E=210e9,nu=0.3,rho=7850 (SI)");
   app.add_option("--modes", modes, "number of elastic free-free modes (rigid-body modes never count)");
@@ -79,8 +80,13 @@ int prep_command(int argc, char** argv) {
     record("output", options.output.string());
     if (!from_spec || given("--unit")) {
       if (!unit_text.empty()) {
+        const std::optional<fp::LengthUnit> spec_unit = options.mesh.unit;
         options.mesh.unit = fp::length_unit_from_string(unit_text);
         if (!options.mesh.unit) throw std::invalid_argument("--unit '" + unit_text + "' is not one of mm, cm, m, in");
+        // Like every flag, --unit replaces the spec's value; the spec's lengths are then read in it too.
+        options.mesh.unit_source = "--unit " + unit_text;
+        if (spec_unit && *spec_unit != *options.mesh.unit)
+          options.mesh.unit_source += fmt::format(" (replacing the body spec's unit: {})", fp::to_string(*spec_unit));
       }
       record("unit", unit_text.empty() ? "(from file)" : unit_text);
     }

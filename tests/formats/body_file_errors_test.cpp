@@ -236,6 +236,14 @@ TEST_F(ReadErrors, FixedInterfaceFrequenciesAreOptional) {
   EXPECT_EQ(read_body_file(path).modes.fixed_interface_frequencies_hz.size(), 0);
 }
 
+TEST_F(ReadErrors, DeclaredUnitIsOptional) {
+  // Added with the unit override (issue 12); files written before it stay readable, with no declared unit.
+  const auto path = good_file("no_declared_unit.fbh5");
+  EXPECT_EQ(read_body_file(path).provenance.declared_unit, "mm");
+  delete_attribute(path, "/", "declared_unit");
+  EXPECT_EQ(read_body_file(path).provenance.declared_unit, "");
+}
+
 TEST_F(ReadErrors, TruncatedFile) {
   const auto good = good_file("whole.fbh5");
   const std::string bytes = read_bytes(good);

@@ -16,6 +16,7 @@ void expect_same(const BodyData& a, const BodyData& b) {
   EXPECT_EQ(a.provenance.source_sha256, b.provenance.source_sha256);
   EXPECT_EQ(a.provenance.input_unit, b.provenance.input_unit);
   EXPECT_EQ(a.provenance.unit_reason, b.provenance.unit_reason);
+  EXPECT_EQ(a.provenance.declared_unit, b.provenance.declared_unit);
   EXPECT_EQ(a.provenance.options, b.provenance.options);
 
   EXPECT_EQ(a.material.name, b.material.name);

@@ -73,6 +73,7 @@ BodyData make_body() {
   body.provenance.source_sha256 = std::string(64, 'a');
   body.provenance.input_unit = "mm";
   body.provenance.unit_reason = "declared by the STEP file";
+  body.provenance.declared_unit = "mm";
   body.provenance.options = {{"unit", "mm"}, {"modes", "2"}, {"mesh-size", "0.5"}, {"note", ""}};
 
   body.material = {"steel", 210.0e9 / 3.0, 0.3, 7850.0 + 1.0 / 7.0};

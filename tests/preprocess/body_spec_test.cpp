@@ -256,3 +256,113 @@ TEST(BodySpec, RigidTieNeedsCraigBampton) {
                          "free-free modes take rbe3 interfaces only"), std::string::npos) << run.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "out.fbh5"));
 }
+
+namespace {
+
+// The beam of beam_folder() as a STEP file written by gmsh: numbers in metres, declared mm.
+std::filesystem::path step_beam_folder() {
+  const auto dir = flexbody::test::scratch_dir();
+  std::filesystem::create_directories(dir / "part");
+  std::filesystem::copy_file(std::filesystem::path(FLEXBODY_TEST_DATA_DIR) / "gmsh-beam" / "beam_1m.step",
+                             dir / "part" / "beam.step");
+  return dir;
+}
+
+// Every length below is in the spec's unit (issue 12): plane points and tolerances, boxes, the mesh size.
+constexpr const char* kStepBeamSpec = R"(input: beam.step
+unit: {unit}
+mesh: {{size: 0.025}}
+reduction: {{modes: 2}}
+interfaces:
+  root: {{select: {{plane: {{point: [0, 0, 0], normal: [1, 0, 0]}}}}}}
+  tip: {{select: {{plane: {{point: [1, 0, 0], normal: [1, 0, 0], tolerance: 0.001}}}}}}
+output_regions:
+  middle: {{select: {{box: {{min: [0.4, -1, -1], max: [0.6, 1, 1]}}}}}}
+)";
+
+// The markers of a body made from kStepBeamSpec sit on the beam's end faces, read as `length` long.
+void expect_beam_of_length(const std::filesystem::path& file, double length) {
+  const auto body = flexbody::format::read_body_file(file);
+  ASSERT_EQ(body.interfaces.size(), 2u);
+  const Eigen::Vector3d com = body.mass.center_of_mass_input;
+  const double s = length;  // the cross-section scales with the length
+  EXPECT_LT((body.interfaces[0].reference_point + com - Eigen::Vector3d(0, 0.025, 0.025) * s).norm(), 1e-12 * s);
+  EXPECT_LT((body.interfaces[1].reference_point + com - Eigen::Vector3d(1, 0.025, 0.025) * s).norm(), 1e-12 * s);
+  // A box's tetrahedra fill it exactly: mass = 7850 kg/m^3 x volume to rounding.
+  EXPECT_NEAR(body.mass.mass, 7850 * 0.0025 * s * s * s, 1e-9 * 7850 * 0.0025 * s * s * s);
+  ASSERT_EQ(body.recovery.size(), 1u);
+  const Eigen::VectorXi& middle = body.recovery[0].nodes;
+  ASSERT_GT(middle.size(), 0);
+  for (Eigen::Index j = 0; j < middle.size(); ++j) {
+    const double x = body.mesh.nodes(middle(j), 0) + com(0);
+    EXPECT_GE(x, (0.4 - 1e-12) * s);  // to rounding: the box takes nodes on its faces
+    EXPECT_LE(x, (0.6 + 1e-12) * s);
+  }
+}
+
+}  // namespace
+
+TEST(BodySpec, UnitAppliesToTheCoordinatesAndEveryLengthOfAStepInput) {
+  // A spec's unit: m on a STEP file that declares mm (gmsh's writer always does) is the unit of the
+  // file's numbers and of the spec's selectors, tolerances and mesh size: the beam is 1 m long and the
+  // plane at x = 1 takes its end face.
+  const auto dir = step_beam_folder();
+  write_text(dir / "part" / "beam.yaml", fmt::format(kStepBeamSpec, fmt::arg("unit", "m")));
+  const CliRun run = run_fbprep(dir, "part/beam.yaml -o beam.fbh5 --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto json = nlohmann::json::parse(run.out);
+  EXPECT_EQ(json["length_unit"], "m");
+  EXPECT_EQ(json["declared_unit"], "mm");
+  EXPECT_EQ(json["length_unit_reason"],
+            "the STEP file declares mm; the body spec's unit: m overrides it: coordinates read as metres");
+  EXPECT_NEAR(json["mesh_size_m"].get<double>(), 0.025, 1e-15);
+  expect_beam_of_length(dir / "beam.fbh5", 1.0);
+  EXPECT_EQ(flexbody::format::read_body_file(dir / "beam.fbh5").provenance.declared_unit, "mm");
+}
+
+TEST(BodySpec, CommandLineUnitOverridesTheSpecUnit) {
+  // bracket.step declares mm. A spec that says unit: m reads its numbers, and the spec's own lengths, as
+  // metres (a 90 m bracket with its bores where the spec puts them); --unit mm replaces the spec's unit, as
+  // any flag replaces the spec's value, and the same numbers are then millimetres, spec and part alike.
+  const auto dir = flexbody::test::scratch_dir();
+  const auto bracket = std::filesystem::path(FLEXBODY_SOURCE_DIR) / "meshes" / "bracket.step";
+  write_text(dir / "bracket.yaml", fmt::format(R"(input: {}
+unit: m
+mesh: {{size: 6}}
+reduction: {{modes: 2}}
+interfaces:
+  bore_1: {{select: {{cylinder: {{point: [45, 20, 0], direction: [0, 0, 1], radius: 5}}}}}}
+  bore_3: {{select: {{cylinder: {{point: [0, 20, 42], direction: [1, 0, 0], radius: 6}}}}}}
+output_regions: {{}}
+)", bracket.string()));
+  // Area centroids of the faceted bores: on their axes (to ~1e-5 of the bracket's size at this mesh) and
+  // mid-way through the 8-unit wall.
+  auto expect_bores = [](const std::filesystem::path& file, double metres_per_number) {
+    const auto body = flexbody::format::read_body_file(file);
+    ASSERT_EQ(body.interfaces.size(), 2u);
+    const Eigen::Vector3d expected[2] = {{45, 20, 4}, {4, 20, 42}};
+    for (int k = 0; k < 2; ++k)
+      EXPECT_LT((body.interfaces[k].reference_point + body.mass.center_of_mass_input - expected[k] * metres_per_number)
+                    .norm(), 0.05 * metres_per_number) << body.interfaces[k].name;
+  };
+  const CliRun metres = run_fbprep(dir, "bracket.yaml -o m.fbh5 --json");
+  ASSERT_EQ(metres.exit_code, 0) << metres.err;
+  const auto m = nlohmann::json::parse(metres.out);
+  EXPECT_EQ(m["length_unit"], "m");
+  EXPECT_EQ(m["length_unit_reason"],
+            "the STEP file declares mm; the body spec's unit: m overrides it: coordinates read as metres");
+  expect_bores(dir / "m.fbh5", 1.0);
+
+  const CliRun millimetres = run_fbprep(dir, "bracket.yaml -o mm.fbh5 --unit mm --json");
+  ASSERT_EQ(millimetres.exit_code, 0) << millimetres.err;
+  const auto mm = nlohmann::json::parse(millimetres.out);
+  EXPECT_EQ(mm["length_unit"], "mm");
+  EXPECT_EQ(mm["unit_overrides_declared"], false);
+  EXPECT_EQ(mm["length_unit_reason"], "declared in the STEP file (mm); --unit mm (replacing the body spec's unit: m) agrees");
+  expect_bores(dir / "mm.fbh5", 1e-3);
+  EXPECT_NEAR(m["mass_kg"].get<double>() / mm["mass_kg"].get<double>(), 1e9, 1e-9 * 1e9);  // the same mesh
+  bool recorded = false;
+  for (const auto& [name, value] : flexbody::format::read_body_file(dir / "mm.fbh5").provenance.options)
+    recorded = recorded || (name == "unit" && value == "mm");
+  EXPECT_TRUE(recorded);
+}

@@ -26,6 +26,10 @@ CliRun fbprep(const std::filesystem::path& dir, const std::string& arguments) {
 }
 
 std::filesystem::path bracket_step() { return std::filesystem::path(FLEXBODY_SOURCE_DIR) / "meshes" / "bracket.step"; }
+// A 1 x 0.05 x 0.05 box meant in metres, written by gmsh, whose STEP writer declares mm.
+std::filesystem::path gmsh_beam_step() {
+  return std::filesystem::path(FLEXBODY_TEST_DATA_DIR) / "gmsh-beam" / "beam_1m.step";
+}
 
 // Only the files the test itself wrote remain in `dir` (no body file, no temporary).
 void expect_no_output(const std::filesystem::path& dir) {
@@ -362,4 +366,130 @@ TEST(FbprepCli, StepDeclaredInInchesIsReadInInches) {
   EXPECT_EQ(a["nodes"], b["nodes"]);
   // Same node count, but gmsh's placement tolerances scale with the model: measured 2.5e-4 apart.
   EXPECT_NEAR(b["mass_kg"].get<double>() / a["mass_kg"].get<double>(), std::pow(25.4, 3), 1e-3 * std::pow(25.4, 3));
+}
+
+TEST(FbprepCli, ExplicitUnitOverridesTheStepDeclaration) {
+  // Issue 12: an explicit unit is the unit of the file's numbers and wins over the STEP declaration, and
+  // the report, --json and the body file say what the file declares and that --unit overrode it.
+  const auto dir = flexbody::test::scratch_dir();
+  // The bracket declares mm; read as metres it is the same mesh (the element size is in the unit in force,
+  // 6 both ways), 1000 times larger: K x 1000, M x 1e9, frequencies / 1000 (to the eigen solve's 1e-10
+  // relative residual, which enters the eigenvalue squared).
+  const std::string bracket = bracket_step().string();
+  const CliRun as_declared = fbprep(dir, fmt::format("'{}' -o a.fbh5 --modes 1 --mesh-size 6 --json", bracket));
+  const CliRun metres = fbprep(dir, fmt::format("'{}' -o b.fbh5 --modes 1 --mesh-size 6 --unit m --json", bracket));
+  ASSERT_EQ(as_declared.exit_code, 0) << as_declared.err;
+  ASSERT_EQ(metres.exit_code, 0) << metres.err;
+  EXPECT_EQ(metres.err, "");
+  const auto a = nlohmann::json::parse(as_declared.out), b = nlohmann::json::parse(metres.out);
+  EXPECT_EQ(a["length_unit"], "mm");
+  EXPECT_EQ(a["declared_unit"], "mm");
+  EXPECT_EQ(a["unit_overrides_declared"], false);
+  EXPECT_EQ(b["length_unit"], "m");
+  EXPECT_EQ(b["declared_unit"], "mm");
+  EXPECT_EQ(b["unit_overrides_declared"], true);
+  const std::string override_reason = "the STEP file declares mm; --unit m overrides it: coordinates read as metres";
+  EXPECT_EQ(b["length_unit_reason"], override_reason);
+  EXPECT_EQ(a["nodes"], b["nodes"]);
+  EXPECT_NEAR(b["mesh_size_m"].get<double>() / a["mesh_size_m"].get<double>(), 1e3, 1e-9);
+  EXPECT_NEAR(b["mass_kg"].get<double>() / a["mass_kg"].get<double>(), 1e9, 1e-9 * 1e9);
+  EXPECT_NEAR(b["frequencies_hz"][0].get<double>() / a["frequencies_hz"][0].get<double>(), 1e-3, 1e-11);
+  const auto body = flexbody::format::read_body_file(dir / "b.fbh5");
+  EXPECT_EQ(body.provenance.input_unit, "m");
+  EXPECT_EQ(body.provenance.declared_unit, "mm");
+  EXPECT_EQ(body.provenance.unit_reason, override_reason);
+  EXPECT_EQ(flexbody::format::read_body_file(dir / "a.fbh5").provenance.declared_unit, "mm");
+  const CliRun inspect = fbprep(dir, "inspect b.fbh5 --json");
+  ASSERT_EQ(inspect.exit_code, 0) << inspect.err;
+  const auto read = nlohmann::json::parse(inspect.out);
+  EXPECT_EQ(read["declared_unit"], "mm");
+  EXPECT_EQ(read["unit_reason"], override_reason);
+
+  // The issue's own case: gmsh's STEP writer declares mm whatever the numbers mean; this beam's are
+  // metres. A box's tetrahedra fill it exactly: mass = 7850 kg/m^3 x 1 x 0.05^2 m^3 to rounding. Its first
+  // free-free bending mode: Timoshenko 263.46 Hz, stiffer on this coarse mesh (evidence: +42 % at 1k DOFs).
+  const CliRun beam = fbprep(dir, fmt::format("'{}' -o c.fbh5 --modes 1 --mesh-size 0.025 --unit m",
+                                              gmsh_beam_step().string()));
+  ASSERT_EQ(beam.exit_code, 0) << beam.err;
+  EXPECT_NE(beam.out.find("length unit"), std::string::npos) << beam.out;
+  EXPECT_NE(beam.out.find(" m: " + override_reason + "\n"), std::string::npos) << beam.out;
+  const auto c = flexbody::format::read_body_file(dir / "c.fbh5");
+  EXPECT_NEAR(c.mass.mass, 19.625, 1e-9 * 19.625);
+  EXPECT_LT((c.mass.center_of_mass_input - Eigen::Vector3d(0.5, 0.025, 0.025)).norm(), 1e-12);
+  EXPECT_GT(c.modes.frequencies_hz(0), 263.46);
+  EXPECT_LT(c.modes.frequencies_hz(0), 1.6 * 263.46);
+
+  // An explicit unit equal to the declared one is no override; list-surfaces follows the same rule.
+  const std::string beam_step = gmsh_beam_step().string();
+  const CliRun same = fbprep(dir, fmt::format("list-surfaces '{}' --unit mm --mesh-size 0.025 --json", beam_step));
+  ASSERT_EQ(same.exit_code, 0) << same.err;
+  EXPECT_EQ(nlohmann::json::parse(same.out)["length_unit_reason"], "declared in the STEP file (mm); --unit mm agrees");
+  const CliRun faces = fbprep(dir, fmt::format("list-surfaces '{}' --unit m --mesh-size 0.025 --json", beam_step));
+  ASSERT_EQ(faces.exit_code, 0) << faces.err;
+  const auto listed = nlohmann::json::parse(faces.out);
+  EXPECT_EQ(listed["length_unit"], "m");
+  EXPECT_EQ(listed["declared_unit"], "mm");
+  int tips = 0;  // the end face x = 1 m, 0.05 x 0.05 m
+  for (const auto& surface : listed["surfaces"])
+    if (std::abs(surface["centroid_m"][0].get<double>() - 1.0) < 1e-12) {
+      ++tips;
+      EXPECT_NEAR(surface["area_m2"].get<double>(), 0.0025, 1e-15);
+    }
+  EXPECT_EQ(tips, 1);
+}
+
+TEST(FbprepCli, StepWithoutDeclaredUnitTakesTheExplicitOne) {
+  // A STEP file with no LENGTH_UNIT: OpenCASCADE takes its numbers as mm (measured: the box's bounding box
+  // is 1 x 0.05 x 0.05 after import); --unit says what they are.
+  const auto dir = flexbody::test::scratch_dir();
+  std::string step = slurp(gmsh_beam_step());
+  const std::string mm_unit = "( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );";
+  const auto at = step.find(mm_unit);
+  ASSERT_NE(at, std::string::npos);
+  step.replace(at, mm_unit.size(), "( NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );");
+  write(dir / "input-unitless.step", step);
+  const CliRun plain = fbprep(dir, "list-surfaces input-unitless.step --mesh-size 0.025 --json");
+  const CliRun metres = fbprep(dir, "list-surfaces input-unitless.step --unit m --mesh-size 0.025 --json");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  ASSERT_EQ(metres.exit_code, 0) << metres.err;
+  const auto a = nlohmann::json::parse(plain.out), b = nlohmann::json::parse(metres.out);
+  EXPECT_EQ(a["length_unit"], "mm");
+  EXPECT_EQ(a["declared_unit"], nullptr);
+  EXPECT_EQ(b["length_unit"], "m");
+  EXPECT_EQ(b["declared_unit"], nullptr);
+  EXPECT_EQ(b["length_unit_reason"], "the STEP file declares no length unit; --unit m: coordinates read as metres");
+  double area_a = 0.0, area_b = 0.0;
+  for (const auto& s : a["surfaces"]) area_a += s["area_m2"].get<double>();
+  for (const auto& s : b["surfaces"]) area_b += s["area_m2"].get<double>();
+  EXPECT_NEAR(area_b, 4 * 0.05 + 2 * 0.0025, 1e-12);  // the box's surface in m^2
+  EXPECT_NEAR(area_b / area_a, 1e6, 1e-6);
+
+  // A declaration that the writer wrapped over two lines is still read (and so can be overridden).
+  step = slurp(gmsh_beam_step());
+  step.replace(step.find(mm_unit), mm_unit.size(), "( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,\n.METRE.) );");
+  write(dir / "input-wrapped.step", step);
+  const CliRun wrapped = fbprep(dir, "list-surfaces input-wrapped.step --unit m --mesh-size 0.025 --json");
+  ASSERT_EQ(wrapped.exit_code, 0) << wrapped.err;
+  EXPECT_EQ(nlohmann::json::parse(wrapped.out)["declared_unit"], "mm");
+}
+
+TEST(FbprepCli, UnitThatCannotBeAppliedIsRefused) {
+  // fbprep cannot undo a conversion whose factor it does not know: OpenCASCADE converts an IGES file's
+  // unit (fbprep reads no IGES header) and STEP units other than mm, cm, m, inch to mm by itself.
+  const auto dir = flexbody::test::scratch_dir();
+  write(dir / "input-part.igs", "an IGES file\n");
+  expect_refusal(dir, "input-part.igs --unit m",
+                 "input-part.igs: fbprep does not read the unit an IGES file declares (OpenCASCADE converts it to "
+                 "mm), so --unit m cannot be applied; drop it to read the file as it declares (lengths then in mm), "
+                 "or export the part as STEP");
+  EXPECT_EQ(fbprep(dir, "input-part.igs --unit mm -o out.fbh5").exit_code, 2);
+  std::string step = slurp(gmsh_beam_step());
+  const auto at = step.find("SI_UNIT(.MILLI.,.METRE.) );");
+  ASSERT_NE(at, std::string::npos);
+  step.replace(at, 15, "SI_UNIT(.MICRO.");
+  write(dir / "input-micro.step", step);
+  expect_refusal(dir, "input-micro.step --unit m",
+                 "input-micro.step: the STEP file declares a length unit fbprep does not read (OpenCASCADE converts "
+                 "it to mm), so --unit m cannot override it; drop it to read the file as it declares (lengths then "
+                 "in mm)");
 }

@@ -45,36 +45,85 @@ std::string lowercase(std::string text) {
   return text;
 }
 
+// "millimetres", "metres", ...: the unit's name in a sentence.
+std::string_view plural_name(LengthUnit unit) {
+  switch (unit) {
+    case LengthUnit::millimetre: return "millimetres";
+    case LengthUnit::centimetre: return "centimetres";
+    case LengthUnit::metre: return "metres";
+    case LengthUnit::inch: return "inches";
+  }
+  return "?";
+}
+
 // Decides the unit of the geometry as gmsh delivers it, and the factor to metres.
 struct UnitDecision {
-  LengthUnit geometry_unit;   // unit of the numbers in the file
+  LengthUnit geometry_unit;   // unit of the numbers in the file, and of every length the user gives
+  std::optional<LengthUnit> declared;  // what the file declares, if fbprep reads it
+  bool overrides = false;     // the user's unit replaced a different declared one
   double gmsh_to_metres;      // factor from gmsh's coordinates to metres
-  double size_unit_to_gmsh;   // factor from the --mesh-size unit to gmsh's coordinates
+  double size_unit_to_gmsh;   // factor from geometry_unit (mesh size) to gmsh's coordinates
   std::string reason;
 };
 
-UnitDecision decide_unit(const std::filesystem::path& path, InputFormat format, std::optional<LengthUnit> unit) {
+// The rule: a unit the user gives is the unit of the file's numbers and wins over a STEP file's
+// declaration; without one, the declaration holds. OpenCASCADE has already converted the declared unit
+// to mm (a STEP file without a LENGTH_UNIT is taken as mm), so gmsh's coordinate is the file's number
+// times (declared unit / mm), and the override is a plain factor: that conversion undone, times the
+// user's unit. Every length the user gives (mesh size, a spec's selectors) is in geometry_unit.
+UnitDecision decide_unit(const std::filesystem::path& path, InputFormat format, std::optional<LengthUnit> unit,
+                         const std::string& unit_source) {
   const std::string name = path.filename().string();
-  if (format == InputFormat::step || format == InputFormat::iges) {
-    // OpenCASCADE converts the declared unit to mm; gmsh's coordinates are then millimetres.
-    std::optional<LengthUnit> declared;
-    if (format == InputFormat::step) declared = detail::declared_step_unit(path);
-    UnitDecision d{declared.value_or(LengthUnit::millimetre), 1e-3, 0.0, ""};
-    if (format == InputFormat::iges)
-      d.reason = "IGES: OpenCASCADE converts the file's declared unit to mm (fbprep does not read IGES headers)";
-    else if (declared)
-      d.reason = fmt::format("declared in the STEP file ({}); OpenCASCADE converts it to mm", to_string(*declared));
-    else
-      d.reason = "the STEP file declares no length unit fbprep recognizes; OpenCASCADE reads it as mm";
-    const LengthUnit size_unit = unit.value_or(declared.value_or(LengthUnit::millimetre));
-    d.size_unit_to_gmsh = metres_per(size_unit) / 1e-3;
-    if (unit) d.reason += fmt::format("; --mesh-size read in {} (--unit)", to_string(*unit));
+  const std::string source = unit ? (unit_source.empty() ? fmt::format("--unit {}", to_string(*unit)) : unit_source)
+                                  : std::string();
+  if (format == InputFormat::iges) {
+    if (unit)
+      throw std::invalid_argument(fmt::format(
+          "{}: fbprep does not read the unit an IGES file declares (OpenCASCADE converts it to mm), so {} cannot "
+          "be applied; drop it to read the file as it declares (lengths then in mm), or export the part as STEP",
+          name, source));
+    return UnitDecision{LengthUnit::millimetre, std::nullopt, false, 1e-3, 1.0,
+                        "IGES: OpenCASCADE converts the file's declared unit to mm (fbprep does not read IGES "
+                        "headers)"};
+  }
+  if (format == InputFormat::step) {
+    const detail::StepLengthUnit step = detail::declared_step_unit(path);
+    if (step.declared && !step.unit) {
+      if (unit)
+        throw std::invalid_argument(fmt::format(
+            "{}: the STEP file declares a length unit fbprep does not read (OpenCASCADE converts it to mm), so {} "
+            "cannot override it; drop it to read the file as it declares (lengths then in mm)", name, source));
+      return UnitDecision{LengthUnit::millimetre, std::nullopt, false, 1e-3, 1.0,
+                          "the STEP file declares a length unit other than mm, cm, m, in; OpenCASCADE converts it "
+                          "to mm"};
+    }
+    // What OpenCASCADE did: file number x occ_factor = gmsh coordinate (mm).
+    const LengthUnit occ_source = step.unit.value_or(LengthUnit::millimetre);
+    const double occ_factor = metres_per(occ_source) / 1e-3;
+    UnitDecision d{unit.value_or(occ_source), step.unit, false, 0.0, occ_factor, ""};
+    d.gmsh_to_metres = d.geometry_unit == occ_source ? 1e-3 : metres_per(d.geometry_unit) / occ_factor;
+    if (!step.declared && unit)
+      d.reason = fmt::format("the STEP file declares no length unit; {}: coordinates read as {}", source,
+                             plural_name(*unit));
+    else if (!step.declared)
+      d.reason = "the STEP file declares no length unit; read as mm (OpenCASCADE's default; --unit chooses another)";
+    else if (!unit)
+      d.reason = fmt::format("declared in the STEP file ({}); OpenCASCADE converts it to mm", to_string(*step.unit));
+    else if (*unit == *step.unit)
+      d.reason = fmt::format("declared in the STEP file ({}); {} agrees", to_string(*step.unit), source);
+    else {
+      d.overrides = true;
+      d.reason = fmt::format("the STEP file declares {}; {} overrides it: coordinates read as {}",
+                             to_string(*step.unit), source, plural_name(*unit));
+    }
     return d;
   }
   if (!unit)
     throw std::runtime_error(fmt::format("{}: {} files carry no length unit; pass --unit mm|cm|m|in", name,
                                          to_string(format)));
-  return UnitDecision{*unit, metres_per(*unit), 1.0, fmt::format("given with --unit ({} carries no unit)", to_string(format))};
+  return UnitDecision{*unit, std::nullopt, false, metres_per(*unit), 1.0,
+                      fmt::format("{} carries no unit; {}: coordinates read as {}", to_string(format), source,
+                                  plural_name(*unit))};
 }
 
 void check_readable(const std::filesystem::path& path) {
@@ -219,9 +268,11 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
     throw std::invalid_argument(fmt::format("--order {}: only linear tetrahedra (--order 1) are implemented", options.order));
   if (!(options.mesh_size >= 0.0) || !std::isfinite(options.mesh_size))
     throw std::invalid_argument(fmt::format("--mesh-size must be a positive length, got {}", options.mesh_size));
-  const UnitDecision unit = decide_unit(path, result.format, options.unit);
+  const UnitDecision unit = decide_unit(path, result.format, options.unit, options.unit_source);
   result.unit = unit.geometry_unit;
   result.unit_reason = unit.reason;
+  result.declared_unit = unit.declared;
+  result.unit_overrides_declared = unit.overrides;
 
   detail::GmshSession session;
   if (options.progress) options.progress("reading " + name);

@@ -91,6 +91,7 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
     const std::string text = r.text(unit, "unit");
     options.mesh.unit = length_unit_from_string(text);
     if (!options.mesh.unit) r.fail(unit, fmt::format("unit '{}' is not one of mm, cm, m, in", text));
+    options.mesh.unit_source = "the body spec's unit: " + text;
     recorded.emplace_back("unit", text);
   }
   if (const YAML::Node material = root["material"]) {

@@ -117,6 +117,8 @@ std::string body_json(const format::BodyData& body, const std::filesystem::path&
   j["source_file"] = p.source_file;
   j["source_sha256"] = p.source_sha256;
   j["input_unit"] = p.input_unit;
+  j["unit_reason"] = p.unit_reason;
+  j["declared_unit"] = p.declared_unit.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(p.declared_unit);
   nlohmann::ordered_json options = nlohmann::ordered_json::object();
   for (const auto& [name, value] : p.options) options[name] = value;
   j["options"] = options;

@@ -91,6 +91,8 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.format = imported.format;
   summary.unit = std::string(to_string(imported.unit));
   summary.unit_reason = imported.unit_reason;
+  summary.declared_unit = imported.declared_unit ? std::string(to_string(*imported.declared_unit)) : std::string();
+  summary.unit_overrides_declared = imported.unit_overrides_declared;
   summary.volumes = imported.volumes;
   summary.meshed_here = imported.meshed_here;
   summary.mesh_size_m = imported.mesh_size_m;
@@ -285,6 +287,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   body.provenance.source_sha256 = summary.input_sha256;
   body.provenance.input_unit = summary.unit;
   body.provenance.unit_reason = summary.unit_reason;
+  body.provenance.declared_unit = summary.declared_unit;
   body.provenance.options = options.recorded_options;
   body.material = options.material;
   body.mass = summary.mass;

@@ -120,6 +120,8 @@ std::string PrepSummary::json() const {
   j["input_sha256"] = input_sha256;
   j["length_unit"] = unit;
   j["length_unit_reason"] = unit_reason;
+  j["declared_unit"] = declared_unit.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(declared_unit);
+  j["unit_overrides_declared"] = unit_overrides_declared;
   j["volumes"] = volumes;
   j["mesh_size_m"] = mesh_size_m;
   j["nodes"] = nodes;

@@ -32,6 +32,9 @@ struct Provenance {
   std::string source_sha256;  ///< SHA-256 of the input file, lowercase hex
   std::string input_unit;     ///< length unit the input was read in ("mm", "cm", "m", "in")
   std::string unit_reason;    ///< why that unit was used (declared by the file, --unit, ...)
+  /// The unit the input file declares, when the tool read one ("mm", "cm", "m", "in"); "" otherwise.
+  /// Differs from input_unit when the user's unit overrode the declaration. Optional in the file.
+  std::string declared_unit;
   /// Every option the tool ran with, as (name, value) in the order given; values as text.
   std::vector<std::pair<std::string, std::string>> options;
 };

@@ -3,7 +3,8 @@
 // part, kept beside the CAD and rerun with `fbprep body.yaml -o body.fbh5`:
 //
 //   input: beam.step                # relative paths are relative to the spec
-//   unit: m                         # the input's length unit (and of every length below)
+//   unit: m                         # unit of the input's coordinates (wins over what a STEP file
+//                                   # declares) and of every length below
 //   material: {E: 210e9, nu: 0.3, rho: 7850}      # or: steel | aluminium | titanium
 //   mesh: {size: 0.0125, order: 1}
 //   reduction: {kind: free-free, modes: 8, fmax: 2000, eigensolver: arpack}

@@ -77,7 +77,9 @@ struct PrepSummary {
   std::filesystem::path input, output;
   std::string input_sha256;
   InputFormat format = InputFormat::step;
-  std::string unit, unit_reason;
+  std::string unit, unit_reason;  ///< the unit the input was read in (every input length is in it), and why
+  std::string declared_unit;      ///< the unit the input declares, if fbprep reads one ("" otherwise)
+  bool unit_overrides_declared = false;  ///< the user's unit replaced a different declared one
   int volumes = 0;
   bool meshed_here = true;
   double mesh_size_m = 0.0;

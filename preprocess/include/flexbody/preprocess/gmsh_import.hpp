@@ -18,11 +18,17 @@ enum class InputFormat { step, iges, brep, geo, msh };
 [[nodiscard]] InputFormat input_format_of(const std::filesystem::path& path);
 
 struct GmshImportOptions {
-  /// Length unit of the input. STEP and IGES files declare their own unit, which OpenCASCADE
-  /// honours (gmsh hands the geometry over in mm); for them `unit` only states the unit of
-  /// `mesh_size`. BREP, .geo and .msh files carry no unit: `unit` is required for them.
+  /// Length unit of the input's coordinates, as the user gives it. It wins over what a STEP file
+  /// declares (a file written with a wrong declared unit is common: gmsh's writer always declares mm);
+  /// without it a STEP file's declared unit holds. BREP, .geo and .msh files carry no unit: `unit` is
+  /// required for them. An IGES file's unit, or a STEP unit other than mm, cm, m, inch, is converted by
+  /// OpenCASCADE with a factor fbprep does not know, so `unit` is refused for them. Every length in
+  /// these options (and in a body spec) is in the unit the geometry is read in: ImportedMesh::unit.
   std::optional<LengthUnit> unit;
-  /// Target element size in `unit` (0: one twenty-fifth of the bounding-box diagonal).
+  /// How `unit` was given, for the report, e.g. "the body spec's unit: m" (empty: "--unit <unit>").
+  std::string unit_source;
+  /// Target element size in the unit the geometry is read in (0: one twenty-fifth of the
+  /// bounding-box diagonal).
   double mesh_size = 0.0;
   /// Element order; 1 (linear tetrahedra) is the only one implemented.
   int order = 1;
@@ -33,8 +39,12 @@ struct GmshImportOptions {
 struct ImportedMesh {
   TetMesh mesh;  ///< nodes in metres, in the input's frame
   InputFormat format = InputFormat::step;
-  LengthUnit unit = LengthUnit::metre;  ///< the unit the geometry was read in
+  LengthUnit unit = LengthUnit::metre;  ///< the unit the geometry was read in (and every input length)
   std::string unit_reason;              ///< why that unit (for the report)
+  /// The unit the file declares, when fbprep reads one (STEP: mm, cm, m, inch); nullopt otherwise.
+  std::optional<LengthUnit> declared_unit;
+  /// True when the user's unit differs from the declared one and replaced it.
+  bool unit_overrides_declared = false;
   int volumes = 0;                      ///< CAD volumes (0 for .msh)
   double mesh_size_m = 0.0;             ///< element size asked of gmsh [m] (0 for .msh)
   bool meshed_here = true;              ///< false when a .msh's tetrahedra were used as they are
@@ -44,7 +54,8 @@ struct ImportedMesh {
 
 /// Imports `path` with gmsh and returns its linear tetrahedra in metres. Throws std::runtime_error
 /// with one line naming the file and the problem: unreadable file, no volume, several disconnected
-/// solids, inverted or zero-volume elements, a .msh without tetrahedra.
+/// solids, inverted or zero-volume elements, a .msh without tetrahedra, no unit for a BREP, .geo or
+/// .msh; std::invalid_argument for a unit that cannot be applied (IGES, a STEP unit fbprep cannot read).
 [[nodiscard]] ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImportOptions& options);
 
 }  // namespace flexbody::preprocess

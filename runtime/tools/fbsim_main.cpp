@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <iostream>
 #include <unistd.h>
 
@@ -54,7 +55,11 @@ int main(int argc, char** argv) {
   };
   flexbody::fbsim::RunSummary summary;
   try {
-    summary = flexbody::fbsim::run_scene(scene, directory, progress);
+    auto warn = [&](const std::string& line) {  // even with -q: a broken conservation law is not progress
+      if (terminal) std::cerr << '\n';
+      std::cerr << "fbsim: warning: " << line << '\n';
+    };
+    summary = flexbody::fbsim::run_scene(scene, directory, progress, warn);
   } catch (const flexbody::runtime::StepFailure& e) {
     if (terminal) std::cerr << '\n';
     return fail(fmt::format("{}: {} (outputs up to the last completed step are in {})", scene_path.string(), e.what(),
@@ -75,6 +80,16 @@ int main(int argc, char** argv) {
     j["energy_final_j"] = summary.energy_final;
     j["energy_drift"] = summary.energy_drift;
     j["max_constraint_residual"] = summary.max_constraint_residual;
+    const double steps = std::max(1.0, static_cast<double>(summary.steps));
+    j["wall_s"] = summary.wall_seconds;
+    j["us_per_step"] = 1e6 * summary.wall_seconds / steps;
+    j["integrator_us_per_step"] = 1e6 * summary.integrator_wall_seconds / steps;
+    j["conserves_energy"] = scene.conserves.energy;
+    j["conserves_angular_momentum"] = scene.conserves.angular_momentum;
+    j["energy_growth"] = summary.energy_growth;
+    j["angular_momentum_growth"] = summary.angular_momentum_growth;
+    j["conservation_warnings"] = summary.warnings.size();
+    j["warnings"] = summary.warnings;
     std::vector<std::string> files;
     for (const auto& f : summary.files) files.push_back(f.string());
     j["outputs"] = files;
@@ -84,9 +99,15 @@ int main(int argc, char** argv) {
                              summary.newton_iterations,
                              summary.steps ? static_cast<double>(summary.newton_iterations) / static_cast<double>(summary.steps) : 0.0,
                              summary.cpu_seconds);
+    std::cout << fmt::format("  {:.1f} us per step ({:.1f} in the integrator, the rest checks and outputs)\n",
+                             1e6 * summary.wall_seconds / std::max(1.0, static_cast<double>(summary.steps)),
+                             1e6 * summary.integrator_wall_seconds / std::max(1.0, static_cast<double>(summary.steps)));
     std::cout << fmt::format("  energy {:.6g} J -> {:.6g} J (drift {:.2e}), max constraint residual {:.2e}\n",
                              summary.energy_initial, summary.energy_final, summary.energy_drift,
                              summary.max_constraint_residual);
+    if (!summary.warnings.empty())
+      std::cout << fmt::format("  {} conservation warning{} (on stderr)\n", summary.warnings.size(),
+                               summary.warnings.size() == 1 ? "" : "s");
     for (const auto& f : summary.files) std::cout << "  wrote " << f.string() << '\n';
   }
   return 0;

@@ -4,6 +4,7 @@
 #include "flexbody/runtime/paraview_series.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
 
+#include <Eigen/Geometry>
 #include <fmt/format.h>
 
 #include <chrono>
@@ -131,9 +132,29 @@ Eigen::VectorXd monitor_values(const Scene& scene, const runtime::GeneralizedAlp
   return v;
 }
 
+// The angular momentum about the system's centre of mass [kg m²/s]: per body Σ_kl G_kl x_k × v_l = Σ_k x_k × w_k with
+// w = (G ⊗ I3) v in blocks of 3 (the nodal sum Σ m_i r_i × ṙ_i through G), less M r_c × v_c.
+Eigen::Vector3d angular_momentum(const runtime::System& system, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
+  Eigen::Vector3d about_origin = Eigen::Vector3d::Zero(), first_moment = Eigen::Vector3d::Zero(),
+                  momentum = Eigen::Vector3d::Zero();
+  double mass = 0.0;
+  for (int b = 0; b < system.body_count(); ++b) {
+    const runtime::BodyModel& model = system.model(b);
+    const Eigen::VectorXd q_b = system.body_coordinates(q, b), v_b = system.body_coordinates(v, b);
+    const Eigen::VectorXd w = runtime::mass_times(model, v_b);
+    for (Eigen::Index k = 0; k < q_b.size() / 3; ++k)
+      about_origin += q_b.segment<3>(3 * k).cross(w.segment<3>(3 * k));
+    first_moment += runtime::mass_times(model, q_b).head<3>();  // m r_c (G's first row)
+    momentum += w.head<3>();
+    mass += model.mass;
+  }
+  return about_origin - (first_moment / mass).cross(momentum);
+}
+
 }  // namespace
 
-RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const std::function<void(double)>& progress) {
+RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const std::function<void(double)>& progress,
+                     const std::function<void(const std::string&)>& warn) {
   // The integrator first: a scene whose initial state or constraints are inconsistent fails before any file.
   const std::clock_t cpu_start = std::clock();
   runtime::GeneralizedAlpha integrator(scene.system, scene.integrator);
@@ -166,28 +187,68 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
       if (series[k].last_time() != integrator.time())
         series[k].write(integrator.time(), scene.system.body_coordinates(integrator.coordinates(), scene.paraview[k].body));
   };
-  const runtime::Energies e0 = scene.system.energies(integrator.coordinates(), integrator.velocities());
+  const runtime::System& system = scene.system;
+  const runtime::Energies e0 = system.energies(integrator.coordinates(), integrator.velocities());
   summary.energy_initial = summary.energy_final = e0.total();
   // The drift's scale: the largest kinetic + elastic + spring energy of the run (independent of where the
   // gravity potential is zero).
-  double exchanged = e0.kinetic + e0.elastic + e0.springs, largest_change = 0.0;
+  double exchanged = e0.kinetic + e0.elastic + e0.springs, largest_change = 0.0, largest_gain = 0.0;
+  const double momentum_initial =
+      scene.conserves.angular_momentum ? angular_momentum(system, integrator.coordinates(), integrator.velocities()).norm() : 0.0;
+  bool energy_warned = false, momentum_warned = false;
+  // Energies, residuals and momenta at a checked step; a conservation law broken beyond kConservationTolerance is
+  // reported once, when it first happens.
+  auto check = [&] {
+    const Eigen::VectorXd& q = integrator.coordinates();
+    const Eigen::VectorXd& v = integrator.velocities();
+    const double t = integrator.time();
+    summary.max_constraint_residual =
+        std::max(summary.max_constraint_residual, system.constraints(t, q).cwiseAbs().maxCoeff());
+    const runtime::Energies e = system.energies(q, v);
+    exchanged = std::max(exchanged, e.kinetic + e.elastic + e.springs);
+    largest_change = std::max(largest_change, std::abs(e.total() - summary.energy_initial));
+    summary.energy_final = e.total();
+    if (scene.conserves.energy) {
+      largest_gain = std::max(largest_gain, e.total() - summary.energy_initial);
+      summary.energy_growth = largest_gain / std::max(exchanged, 1e-300);
+      if (!energy_warned && summary.energy_growth > kConservationTolerance) {
+        energy_warned = true;
+        summary.warnings.push_back(fmt::format(
+            "t = {:.6g} s: the energy of this conservative scene (no damping, no driven joint, no applied load) grew by "
+            "{:.3g} % of its largest kinetic + elastic + spring energy (warning above {:.3g} %); generalized-alpha only "
+            "dissipates, so the motion is not to be trusted: try a smaller step or a smaller rho_inf",
+            t, 100.0 * summary.energy_growth, 100.0 * kConservationTolerance));
+        if (warn) warn(summary.warnings.back());
+      }
+    }
+    if (scene.conserves.angular_momentum && momentum_initial > 0.0) {
+      const double growth = (angular_momentum(system, q, v).norm() - momentum_initial) / momentum_initial;
+      summary.angular_momentum_growth = std::max(summary.angular_momentum_growth, growth);
+      if (!momentum_warned && growth > kConservationTolerance) {
+        momentum_warned = true;
+        summary.warnings.push_back(fmt::format(
+            "t = {:.6g} s: the angular momentum about the centre of mass of this free, torque-free scene grew by "
+            "{:.3g} % of its initial {:.6g} kg m^2/s (warning above {:.3g} %): the motion is not to be trusted; try a "
+            "smaller step or a smaller rho_inf", t, 100.0 * growth, momentum_initial, 100.0 * kConservationTolerance));
+        if (warn) warn(summary.warnings.back());
+      }
+    }
+  };
   record();
   draw();
   const long steps = std::lround(scene.end_time / scene.integrator.step);
   bool written = true, drawn = true;
+  const auto wall_start = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::duration in_integrator{};
   try {
     for (long k = 1; k <= steps; ++k) {
+      const auto step_start = std::chrono::steady_clock::now();
       integrator.step();
+      in_integrator += std::chrono::steady_clock::now() - step_start;
       written = drawn = false;
       ++summary.steps;
       summary.newton_iterations += integrator.last_iterations();
-      summary.max_constraint_residual = std::max(
-          summary.max_constraint_residual,
-          scene.system.constraints(integrator.time(), integrator.coordinates()).cwiseAbs().maxCoeff());
-      const runtime::Energies e = scene.system.energies(integrator.coordinates(), integrator.velocities());
-      exchanged = std::max(exchanged, e.kinetic + e.elastic + e.springs);
-      largest_change = std::max(largest_change, std::abs(e.total() - summary.energy_initial));
-      summary.energy_final = e.total();
+      if (k % kCheckEvery == 0 || k == steps) check();
       if (k % scene.output_every == 0 || k == steps) {
         record();
         written = true;
@@ -213,6 +274,8 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
     throw;
   }
   summary.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+  summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  summary.integrator_wall_seconds = std::chrono::duration<double>(in_integrator).count();
   summary.energy_drift = largest_change / std::max(exchanged, 1e-300);
   return summary;
 }

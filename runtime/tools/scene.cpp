@@ -213,8 +213,10 @@ Scene read_scene(const std::filesystem::path& file) {
                                           joints[k].name, row - scene.system.joint_row(k) + 1, joints[k].rows()));
   }
 
+  bool applied_loads = false, damped_springs = false, springs_to_ground = false;
   if (const YAML::Node forces = root["forces"]) {
     if (!forces.IsMap()) r.fail(forces, "forces must be a map of names to forces");
+    applied_loads = forces.size() > 0;
     for (auto it = forces.begin(); it != forces.end(); ++it) {
       const std::string where = fmt::format("force '{}'", it->first.Scalar());
       const YAML::Node f = it->second;
@@ -269,6 +271,8 @@ Scene read_scene(const std::filesystem::path& file) {
         spring.rest_length = (runtime::marker_position(spring.second, scene.system.body_coordinates(q0, spring.second.body)) -
                               runtime::marker_position(spring.first, scene.system.body_coordinates(q0, spring.first.body))).norm();
       }
+      damped_springs = damped_springs || spring.damping != 0.0;
+      springs_to_ground = springs_to_ground || spring.first.body == runtime::kGround || spring.second.body == runtime::kGround;
       try {
         scene.system.add_spring(std::move(spring));
       } catch (const std::invalid_argument& e) {
@@ -399,6 +403,14 @@ Scene read_scene(const std::filesystem::path& file) {
       if (scene.paraview_every < 1) r.fail(every, "paraview every must be at least 1");
     }
   }
+  bool damped_bodies = false, driven = false, joints_to_ground = false;
+  for (int b = 0; b < scene.system.body_count(); ++b) damped_bodies = damped_bodies || scene.system.model(b).damping.size() > 0;
+  for (const runtime::Joint& j : scene.system.joints()) {
+    driven = driven || j.type == runtime::JointType::driven_revolute;
+    joints_to_ground = joints_to_ground || j.first.body == runtime::kGround || j.second.body == runtime::kGround;
+  }
+  scene.conserves.energy = !applied_loads && !damped_springs && !damped_bodies && !driven;
+  scene.conserves.angular_momentum = scene.conserves.energy && !joints_to_ground && !springs_to_ground;
   return scene;
 }
 

@@ -32,6 +32,16 @@ struct SurfaceSeries {
   bool stresses = true;
 };
 
+/// Which conservation laws a scene's motion must obey, so that a run can check them (run.cpp). The energy is
+/// conserved when only gravity, undamped springs and joints that are not driven act (no damping, no applied force or
+/// torque: a constant point force is conservative too, but its potential is not in System::energies); the angular
+/// momentum about the centre of mass besides when nothing ties a body to ground (no joint or spring to ground, no
+/// applied force or torque; uniform gravity exerts no moment about the centre of mass).
+struct Conservation {
+  bool energy = false;
+  bool angular_momentum = false;
+};
+
 struct Scene {
   runtime::System system;
   runtime::GeneralizedAlphaOptions integrator;
@@ -41,6 +51,7 @@ struct Scene {
   std::vector<Sensor> sensors;
   std::vector<SurfaceSeries> paraview;  ///< DIR/<body>.pvd + DIR/<body>/*.vtu
   int paraview_every = 1;               ///< a frame every n-th step
+  Conservation conserves;
 };
 
 /// Reads and assembles a scene; body files are read relative to the scene's directory.

@@ -350,3 +350,67 @@ TEST(ParaViewSeries, DrawsRotatedBodiesInWorldAxes) {
   EXPECT_LT(worst_displacement, 1e-12 * largest_u);
   EXPECT_LT(worst_stress, 1e-12 * largest_stress);
 }
+
+// Issue 12, item 6: a conservative scene that gains energy or angular momentum must not pass silently. A free rigid
+// plate (0.3 x 0.2 x 0.01 m) spinning at 5 rad/s near its intermediate principal axis with ρ∞ = 0.99 and h = 2 ms
+// gains energy (the index-3 form with the quadratic orthogonality constraints is weakly unstable near ρ∞ = 1; item
+// 5 of the issue): at 6.92 s it has gained 0.1 % of its kinetic energy, and its angular momentum 0.1 % at 7.31 s.
+// On 521de58 the same run exited 0 without a word (and a 12 s run ended with +17.6 % energy). When item 5 makes
+// this scene stable, the first half of this test needs another energy source. With ρ∞ = 0.9 it does not gain.
+TEST(FbsimCli, AConservativeSceneThatGainsEnergyIsFlagged) {
+  const auto dir = flexbody::test::scratch_dir();
+  write_text(dir / "plate.geo", "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 0.3, 0.2, 0.01};\n");
+  write_text(dir / "plate.yaml", "input: plate.geo\nunit: m\nmesh: {size: 0.05}\nreduction: {modes: 1}\noutput_regions: {}\n");
+  const CliRun prep = run_fbprep(dir, "plate.yaml -o plate.fbh5 -q");
+  ASSERT_EQ(prep.exit_code, 0) << prep.err;
+  auto scene = [](double rho) {
+    return "bodies:\n  plate: {file: plate.fbh5, modes: rigid, angular_velocity: [0.05, 5.0, 0.05]}\n"
+           "integrator: {type: generalized-alpha, rho_inf: " + std::to_string(rho) + ", step: 2.0e-3, end: 8.0}\n";
+  };
+  write_text(dir / "flip.yaml", scene(0.99));
+  const CliRun run = run_fbsim(dir, "flip.yaml -o flip_out --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json summary = nlohmann::json::parse(run.out);
+  EXPECT_TRUE(summary["conserves_energy"].get<bool>());
+  EXPECT_TRUE(summary["conserves_angular_momentum"].get<bool>());
+  EXPECT_EQ(summary["conservation_warnings"].get<int>(), 2) << run.err;
+  EXPECT_GT(summary["energy_growth"].get<double>(), 1e-3);
+  EXPECT_GT(summary["angular_momentum_growth"].get<double>(), 1e-3);
+  EXPECT_NE(run.err.find("fbsim: warning: t = 6.9"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("the energy of this conservative scene"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("the angular momentum about the centre of mass"), std::string::npos) << run.err;
+
+  write_text(dir / "damped.yaml", scene(0.9));
+  const CliRun damped = run_fbsim(dir, "damped.yaml -o damped_out --json");
+  ASSERT_EQ(damped.exit_code, 0) << damped.err;
+  const nlohmann::json quiet = nlohmann::json::parse(damped.out);
+  EXPECT_EQ(quiet["conservation_warnings"].get<int>(), 0) << damped.err;
+  EXPECT_EQ(quiet["energy_growth"].get<double>(), 0.0);          // measured: it only dissipates
+  EXPECT_LT(quiet["angular_momentum_growth"].get<double>(), 1e-5);  // measured 4.2e-6
+  EXPECT_TRUE(damped.err.empty()) << damped.err;
+}
+
+// The conservation checks apply only where the laws hold: a pendulum on a joint to ground conserves energy but
+// not angular momentum; a body with a force, or with damping, conserves neither.
+TEST(FbsimCli, ConservationChecksApplyWhereTheLawsHold) {
+  const auto& dir = bar_folder();
+  std::string pendulum = kIssueScene;
+  pendulum.replace(pendulum.find("end: 2.0"), 8, "end: 0.05");
+  write_text(dir / "conserving.yaml", pendulum);
+  const CliRun run = run_fbsim(dir, "conserving.yaml -o conserving_out --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json summary = nlohmann::json::parse(run.out);
+  EXPECT_TRUE(summary["conserves_energy"].get<bool>());
+  EXPECT_FALSE(summary["conserves_angular_momentum"].get<bool>());
+  EXPECT_EQ(summary["conservation_warnings"].get<int>(), 0);
+  EXPECT_GT(summary["integrator_us_per_step"].get<double>(), 0.0);
+  EXPECT_GE(summary["us_per_step"].get<double>(), summary["integrator_us_per_step"].get<double>());
+  write_text(dir / "pushed.yaml", pendulum + "forces:\n  push: {body: bar, interface: tip, force: [0, -10, 0]}\n");
+  const nlohmann::json pushed = nlohmann::json::parse(run_fbsim(dir, "pushed.yaml -o pushed_out --json").out);
+  EXPECT_FALSE(pushed["conserves_energy"].get<bool>());
+  std::string damped = pendulum;
+  damped.replace(damped.find("modes: 8}"), 9, "modes: 8, damping: {modal: 0.02}}");
+  write_text(dir / "damped.yaml", damped);
+  const nlohmann::json damped_run = nlohmann::json::parse(run_fbsim(dir, "damped.yaml -o damped_out --json").out);
+  EXPECT_FALSE(damped_run["conserves_energy"].get<bool>());
+}

@@ -3,7 +3,7 @@
 
 Runs fbprep once on a slender beam (1 x 0.04 x 0.02 m, E = 5 GPa, rho = 2000, 10 mm elements, 16 free-free modes,
 interfaces at both ends), then fbsim on scenes with it and reads `fbsim --json`: `integrator_us_per_step` is the time
-inside GeneralizedAlpha::step, `us_per_step` the whole run (checks every 10 steps and at every output, CSV
+inside GeneralizedAlpha::step, `us_per_step` the whole run (checks every 9 steps and at the last, CSV
 writing, monitors). Writes results/fbsim_bench.csv and prints a table. See bench/README.md.
 
     /usr/bin/python3 bench/fbsim_bench.py [--build build] [--work bench/results/work/fbsim]

@@ -354,9 +354,10 @@ TEST(ParaViewSeries, DrawsRotatedBodiesInWorldAxes) {
 // Issue 12, item 6: a conservative scene that gains energy or angular momentum must not pass silently. A free rigid
 // plate (0.3 x 0.2 x 0.01 m) spinning at 5 rad/s near its intermediate principal axis with ρ∞ = 0.99 and h = 2 ms
 // gains energy (the index-3 form with the quadratic orthogonality constraints is weakly unstable near ρ∞ = 1; item
-// 5 of the issue): at 6.92 s it has gained 0.1 % of its kinetic energy, and its angular momentum 0.1 % at 7.31 s.
-// On 521de58 the same run exited 0 without a word (and a 12 s run ended with +17.6 % energy). When item 5 makes
-// this scene stable, the first half of this test needs another energy source. With ρ∞ = 0.9 it does not gain.
+// 5 of the issue): at 6.93 s it has gained 0.1 % of its kinetic energy, and its angular momentum 0.1 % at 7.33 s,
+// in an oscillation of period 2 h (see kCheckEvery). On 521de58 the same run exited 0 without a word (a 12 s run
+// ended at +17.6 %). When item 5 makes this scene stable, the first half of this test needs another energy source.
+// With ρ∞ = 0.9 it does not gain.
 TEST(FbsimCli, AConservativeSceneThatGainsEnergyIsFlagged) {
   const auto dir = flexbody::test::scratch_dir();
   write_text(dir / "plate.geo", "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 0.3, 0.2, 0.01};\n");

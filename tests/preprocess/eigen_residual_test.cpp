@@ -1,7 +1,9 @@
 // Eigen residuals and their rounding floors (eigen_residual.hpp): the floor against a dense computation, and
-// the acceptance bound.
+// that modes which are not converged are still refused while modes at their floor are not.
 #include "flexbody/preprocess/assembly.hpp"
+#include "flexbody/preprocess/craig_bampton.hpp"
 #include "flexbody/preprocess/eigen_residual.hpp"
+#include "flexbody/preprocess/free_free_modes.hpp"
 #include "test_meshes.hpp"
 
 #include <Eigen/Dense>
@@ -9,6 +11,7 @@
 
 #include <cfloat>
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <string>
 
@@ -25,6 +28,17 @@ Eigen::MatrixXd dense_vector_mass(const fp::SparseMatrix& scalar_mass_upper) {
     for (Eigen::Index j = 0; j < ms.cols(); ++j)
       for (int c = 0; c < 3; ++c) m(3 * i + c, 3 * j + c) = ms(i, j);
   return m;
+}
+
+// The wire clamped at x = 0 (its four root nodes tied rigidly).
+fp::RigidInterface wire_root(const flexbody::test::AssembledMesh& wire) {
+  std::vector<int> nodes;
+  for (Eigen::Index i = 0; i < wire.mesh.nodes.rows(); ++i)
+    if (wire.mesh.nodes(i, 0) == 0.0) nodes.push_back(static_cast<int>(i));
+  fp::RigidInterface root;
+  root.nodes = Eigen::Map<const Eigen::VectorXi>(nodes.data(), static_cast<Eigen::Index>(nodes.size()));
+  root.reference_point = Eigen::Vector3d(0.0, 0.00125, 0.00125);
+  return root;
 }
 
 }  // namespace
@@ -78,4 +92,72 @@ TEST(EigenResidual, AcceptanceBoundIsTheLargerOfTheFixedOneAndTheScaledFloor) {
   const std::string message = fp::describe_refusal(3e-7, 1e-8);
   EXPECT_NE(message.find("relative residual 3e-07, 30 times its rounding floor 1e-08; accepted up to max(1e-08, 20 x "
                          "floor) = 2e-07"), std::string::npos) << message;
+}
+
+TEST(EigenResidual, PerturbedModeIsRefused) {
+  // The wire's first free-free mode is accepted at its floor (residual 0.58 of it). Mixing in 1e-6 of the third
+  // mode (an eigenvector error of 1e-6, against about residual / relative gap = 1e-8 for the computed one) puts
+  // its residual 97 times above its floor (measured): refused, though it is still below 1e-5.
+  const auto& wire = flexbody::test::steel_wire();
+  fp::FreeFreeOptions options;
+  options.modes = 4;
+  const auto modes = fp::free_free_modes(wire.mesh.nodes, wire.stiffness, wire.scalar_mass, kSteel, options);
+  const fp::EigenResidual converged =
+      fp::eigen_residual(wire.stiffness, wire.scalar_mass, modes.eigenvalues(0), modes.vectors.col(0));
+  EXPECT_TRUE(converged.accepted());
+  EXPECT_LT(converged.to_floor(), 1.0);
+  for (const double amount : {1e-6, 1e-4}) {
+    SCOPED_TRACE(amount);
+    Eigen::VectorXd phi = modes.vectors.col(0) + amount * modes.vectors.col(2);
+    Eigen::VectorXd kphi(phi.size()), mphi(phi.size());
+    fp::apply_symmetric(wire.stiffness, phi, kphi);
+    fp::apply_vector_mass(wire.scalar_mass, phi, mphi);
+    const double rayleigh = phi.dot(kphi) / phi.dot(mphi);  // the best λ for this vector
+    const fp::EigenResidual perturbed = fp::eigen_residual(wire.stiffness, wire.scalar_mass, rayleigh, phi);
+    EXPECT_FALSE(perturbed.accepted()) << perturbed.relative << " " << perturbed.floor;
+    EXPECT_GT(perturbed.to_floor(), 2.0 * fp::kResidualFloorFactor);
+  }
+}
+
+TEST(EigenResidual, ModesOfAnEarlyStoppedSolverAreRefused) {
+  // ARPACK stopped at tol 1e-6 with a shift far above the modes, -(2 pi 10 kHz)^2, where Lanczos converges
+  // slowly: its Ritz vectors are off by far more than rounding (ratios 5e4 clamped, 2e5 free-free measured).
+  // Both are refused with the residual, the floor and the bound in the message. At the default tol 1e-12
+  // the same shift gives residuals within 3.2 times the floor: accepted.
+  const auto& wire = flexbody::test::steel_wire();
+  const double far_shift = -std::pow(2.0 * std::numbers::pi * 1e4, 2);
+  auto expect_refusal = [](auto&& compute, const std::string& what) {
+    try {
+      (void)compute();
+      ADD_FAILURE() << what << ": accepted";
+    } catch (const std::runtime_error& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find(what), std::string::npos) << message;
+      EXPECT_NE(message.find("is not converged: relative residual"), std::string::npos) << message;
+      EXPECT_NE(message.find("times its rounding floor"), std::string::npos) << message;
+      EXPECT_NE(message.find("accepted up to max(1e-08, 20 x floor)"), std::string::npos) << message;
+    }
+  };
+  fp::CraigBamptonOptions cb;
+  cb.fixed_interface_modes = 4;
+  cb.shift = far_shift;
+  cb.solver.tolerance = 1e-6;
+  expect_refusal([&] {
+    return fp::craig_bampton_modes(wire.mesh.nodes, wire.stiffness, wire.scalar_mass, kSteel, {wire_root(wire)}, cb);
+  }, "craig-bampton: fixed-interface mode");
+  fp::FreeFreeOptions ff;
+  ff.modes = 4;
+  ff.shift = far_shift;
+  ff.solver.tolerance = 1e-6;
+  expect_refusal([&] { return fp::free_free_modes(wire.mesh.nodes, wire.stiffness, wire.scalar_mass, kSteel, ff); },
+                 "free-free modes: mode");
+
+  cb.solver.tolerance = ff.solver.tolerance = 1e-12;
+  const auto clamped =
+      fp::craig_bampton_modes(wire.mesh.nodes, wire.stiffness, wire.scalar_mass, kSteel, {wire_root(wire)}, cb);
+  EXPECT_LT((clamped.fixed_interface_residuals.array() / clamped.fixed_interface_residual_floors.array()).maxCoeff(),
+            fp::kResidualFloorFactor);
+  const auto free_free = fp::free_free_modes(wire.mesh.nodes, wire.stiffness, wire.scalar_mass, kSteel, ff);
+  EXPECT_LT((free_free.relative_residuals.array() / free_free.residual_floors.array()).maxCoeff(),
+            fp::kResidualFloorFactor);
 }

@@ -123,4 +123,10 @@ const AssembledMesh& square_beam() {
   return beam;
 }
 
+const AssembledMesh& steel_wire() {
+  static const AssembledMesh wire =
+      assemble(box_mesh(1.0, 0.0025, 0.0025, 100, 1, 1), preprocess::Material{"steel", 210e9, 0.3, 7850.0});
+  return wire;
+}
+
 }  // namespace flexbody::test

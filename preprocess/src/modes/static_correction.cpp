@@ -1,10 +1,12 @@
 #include "flexbody/preprocess/static_correction.hpp"
 
 #include "flexbody/preprocess/assembly.hpp"
+#include "flexbody/preprocess/eigen_residual.hpp"
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
+#include <cfloat>
 #include <cmath>
 #include <stdexcept>
 
@@ -14,10 +16,12 @@ namespace {
 // The conjugate-gradient iteration stops when its residual is below this fraction of the projected load.
 // The preconditioned spectrum lies in [λ_next / (λ_next − σ), 1), so this takes a few solves when |σ| is
 // below the first eigenvalue not in the basis (about 3 per load on the bracket); kMaxIterations leaves room
-// for very slender parts. The true residual b − PᵀK̄u is checked afterwards against kAcceptedResidual (the
-// recursive one can drift from it); one restart from u is allowed before the load is refused.
+// for very slender parts. The true residual b − PᵀK̄u is checked afterwards (the recursive one can drift from
+// it, and keeps falling where the true one stops at its rounding floor); one restart from u is allowed before
+// the load is refused. The check is that of the eigenmodes (eigen_residual.hpp): ‖b − PᵀK̄u‖₂ / ‖b‖₂ <=
+// max(1e-8, kResidualFloorFactor · floor), floor = ε ‖|K̄||u|‖₂ / ‖b‖₂, the rounding error of forming K̄u. The
+// projection adds no cancellation (K̄u is M̄W-free at the solution), so its own rounding, ε‖b‖-sized, is left out.
 constexpr double kSolveTolerance = 1e-10;
-constexpr double kAcceptedResidual = 1e-8;
 constexpr int kMaxIterations = 500;
 // A combination of M̄-normalised responses whose M̄-norm is below 1e-6 adds nothing the others and the known
 // fields do not already hold (the responses themselves are accurate to ~1e-10): Gram eigenvalue 1e-12.
@@ -118,7 +122,7 @@ StaticCorrectionModes static_correction_modes(CholmodShiftSolve& solve, const Sp
 
   // 1. The residual static responses, by preconditioned conjugate gradients on PᵀK̄P u = Pᵀ f.
   Eigen::MatrixXd responses = Eigen::MatrixXd::Zero(n, s);
-  Eigen::VectorXd b(n), r(n), z(n), p(n), q(n), u(n);
+  Eigen::VectorXd b(n), r(n), z(n), p(n), q(n), u(n), magnitude(n);
   auto precondition = [&](const Eigen::VectorXd& in, Eigen::VectorXd& out) {
     solve.perform_op(in.data(), out.data());
     project(known, scalar_mass_upper, out);
@@ -129,7 +133,7 @@ StaticCorrectionModes static_correction_modes(CholmodShiftSolve& solve, const Sp
     const double b_norm = b.norm();
     if (!(b_norm > 1e-14 * loads.col(c).norm())) continue;  // wholly in the known fields: no response
     u.setZero();
-    double true_residual = 0.0;
+    double true_residual = 0.0, floor = 0.0;
     for (int pass = 0; pass < 2; ++pass) {  // a second pass restarts from u with the true residual
       apply_symmetric(stiffness_upper, u, q);
       project_force(known, scalar_mass_upper, q);
@@ -160,15 +164,17 @@ StaticCorrectionModes static_correction_modes(CholmodShiftSolve& solve, const Sp
         p = z + (rz_next / rz) * p;
         rz = rz_next;
       }
-      apply_symmetric(stiffness_upper, u, q);
+      apply_symmetric_with_magnitude(stiffness_upper, u, q, magnitude);
       project_force(known, scalar_mass_upper, q);
       true_residual = (b - q).norm() / b_norm;
-      if (true_residual <= kAcceptedResidual) break;
+      floor = DBL_EPSILON * magnitude.norm() / b_norm;
+      if (true_residual <= accepted_residual(floor)) break;
     }
-    if (!(true_residual <= kAcceptedResidual))
-      throw std::runtime_error(fmt::format("static correction: load {}: the static solve reaches only a relative "
-                                           "residual of {:.3g}", c + 1, true_residual));
+    if (!(true_residual <= accepted_residual(floor)))
+      throw std::runtime_error(fmt::format("static correction: load {}: the static solve is not converged: {}", c + 1,
+                                           describe_refusal(true_residual, floor)));
     result.stats.max_relative_residual = std::max(result.stats.max_relative_residual, true_residual);
+    result.stats.max_residual_to_floor = std::max(result.stats.max_residual_to_floor, true_residual / floor);
     responses.col(c) = u;
   }
 

@@ -177,6 +177,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     summary.static_correction_modes = modes.vectors.cols() - modes.normal_modes;
     summary.frequencies_hz = modes.frequencies_hz;
     summary.relative_residuals = modes.relative_residuals;
+    summary.residual_floors = modes.residual_floors;
     summary.shift = modes.shift;
     summary.rigid_body_residual = modes.rigid_body_residual;
     summary.rigid_body_coupling = modes.rigid_body_coupling;
@@ -208,6 +209,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     summary.relative_residuals = modes.relative_residuals;
     summary.fixed_interface_frequencies_hz = modes.fixed_interface_frequencies_hz;
     summary.fixed_interface_residuals = modes.fixed_interface_residuals;
+    summary.fixed_interface_residual_floors = modes.fixed_interface_residual_floors;
     summary.shift = modes.shift;
     summary.rigid_body_coupling = modes.rigid_body_coupling;
     summary.solver_runs = 1;

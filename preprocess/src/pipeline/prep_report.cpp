@@ -1,6 +1,8 @@
 // PrepSummary::full_report() and json(): what fbprep did, for people and for programs.
 #include "flexbody/preprocess/fbprep_pipeline.hpp"
 
+#include "flexbody/preprocess/eigen_residual.hpp"
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
@@ -25,9 +27,23 @@ std::string shift_as_frequency(double sigma) {
 
 }  // namespace
 
+double PrepSummary::max_residual_to_floor() const {
+  const bool free_free = reduction == ReductionKind::free_free;
+  const Eigen::VectorXd& residuals = free_free ? relative_residuals : fixed_interface_residuals;
+  const Eigen::VectorXd& floors = free_free ? residual_floors : fixed_interface_residual_floors;
+  const Eigen::Index checked = free_free ? floors.size() - static_correction_modes : floors.size();
+  if (checked <= 0 || residuals.size() < checked) return 0.0;
+  return (residuals.head(checked).array() / floors.head(checked).array()).maxCoeff();
+}
+
 std::string PrepSummary::full_report() const {
   std::string r;
   auto line = [&r](std::string_view label, const std::string& value) { r += fmt::format("  {:<22}{}\n", label, value); };
+  auto residual_check_line = [this] {
+    return fmt::format("  {:<22}max residual / rounding floor {:.2g}; accepted: residual <= max({:.0e}, {:g} x "
+                       "floor),\n  {:<22}floor = eps (|abs(K) abs(phi)| + lambda |abs(M) abs(phi)|) / |K phi|\n",
+                       "residual check", max_residual_to_floor(), kMinResidualBound, kResidualFloorFactor, "");
+  };
   r += fmt::format("fbprep {} report\n\n", kFbprepVersion);
   r += "Input\n";
   line("file", fmt::format("{} ({})", input.string(), to_string(format)));
@@ -56,26 +72,34 @@ std::string PrepSummary::full_report() const {
   if (reduction == ReductionKind::craig_bampton) {
     r += fmt::format("\nCraig-Bampton: fixed-interface modes ({}, shift-invert on CHOLMOD, sigma = {}, rbe2 interfaces "
                      "clamped)\n", eigensolver, shift_as_frequency(shift));
-    r += fmt::format("  {:>4}  {:>16}  {:>14}\n", "mode", "frequency [Hz]", "rel. residual");
+    r += fmt::format("  {:>4}  {:>16}  {:>14}  {:>14}\n", "mode", "frequency [Hz]", "rel. residual", "rounding floor");
     for (Eigen::Index k = 0; k < fixed_interface_frequencies_hz.size(); ++k)
-      r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}\n", k + 1, fixed_interface_frequencies_hz(k),
-                       fixed_interface_residuals(k));
+      r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}  {:>14.2e}\n", k + 1, fixed_interface_frequencies_hz(k),
+                       fixed_interface_residuals(k), fixed_interface_residual_floors(k));
+    r += residual_check_line();
     r += "\nOrthonormalised modes (reduced eigenproblem on fixed-interface + constraint modes, 6 rigid dropped;\n"
          "residual: in the model with the rbe2 patches rigid, the reduction error)\n";
   } else {
     r += fmt::format("\nFree-free modes ({}, shift-invert on CHOLMOD, sigma = {}, 6 rigid-body modes deflated)\n",
                      eigensolver, shift_as_frequency(shift));
   }
-  r += fmt::format("  {:>4}  {:>16}  {:>14}\n", "mode", "frequency [Hz]", "rel. residual");
+  // Free-free modes have floors; the orthonormalised Craig-Bampton modes' residuals are reduction errors, not
+  // rounding, and have none.
+  const bool floors = residual_floors.size() == frequencies_hz.size();
+  r += fmt::format("  {:>4}  {:>16}  {:>14}{}\n", "mode", "frequency [Hz]", "rel. residual",
+                   floors ? fmt::format("  {:>14}", "rounding floor") : "");
   const Eigen::Index first_static = frequencies_hz.size() - static_correction_modes;
   for (Eigen::Index k = 0; k < frequencies_hz.size(); ++k)
-    r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}{}\n", k + 1, frequencies_hz(k), relative_residuals(k),
+    r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}{}{}\n", k + 1, frequencies_hz(k), relative_residuals(k),
+                     floors && k < first_static ? fmt::format("  {:>14.2e}", residual_floors(k)) : "",
                      k >= first_static ? "  static correction (Ritz value)" : "");
+  if (reduction == ReductionKind::free_free) r += residual_check_line();
   if (!static_loads.empty()) {
     line("static correction", fmt::format("{} unit loads ({}), {} dropped as dependent", static_correction.loads,
                                           fmt::join(static_loads, " "), static_correction.dropped));
-    line("", fmt::format("{} preconditioned CG iterations, max static residual {:.1e}; {}", static_correction.iterations,
-                         static_correction.max_relative_residual,
+    line("", fmt::format("{} preconditioned CG iterations, max static residual {:.1e} ({:.2g} x its rounding floor); "
+                         "{}", static_correction.iterations, static_correction.max_relative_residual,
+                         static_correction.max_residual_to_floor,
                          reduction == ReductionKind::free_free
                              ? "inertia relief, less the normal modes' part"
                              : "interfaces clamped, in the basis before orthonormalisation"));
@@ -153,6 +177,13 @@ std::string PrepSummary::json() const {
   // Over the eigenmodes: static correction modes are Ritz vectors with O(1) residuals by construction.
   const Eigen::Index normal = relative_residuals.size() - static_correction_modes;
   j["max_relative_residual"] = normal > 0 ? relative_residuals.head(normal).maxCoeff() : 0.0;
+  // Rounding floors (eigen_residual.hpp) of the eigenmodes that are checked against them: the free-free normal
+  // modes (the static corrections' entries too, unchecked), or the fixed-interface modes.
+  j["residual_floors"] = to_std(residual_floors);
+  j["fixed_interface_relative_residuals"] = to_std(fixed_interface_residuals);
+  j["fixed_interface_residual_floors"] = to_std(fixed_interface_residual_floors);
+  j["max_residual_to_floor"] = max_residual_to_floor();
+  j["residual_acceptance"] = {{"min_bound", kMinResidualBound}, {"floor_factor", kResidualFloorFactor}};
   // The K r check runs with free-free modes only (it is part of that solver): null otherwise.
   j["rigid_body_residual"] = reduction == ReductionKind::free_free ? nlohmann::ordered_json(rigid_body_residual)
                                                                     : nlohmann::ordered_json(nullptr);
@@ -180,7 +211,8 @@ std::string PrepSummary::json() const {
                             {"dropped", static_correction.dropped},
                             {"modes", static_correction_modes},
                             {"iterations", static_correction.iterations},
-                            {"max_relative_residual", static_correction.max_relative_residual}};
+                            {"max_relative_residual", static_correction.max_relative_residual},
+                            {"max_residual_to_floor", static_correction.max_residual_to_floor}};
   nlohmann::ordered_json region_list = nlohmann::ordered_json::array();
   for (const auto& region : output_regions) region_list.push_back({{"name", region.name}, {"nodes", region.nodes}});
   j["output_regions"] = region_list;

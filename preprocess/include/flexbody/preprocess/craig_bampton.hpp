@@ -33,8 +33,10 @@ struct CraigBamptonOptions {
 };
 
 struct CraigBamptonModes {
-  /// The clamped problem: omega^2 [rad^2/s^2], frequencies and ||K φ - ω² M φ|| / ||K φ||.
-  Eigen::VectorXd fixed_interface_eigenvalues, fixed_interface_frequencies_hz, fixed_interface_residuals;
+  /// The clamped problem: omega^2 [rad^2/s^2], frequencies, ||K φ - ω² M φ||_2 / ||K φ||_2 and its rounding
+  /// floor (eigen_residual.hpp; each residual is at most max(1e-8, kResidualFloorFactor x its floor)).
+  Eigen::VectorXd fixed_interface_eigenvalues, fixed_interface_frequencies_hz, fixed_interface_residuals,
+      fixed_interface_residual_floors;
   /// The Craig-Bampton basis before orthonormalisation: [fixed-interface modes, constraint modes, static
   /// corrections] (3 n_n x (n_fixed + 6 n_interfaces + n_static)); constraint mode 6 j + k moves interface j
   /// by unit DOF k (translations x, y, z, then small rotations about x, y, z); the static corrections are
@@ -57,7 +59,8 @@ struct CraigBamptonModes {
 /// `static_loads` (3 n_n x s nodal force vectors, e.g. unit_load_vectors, zero on the interfaces) add their
 /// static responses with every interface clamped, less what the fixed-interface modes hold, to the basis.
 /// Throws std::invalid_argument for no interface or an impossible mode count, std::runtime_error when
-/// a fixed-interface mode's residual exceeds 1e-8, the reduced problem does not have exactly six
+/// a fixed-interface mode's residual exceeds max(1e-8, kResidualFloorFactor x its rounding floor)
+/// (eigen_residual.hpp: not converged), the reduced problem does not have exactly six
 /// zero-energy vectors (a mechanism) or a solver fails.
 [[nodiscard]] CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
                                                     const SparseMatrix& scalar_mass_upper, const Material& material,

@@ -89,8 +89,10 @@ struct PrepSummary {
   format::MassProperties mass;
   ReductionKind reduction = ReductionKind::free_free;
   Eigen::VectorXd frequencies_hz, relative_residuals;
-  /// Craig-Bampton only: the clamped problem's frequencies and residuals.
-  Eigen::VectorXd fixed_interface_frequencies_hz, fixed_interface_residuals;
+  /// Free-free only: each mode's rounding floor of its residual (eigen_residual.hpp).
+  Eigen::VectorXd residual_floors;
+  /// Craig-Bampton only: the clamped problem's frequencies, residuals and their rounding floors.
+  Eigen::VectorXd fixed_interface_frequencies_hz, fixed_interface_residuals, fixed_interface_residual_floors;
   double shift = 0.0;
   std::string eigensolver;
   double rigid_body_residual = 0.0, rigid_body_coupling = 0.0;
@@ -125,6 +127,9 @@ struct PrepSummary {
   double peak_memory_mb = 0.0;
   std::uintmax_t output_bytes = 0;
 
+  /// The largest relative residual / rounding floor of the eigenmodes fbprep checks: the free-free normal modes,
+  /// or the Craig-Bampton fixed-interface modes (each is at most kResidualFloorFactor, or below 1e-8).
+  [[nodiscard]] double max_residual_to_floor() const;
   [[nodiscard]] std::string full_report() const;
   /// The summary as one JSON object (a single line).
   [[nodiscard]] std::string json() const;

@@ -34,9 +34,10 @@ struct FreeFreeModes {
   /// Ritz values (all above the normal modes').
   Eigen::VectorXd eigenvalues;
   Eigen::VectorXd frequencies_hz;
-  /// ||K phi - omega^2 M phi|| / ||K phi||: below 1e-8 for the normal modes; the static correction modes
-  /// are not eigenvectors and their residuals are what they are.
-  Eigen::VectorXd relative_residuals;
+  /// ||K phi - omega^2 M phi||_2 / ||K phi||_2 and its rounding floor (eigen_residual.hpp). Each normal mode's
+  /// residual is at most max(1e-8, kResidualFloorFactor x its floor); the static correction modes are not
+  /// eigenvectors and their residuals are what they are.
+  Eigen::VectorXd relative_residuals, residual_floors;
   Eigen::MatrixXd vectors;         ///< 3 n_n x n_m, M̄-orthonormal, node-interleaved
   Eigen::Index normal_modes = 0;   ///< the first this many are eigenmodes, the rest static corrections
   StaticCorrectionStats static_correction;
@@ -56,7 +57,8 @@ struct FreeFreeModes {
 /// With `static_loads` (3 n_n x s nodal force vectors, e.g. unit_load_vectors), the basis is extended by
 /// their residual static correction modes (inertia relief; static_correction.hpp) on the same factorization.
 /// Throws std::runtime_error when the body has more than six zero-energy modes (a mechanism or a
-/// disconnected mesh), when a normal mode's residual exceeds 1e-8, or when a solver fails.
+/// disconnected mesh), when a normal mode's residual exceeds max(1e-8, kResidualFloorFactor x its rounding
+/// floor) (eigen_residual.hpp: not converged), or when a solver fails.
 [[nodiscard]] FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
                                             const SparseMatrix& scalar_mass_upper, const Material& material,
                                             const FreeFreeOptions& options,

@@ -60,7 +60,10 @@ struct StaticCorrectionStats {
   /// the known fields and of the other responses), and so no mode.
   Eigen::Index dropped = 0;
   int iterations = 0;  ///< conjugate-gradient iterations over all loads (one factor solve each)
-  double max_relative_residual = 0.0;  ///< max ‖b − K̄u‖ / ‖b‖ of the static solves (b the projected load)
+  double max_relative_residual = 0.0;  ///< max ‖b − K̄u‖₂ / ‖b‖₂ of the static solves (b the projected load)
+  /// max over the solves of that residual over its rounding floor ε ‖|K̄||u|‖₂ / ‖b‖₂ (eigen_residual.hpp); each
+  /// residual is at most max(1e-8, kResidualFloorFactor x its floor).
+  double max_residual_to_floor = 0.0;
 };
 
 struct StaticCorrectionModes {
@@ -76,7 +79,8 @@ struct StaticCorrectionModes {
 /// M̄-orthonormal and hold every zero-energy field of K̄ (the six rigid-body fields of a free body) and the
 /// normal modes. Each load is solved by conjugate gradients on the M̄-complement of `known`, preconditioned
 /// by the factorization: the preconditioned spectrum is λ / (λ − σ) with λ >= the first eigenvalue not in
-/// `known`, so a handful of solves reach 1e-10. Throws std::runtime_error if a solve does not converge.
+/// `known`, so a handful of solves reach 1e-10. Throws std::runtime_error if a solve does not converge (its true
+/// residual above max(1e-8, kResidualFloorFactor x its rounding floor)).
 [[nodiscard]] StaticCorrectionModes static_correction_modes(CholmodShiftSolve& solve, const SparseMatrix& stiffness_upper,
                                                             const SparseMatrix& scalar_mass_upper,
                                                             const Eigen::MatrixXd& known, const Eigen::MatrixXd& loads);

@@ -73,7 +73,7 @@ GeneralizedFields orthonormal_fields(const SparseMatrix& scalar_mass_upper, cons
 
 double spectral_condition(const Eigen::MatrixXd& symmetric) {
   // A direct eigen solve of A finds λmin only to about eps λmax absolute, which is all of it when A's rows
-  // carry different units: G of a 1 mm steel part has λmin/λmax ~ 1e-18 (second moments in kg m^2 next to
+  // carry different units: G of a 1 mm steel part has λmin/λmax ~ 1e-20 (second moments in kg m^2 next to
   // the fields' identity block), and the solve returns λmin <= 0 or noise. So A = S^-1 Â S^-1 is taken
   // apart by its Jacobi scaling (S = D^-1/2, D = diag A; Â has unit diagonal and no units): λmax(A) comes from A
   // itself (a largest eigenvalue is found to eps relative), λmin(A) = 1 / λmax(A^-1) with

@@ -231,6 +231,9 @@ Gcms read_gcms(const Location& root) {
   gcms.condition_mass_before = detail::read_double_attribute(group, "condition_G_before");
   gcms.condition_mass_after = detail::read_double_attribute(group, "condition_G_after");
   gcms.condition_mass_scaled_after = detail::read_double_attribute(group, "condition_G_scaled_after");
+  // Optional: absent in files written before fbprep recorded it.
+  if (detail::has_attribute(root, "/gcms", "condition_G_scaled_before"))
+    gcms.condition_mass_scaled_before = detail::read_double_attribute(group, "condition_G_scaled_before");
   const int dropped = detail::read_int_attribute(group, "dropped_fields");
   if (dropped != gcms.mode_coefficients.cols() - gcms.fields.cols())
     group.fail("/gcms/dropped_fields is " + std::to_string(dropped) + ", expected 3 n_m - n_f = " +

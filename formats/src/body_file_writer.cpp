@@ -111,6 +111,8 @@ void write_gcms(const Location& root, const Gcms& gcms) {
   detail::write_double_attribute(group, "condition_mode_gram_before", gcms.condition_mode_gram_before);
   detail::write_double_attribute(group, "condition_G_before", gcms.condition_mass_before);
   detail::write_double_attribute(group, "condition_G_after", gcms.condition_mass_after);
+  if (gcms.condition_mass_scaled_before)  // optional: readers of older files find it absent
+    detail::write_double_attribute(group, "condition_G_scaled_before", *gcms.condition_mass_scaled_before);
   detail::write_double_attribute(group, "condition_G_scaled_after", gcms.condition_mass_scaled_after);
 }
 

@@ -17,16 +17,30 @@ void expect_shape(const Eigen::MatrixXd& m, Eigen::Index rows, Eigen::Index cols
                       meaning + ")");
 }
 
-// Written symmetric to the last bit (averaged with its transpose); 1e-12 of the largest entry leaves
-// room for writers that are merely careful.
+void fail_symmetric(const Eigen::MatrixXd& m, Eigen::Index r, Eigen::Index c, const std::string& path,
+                    const std::string& context) {
+  fail(context, path + " is not symmetric: " + path + index(r) + index(c) + " = " + number(m(r, c)) + " but " + path +
+                    index(c) + index(r) + " = " + number(m(c, r)));
+}
+
+// Written symmetric to the last bit (averaged with its transpose); 1e-12 leaves room for writers that are
+// merely careful. K̂'s entries all carry s^-2, so its largest entry is their scale.
 void check_symmetric(const Eigen::MatrixXd& m, const std::string& path, const std::string& context) {
   if (m.size() == 0) return;
   const double scale = m.cwiseAbs().maxCoeff();
   for (Eigen::Index c = 0; c < m.cols(); ++c)
     for (Eigen::Index r = 0; r < c; ++r)
-      if (std::abs(m(r, c) - m(c, r)) > 1e-12 * scale)
-        fail(context, path + " is not symmetric: " + path + index(r) + index(c) + " = " + number(m(r, c)) + " but " +
-                          path + index(c) + index(r) + " = " + number(m(c, r)));
+      if (std::abs(m(r, c) - m(c, r)) > 1e-12 * scale) fail_symmetric(m, r, c, path, context);
+}
+
+// G's rows carry different units (kg^1/2, kg^1/2 m and 1 for the rows of τ, a and ξ, in the sense that
+// G_rc / sqrt(G_rr G_cc) is a pure number), and their sizes differ by many decades for a small or a large
+// part: entry (r, c) is measured against sqrt(G_rr G_cc), its own scale (the entry of the Jacobi-scaled
+// D^-1/2 G D^-1/2), never against the largest entry of G. Needs a positive diagonal.
+void check_symmetric_scaled(const Eigen::MatrixXd& m, const std::string& path, const std::string& context) {
+  for (Eigen::Index c = 0; c < m.cols(); ++c)
+    for (Eigen::Index r = 0; r < c; ++r)
+      if (std::abs(m(r, c) - m(c, r)) > 1e-12 * std::sqrt(m(r, r) * m(c, c))) fail_symmetric(m, r, c, path, context);
 }
 
 void check_condition(double value, const std::string& path, const std::string& context) {
@@ -66,7 +80,9 @@ void check_gcms_finite(const BodyData& body, const std::string& context) {
   check_values(gcms.mass_matrix, "/gcms/G", context);
   check_values(gcms.stiffness, "/gcms/K_hat", context);
   check_value(gcms.drop_tolerance, "/gcms/drop_tolerance", context);
-  check_value(gcms.condition_mass_after, "/gcms/condition_G_after", context);
+  // condition_G_before and condition_G_after (SI units) may be inf: they depend on the part's size, and
+  // a writer that computes them without scaling finds G singular for a small part. The unit-free
+  // condition_G_scaled_after certifies the stored G.
   check_value(gcms.condition_mass_scaled_after, "/gcms/condition_G_scaled_after", context);
 }
 
@@ -77,12 +93,19 @@ void check_gcms_ranges(const BodyData& body, const std::string& context) {
   check_condition(gcms.condition_mode_gram_before, "/gcms/condition_mode_gram_before", context);
   check_condition(gcms.condition_mass_before, "/gcms/condition_G_before", context);
   check_condition(gcms.condition_mass_after, "/gcms/condition_G_after", context);
+  if (gcms.condition_mass_scaled_before)
+    check_condition(*gcms.condition_mass_scaled_before, "/gcms/condition_G_scaled_before", context);
   check_condition(gcms.condition_mass_scaled_after, "/gcms/condition_G_scaled_after", context);
-  check_symmetric(gcms.mass_matrix, "/gcms/G", context);
+  const Eigen::MatrixXd& g = gcms.mass_matrix;
+  const Eigen::VectorXd diagonal = g.diagonal();
+  for (Eigen::Index i = 0; i < diagonal.size(); ++i)
+    if (!(diagonal(i) > 0.0))
+      fail(context, "/gcms/G" + index(i) + index(i) + " is " + number(diagonal(i)) +
+                        ", expected > 0 (G is a mass matrix: positive definite)");
+  check_symmetric_scaled(g, "/gcms/G", context);
   check_symmetric(gcms.stiffness, "/gcms/K_hat", context);
   // G must agree with /mass: G[0][0] is the mass and G[1:4, 1:4] = X̄ᵀ M_s X̄ the second moments J, with
   // inertia tr(J) I - J. Both come from the same M_s; 1e-9 allows for the summation order.
-  const Eigen::MatrixXd& g = gcms.mass_matrix;
   const double mass = body.mass.mass;
   if (std::abs(g(0, 0) - mass) > 1e-9 * mass)
     fail(context, "/gcms/G[0][0] = " + number(g(0, 0)) + " kg differs from /mass/total = " + number(mass) + " kg");
@@ -95,7 +118,8 @@ void check_gcms_ranges(const BodyData& body, const std::string& context) {
   // What the runtime relies on without checking (SCHEMA.md, "What G holds"): the frame at the centre of
   // mass (G[0][1:4] = 0, 1e-9 of m times the part's size), the fields M-orthogonal to translations so that
   // Eq. 77 holds identically (G[0][4:] = 0, 1e-8 of sqrt(m): the unit field's M-norm is 1), and the fields
-  // M_s-orthonormal (G[4:][4:] = I to 1e-10).
+  // M_s-orthonormal (G[4:][4:] = I to 1e-10; these entries are pure numbers, relative to the fields' unit
+  // M_s-norm). All three are relative to the size of the entry they bound, so they hold at any part size.
   const Eigen::Index n_f = gcms.field_count();
   const double size = std::max(body.mesh.nodes.cwiseAbs().maxCoeff(), 1e-300);
   for (int j = 1; j < 4; ++j)
@@ -112,12 +136,7 @@ void check_gcms_ranges(const BodyData& body, const std::string& context) {
         fail(context, "/gcms/G" + index(4 + r) + index(4 + c) + " = " + number(g(4 + r, 4 + c)) +
                           ": the fields are not M_s-orthonormal (G[4:][4:] must be I)");
   // Positive definite, tested on the Jacobi-scaled matrix: the blocks of G carry different units
-  // (kg, kg m, kg m^2, 1), and scaling makes the test independent of them.
-  const Eigen::VectorXd diagonal = g.diagonal();
-  for (Eigen::Index i = 0; i < diagonal.size(); ++i)
-    if (!(diagonal(i) > 0.0))
-      fail(context, "/gcms/G" + index(i) + index(i) + " is " + number(diagonal(i)) +
-                        ", expected > 0 (G is a mass matrix: positive definite)");
+  // (kg, kg m, kg m^2, 1), and scaling makes the test independent of them (and of the part's size).
   const Eigen::VectorXd scale = diagonal.cwiseSqrt().cwiseInverse();
   const Eigen::MatrixXd scaled = scale.asDiagonal() * g * scale.asDiagonal();
   if (Eigen::LLT<Eigen::MatrixXd>(scaled).info() != Eigen::Success)

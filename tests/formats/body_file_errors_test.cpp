@@ -244,6 +244,13 @@ TEST_F(ReadErrors, DeclaredUnitIsOptional) {
   EXPECT_EQ(read_body_file(path).provenance.declared_unit, "");
 }
 
+TEST_F(ReadErrors, ScaledConditionBeforeIsOptional) {
+  // Written by fbprep since issue 12; absent in earlier version-3 files, which stay readable.
+  const auto path = good_file("no_scaled_before.fbh5");
+  delete_attribute(path, "/gcms", "condition_G_scaled_before");
+  EXPECT_FALSE(read_body_file(path).gcms.condition_mass_scaled_before.has_value());
+}
+
 TEST_F(ReadErrors, TruncatedFile) {
   const auto good = good_file("whole.fbh5");
   const std::string bytes = read_bytes(good);

@@ -59,6 +59,7 @@ void expect_same(const BodyData& a, const BodyData& b) {
   EXPECT_EQ(ga.condition_mode_gram_before, gb.condition_mode_gram_before);
   EXPECT_EQ(ga.condition_mass_before, gb.condition_mass_before);
   EXPECT_EQ(ga.condition_mass_after, gb.condition_mass_after);
+  EXPECT_EQ(ga.condition_mass_scaled_before, gb.condition_mass_scaled_before);
   EXPECT_EQ(ga.condition_mass_scaled_after, gb.condition_mass_scaled_after);
 
   ASSERT_EQ(a.interfaces.size(), b.interfaces.size());
@@ -110,6 +111,17 @@ TEST_F(RoundTrip, KeepsEmptyOptionsTrianglesAndModes) {
   const auto path = dir() / "bare.fbh5";
   write_body_file(body, path);
   expect_same(body, read_body_file(path));
+}
+
+// A 1 mm and a 1 km body (issue 12): written, read back with every check of the reader, unchanged.
+TEST_F(RoundTrip, TinyAndHugeBodiesReadBack) {
+  for (const double s : {2e-2, 2e4}) {
+    SCOPED_TRACE(s);
+    const BodyData body = scaled_body(make_body(), s);
+    const auto path = dir() / "scaled.fbh5";
+    write_body_file(body, path);
+    expect_same(body, read_body_file(path));
+  }
 }
 
 TEST_F(RoundTrip, StoresUpsilonRowMajorInListFormat) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 
 namespace flexbody::format::test {
@@ -124,11 +125,14 @@ TEST(Validate, GcmsConstants) {
   body.gcms.stiffness(3, 7) = std::numeric_limits<double>::quiet_NaN();
   expect_invalid(body, "/gcms/K_hat[3][7] is nan, expected a finite number");
   body = make_body();
-  body.gcms.condition_mass_after = std::numeric_limits<double>::infinity();
-  expect_invalid(body, "/gcms/condition_G_after is inf, expected a finite number");
+  body.gcms.condition_mass_scaled_after = std::numeric_limits<double>::infinity();
+  expect_invalid(body, "/gcms/condition_G_scaled_after is inf, expected a finite number");
   body = make_body();
   body.gcms.condition_mass_before = 0.5;
   expect_invalid(body, "/gcms/condition_G_before is 0.5, expected a condition number >= 1 (or inf)");
+  body = make_body();
+  body.gcms.condition_mass_scaled_before = 0.5;
+  expect_invalid(body, "/gcms/condition_G_scaled_before is 0.5, expected a condition number >= 1 (or inf)");
   body = make_body();
   body.gcms.fields.conservativeResize(5, 7);
   expect_invalid(body, "/gcms/fields has shape 5 x 7, expected 5 x n_f with n_f <= 3 n_m = 6");
@@ -144,6 +148,44 @@ TEST(Validate, GcmsConstants) {
   body = make_body();
   body.gcms.mass_matrix(1, 2) += 1e-3;  // G[1][2] without G[2][1]
   expect_invalid(body, "/gcms/G is not symmetric: /gcms/G[1][2]");
+}
+
+// Issue 12: the condition numbers of G in SI units depend on the part's size (G's blocks carry kg, kg m^2
+// and 1), and a writer that computes them without scaling finds G singular for a small part. They are
+// informative; the unit-free condition_G_scaled_after and the Cholesky of the Jacobi-scaled G certify G.
+TEST(Validate, ConditionOfGInSiUnitsMayBeInfinite) {
+  BodyData body = make_body();
+  body.gcms.condition_mass_after = std::numeric_limits<double>::infinity();
+  EXPECT_NO_THROW(validate(body));
+  body.gcms.condition_mass_scaled_before.reset();  // files written before fbprep recorded it
+  EXPECT_NO_THROW(validate(body));
+}
+
+// The same body at 1 mm ... 1 km scale (the synthetic body is about 0.05 m across, so 2e-2 makes it 1 mm):
+// every check is relative to the size of what it checks, so each passes. Before issue 12 a 1 mm body was
+// refused for its infinite condition_G_after.
+TEST(Validate, TinyAndHugeBodiesPass) {
+  for (const double s : {2e-2, 1e-3, 1e-6, 1e2, 2e4}) {
+    SCOPED_TRACE(s);
+    EXPECT_NO_THROW(validate(scaled_body(make_body(), s)));
+  }
+}
+
+// ... and none is blind to its scale: the symmetry of G's second-moment block (kg m^2, about 1e-17 kg m^2
+// for a 1 mm steel part, next to the fields' identity block of G) is checked against that block's own size,
+// sqrt(G_rr G_cc), not against G's largest entry. Before issue 12 an asymmetry of 1e-9 relative passed
+// at 1 mm (it was measured against 1, the identity block) and at 1 km (against the largest J).
+TEST(Validate, AsymmetryOfGIsFoundAtEveryScale) {
+  for (const double s : {2e-2, 1.0, 2e4}) {
+    SCOPED_TRACE(s);
+    BodyData body = scaled_body(make_body(), s);
+    Eigen::MatrixXd& g = body.gcms.mass_matrix;
+    g(1, 2) += 1e-9 * std::sqrt(g(1, 1) * g(2, 2));  // G[1][2] without G[2][1]
+    expect_invalid(body, "/gcms/G is not symmetric: /gcms/G[1][2]");
+    body = scaled_body(make_body(), s);
+    g(5, 6) += 1e-9;  // in the identity block of the fields (pure numbers)
+    expect_invalid(body, "/gcms/G is not symmetric: /gcms/G[5][6]");
+  }
 }
 
 TEST(Validate, Interfaces) {

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <fstream>
 #include <limits>
 #include <iterator>
@@ -133,6 +134,7 @@ BodyData make_body() {
   gcms.condition_mode_gram_before = std::numeric_limits<double>::infinity();  // singular: allowed
   gcms.condition_mass_before = 1e9 / 3.0;
   gcms.condition_mass_after = 1e3 / 7.0;
+  gcms.condition_mass_scaled_before = 1e5 / 3.0;
   gcms.condition_mass_scaled_after = 1e2 / 7.0;
 
   // One interface on the face of nodes 1, 2, 4, with weights that are not round numbers.
@@ -162,6 +164,36 @@ BodyData make_body() {
     for (Eigen::Index c = 0; c < 3 * kFields; ++c) region.stress_modes(r, c) = 1e9 * static_cast<double>(r + 2 * c) / 13.0;
   body.recovery.push_back(region);
   return body;
+}
+
+BodyData scaled_body(const BodyData& body, double scale) {
+  const double s = scale, s3 = s * s * s, s5 = s3 * s * s;
+  const double field = 1.0 / std::sqrt(s3);  // kg^-1/2: the mass grows like s^3
+  BodyData b = body;
+  b.mass.mass *= s3;
+  b.mass.center_of_mass_input *= s;
+  b.mass.inertia_about_com *= s5;
+  b.mesh.nodes *= s;
+  b.modes.frequencies_hz /= s;
+  b.modes.fixed_interface_frequencies_hz /= s;
+  b.modes.shift /= s * s;
+  b.modes.upsilon *= field;
+  Gcms& g = b.gcms;
+  g.fields *= field;
+  g.stiffness /= s * s;
+  Eigen::VectorXd rows = Eigen::VectorXd::Ones(g.mass_matrix.rows());  // G_rc x rows_r rows_c
+  rows(0) = std::sqrt(s3);
+  rows.segment<3>(1).setConstant(std::sqrt(s5));
+  g.mass_matrix = rows.asDiagonal() * g.mass_matrix * rows.asDiagonal();
+  g.condition_mass_before = g.condition_mass_after = std::numeric_limits<double>::infinity();
+  for (Interface& i : b.interfaces) {
+    i.reference_point *= s;
+    i.y_row.segment<3>(1) *= s;
+    i.y_row.tail(i.y_row.size() - 4) *= field;
+    i.rotation *= field / s;  // kg^-1/2 m^-1
+  }
+  for (RecoveryRegion& r : b.recovery) r.stress_modes *= field / s;  // Pa kg^-1/2 m^-1
+  return b;
 }
 
 void TempDirTest::SetUp() {

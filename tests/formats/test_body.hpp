@@ -17,6 +17,13 @@ namespace flexbody::format::test {
 /// is distinct and not exactly representable in few digits, so a round trip must be bit-exact.
 [[nodiscard]] BodyData make_body();
 
+/// `body` made `scale` times as large in every length, of the same material: lengths x s, mass x s^3,
+/// inertia x s^5, frequencies / s, and each quantity whose unit holds kg or m accordingly (the fields, kg^-1/2,
+/// x s^-3/2; K̂ x s^-2; G's rows of τ, a, ξ x s^3/2, s^5/2, 1). The unit-free figures stay as they are; the
+/// two condition numbers of G in SI units become +inf, which is what a writer that computes them without
+/// scaling finds for a small part.
+[[nodiscard]] BodyData scaled_body(const BodyData& body, double scale);
+
 /// A fresh directory under temp_directory_path(), removed after the test.
 class TempDirTest : public ::testing::Test {
  protected:

@@ -108,6 +108,30 @@ TEST(GcmsMatrices, RotationalTisserandRowsAreEq78ByNodalSums) {
   EXPECT_LT(worst, 1e-12 * scale);
 }
 
+// Issue 12: G of a 1 mm steel part has second moments of ~1e-17 kg m^2 next to the fields' identity block, so a
+// direct eigen solve finds λmin to eps λmax absolute, i.e. not at all. spectral_condition goes through the
+// Jacobi scaling and keeps λmin's relative accuracy. A 2 x 2 case with an exact answer: [[a, b], [b, d]] with
+// a = 1e-20, d = 1, b = sqrt(a d) / 2 (its Jacobi-scaled form is [[1, 1/2], [1/2, 1]], condition 3).
+TEST(GcmsMatrices, SpectralConditionOfAGradedMatrix) {
+  const double a = 1e-20, d = 1.0, b = 0.5e-10;
+  Eigen::Matrix2d g;
+  g << a, b, b, d;
+  const double lambda_max = 0.5 * (a + d + std::sqrt((a - d) * (a - d) + 4 * b * b));
+  const double lambda_min = (a * d - b * b) / lambda_max;  // the determinant over λmax: no cancellation
+  EXPECT_NEAR(fp::spectral_condition(g), lambda_max / lambda_min, 1e-13 * lambda_max / lambda_min);
+  EXPECT_NEAR(fp::scaled_condition(g), 3.0, 1e-14 * 3.0);
+  // Where the units agree it is the plain λmax / λmin (a small well-conditioned SPD matrix).
+  Eigen::Matrix3d c;
+  c << 4, 1, 0.5, 1, 3, 0.25, 0.5, 0.25, 2;
+  const Eigen::Vector3d values = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues();
+  EXPECT_NEAR(fp::spectral_condition(c), values(2) / values(0), 1e-14 * values(2) / values(0));
+  // Not positive definite: +inf, as before.
+  Eigen::Matrix2d indefinite;
+  indefinite << 1e-20, 1.5e-10, 1.5e-10, 1;
+  EXPECT_TRUE(std::isinf(fp::spectral_condition(indefinite)));
+  EXPECT_TRUE(std::isinf(fp::scaled_condition(indefinite)));
+}
+
 TEST(GeneralizedFields, SquareBeamDependencyIsRemoved) {
   // The must-pass case of FORMULATION.md section 7: the square beam's bending pairs make the fields
   // nearly dependent, and the cross-components of each mode are decades smaller than its main one.

@@ -21,6 +21,9 @@ constexpr int kGmshTet4 = 4;  // gmsh element type of the 4-node tetrahedron
 // Refuse a mesh size that would give more tetrahedra than this: 2e7 tets are ~1e7 DOFs, several times
 // what fits in 24 GiB, and such a request is nearly always a unit mistake.
 constexpr double kMaxEstimatedElements = 2e7;
+// A part smaller than this across, in gmsh's own coordinates, is where gmsh's and OpenCASCADE's absolute
+// tolerances start to spoil the mesh (see import_tet_mesh): 1e-2 of the file's unit.
+constexpr double kSmallInModelUnits = 1e-2;
 
 // Tetrahedra gmsh would make at element size h: its nearly regular tetrahedra of edge h have volume
 // h^3 / 8.5.
@@ -332,7 +335,22 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
   if (components.count > 1)
     throw std::runtime_error(fmt::format("{}: found {} disconnected solids; an assembly is not one body (export "
                                          "each part on its own, or fuse them in CAD)", name, components.count));
-  check_element_volumes(result.mesh, name);
+  try {
+    check_element_volumes(result.mesh, name);
+  } catch (const std::runtime_error& e) {
+    // gmsh and OpenCASCADE work to absolute tolerances in the file's own numbers. Measured with gmsh 4.8: the
+    // sample bracket written in metres at 0.9 mm across gets a flat tetrahedron (its surface mesh has a node on
+    // another triangle's edge), the same geometry at 2.7 mm, or at 0.9 mm written in millimetres, meshes
+    // cleanly. A part under 1e-2 of the file's unit across is in that range: say how to get out of it.
+    const double across = (result.mesh.nodes.colwise().maxCoeff() - result.mesh.nodes.colwise().minCoeff()).norm() /
+                          unit.gmsh_to_metres;
+    if (result.meshed_here && across < kSmallInModelUnits)
+      throw std::runtime_error(fmt::format(
+          "{}; the part is only {:.3g} across in gmsh's coordinates (the file's numbers; mm for STEP and IGES), "
+          "where gmsh and OpenCASCADE work to fixed absolute tolerances: write a part this small in mm and pass "
+          "--unit mm", e.what(), across));
+    throw;
+  }
   return result;
 }
 

@@ -87,9 +87,14 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
   r += "\nGCMS constants\n";
   line("fields", fmt::format("{} of {} ({} dropped as dependent, tolerance {:.0e})", g.field_count(),
                              g.mode_coefficients.cols(), g.mode_coefficients.cols() - g.field_count(), g.drop_tolerance));
-  line("G", fmt::format("{} x {}; cond {:.3g} ({:.3g} before; {:.3g} Jacobi-scaled)", g.mass_matrix.rows(),
-                        g.mass_matrix.cols(), g.condition_mass_after, g.condition_mass_before,
-                        g.condition_mass_scaled_after));
+  // The Jacobi-scaled condition numbers are unit-free (the same at every size of the part); the SI ones
+  // mix kg, kg m^2 and 1. Files from before issue 12 do not record the scaled one before.
+  const std::string scaled_before = g.condition_mass_scaled_before
+                                        ? fmt::format("{:.3g} before", *g.condition_mass_scaled_before)
+                                        : std::string("before not recorded");
+  line("G", fmt::format("{} x {}; cond {:.3g} Jacobi-scaled ({}); in SI units {:.3g} ({:.3g} before)",
+                        g.mass_matrix.rows(), g.mass_matrix.cols(), g.condition_mass_scaled_after, scaled_before,
+                        g.condition_mass_after, g.condition_mass_before));
   line("K_hat", fmt::format("{} x {}; sqrt(eig)/2pi from {:.6g} to {:.6g} Hz", g.stiffness.rows(), g.stiffness.cols(),
                             k_low, k_high));
   line("cond(Ups^T M_s Ups)", fmt::format("{:.3g} (the modes' own fields)", g.condition_mode_gram_before));
@@ -152,6 +157,8 @@ std::string body_json(const format::BodyData& body, const std::filesystem::path&
   j["condition_mode_gram_before"] = number_or_null(g.condition_mode_gram_before);
   j["condition_G_before"] = number_or_null(g.condition_mass_before);
   j["condition_G_after"] = number_or_null(g.condition_mass_after);
+  j["condition_G_scaled_before"] =  // null: singular, or not recorded (files from before issue 12)
+      g.condition_mass_scaled_before ? number_or_null(*g.condition_mass_scaled_before) : nlohmann::ordered_json(nullptr);
   j["condition_G_scaled_after"] = number_or_null(g.condition_mass_scaled_after);
   j["k_hat_frequency_range_hz"] = {k_low, k_high};
   j["static_loads"] = body.modes.static_loads;

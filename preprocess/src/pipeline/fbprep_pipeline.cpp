@@ -229,6 +229,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.condition_mode_gram_before = body.gcms.condition_mode_gram_before;
   summary.condition_mass_before = body.gcms.condition_mass_before;
   summary.condition_mass_after = body.gcms.condition_mass_after;
+  summary.condition_mass_scaled_before = body.gcms.condition_mass_scaled_before.value();
   summary.condition_mass_scaled_after = body.gcms.condition_mass_scaled_after;
   body.interfaces = in_stage("interfaces", [&] {
     std::vector<format::Interface> markers;

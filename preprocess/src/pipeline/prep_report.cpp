@@ -118,8 +118,10 @@ std::string PrepSummary::full_report() const {
   line("fields", fmt::format("{} kept of {} (3 per mode), {} dropped as dependent", gcms_fields,
                              gcms_fields + dropped_fields, dropped_fields));
   line("cond(Ups^T M_s Ups)", fmt::format("{:.3g} before", condition_mode_gram_before));
-  line("cond(G)", fmt::format("{:.3g} before, {:.3g} after; {:.3g} Jacobi-scaled (D^-1/2 G D^-1/2, D = diag G)",
-                              condition_mass_before, condition_mass_after, condition_mass_scaled_after));
+  line("cond(G), scaled", fmt::format("{:.3g} before, {:.3g} after (D^-1/2 G D^-1/2, D = diag G: unit-free)",
+                                      condition_mass_scaled_before, condition_mass_scaled_after));
+  line("cond(G), SI units", fmt::format("{:.3g} before, {:.3g} after (kg, kg m^2 and 1 mixed: depends on the size)",
+                                        condition_mass_before, condition_mass_after));
   if (!interfaces.empty()) {
     r += "\nInterfaces (markers: weighted node average and least-squares rotation of the node set)\n";
     for (const auto& i : interfaces)
@@ -197,6 +199,7 @@ std::string PrepSummary::json() const {
   j["condition_mode_gram_before"] = condition(condition_mode_gram_before);
   j["condition_G_before"] = condition(condition_mass_before);
   j["condition_G_after"] = condition(condition_mass_after);
+  j["condition_G_scaled_before"] = condition(condition_mass_scaled_before);
   j["condition_G_scaled_after"] = condition(condition_mass_scaled_after);
   nlohmann::ordered_json interface_list = nlohmann::ordered_json::array();
   for (const auto& i : interfaces)

@@ -72,10 +72,26 @@ GeneralizedFields orthonormal_fields(const SparseMatrix& scalar_mass_upper, cons
 }
 
 double spectral_condition(const Eigen::MatrixXd& symmetric) {
+  // A direct eigen solve of A finds λmin only to about eps λmax absolute, which is all of it when A's rows
+  // carry different units: G of a 1 mm steel part has λmin/λmax ~ 1e-20 (second moments in kg m^2 next to
+  // the fields' identity block), and the solve returns λmin <= 0 or noise. So A = S^-1 Â S^-1 is taken
+  // apart by its Jacobi scaling (S = D^-1/2, D = diag A; Â has unit diagonal and no units): λmax(A) comes from A
+  // itself (a largest eigenvalue is found to eps relative), λmin(A) = 1 / λmax(A^-1) with
+  // A^-1 = S Â^-1 S = B Bᵀ, B = S V Λ^-1/2 from Â = V Λ Vᵀ, whose largest eigenvalue is again found to eps
+  // relative. The result is accurate to about eps cond(Â), whatever the units or the part's size.
   if (symmetric.size() == 0) return 1.0;
-  const Eigen::VectorXd values = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(symmetric, Eigen::EigenvaluesOnly).eigenvalues();
-  if (!(values(0) > 0.0)) return std::numeric_limits<double>::infinity();
-  return values(values.size() - 1) / values(0);
+  const double infinity = std::numeric_limits<double>::infinity();
+  const Eigen::VectorXd diagonal = symmetric.diagonal();
+  if (!(diagonal.minCoeff() > 0.0)) return infinity;
+  const Eigen::VectorXd scale = diagonal.cwiseSqrt().cwiseInverse();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> scaled(scale.asDiagonal() * symmetric * scale.asDiagonal());
+  if (scaled.info() != Eigen::Success || !(scaled.eigenvalues()(0) > 0.0)) return infinity;
+  const Eigen::MatrixXd b =
+      scale.asDiagonal() * scaled.eigenvectors() * scaled.eigenvalues().cwiseSqrt().cwiseInverse().asDiagonal();
+  const double inverse_max =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(b.transpose() * b, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+  const double max = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(symmetric, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+  return max * inverse_max;
 }
 
 double scaled_condition(const Eigen::MatrixXd& symmetric) {
@@ -83,7 +99,12 @@ double scaled_condition(const Eigen::MatrixXd& symmetric) {
   if (symmetric.size() == 0) return 1.0;
   if (!(diagonal.minCoeff() > 0.0)) return std::numeric_limits<double>::infinity();
   const Eigen::VectorXd scale = diagonal.cwiseSqrt().cwiseInverse();
-  return spectral_condition(scale.asDiagonal() * symmetric * scale.asDiagonal());
+  const Eigen::VectorXd values =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(scale.asDiagonal() * symmetric * scale.asDiagonal(),
+                                                     Eigen::EigenvaluesOnly)
+          .eigenvalues();
+  if (!(values(0) > 0.0)) return std::numeric_limits<double>::infinity();
+  return values(values.size() - 1) / values(0);
 }
 
 }  // namespace flexbody::preprocess

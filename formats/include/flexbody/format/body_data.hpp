@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -107,11 +108,18 @@ struct Gcms {
   Eigen::MatrixXd stiffness;
   /// A field is dropped if its Gram-Schmidt remainder is below this fraction of its mode's M-norm.
   double drop_tolerance = 0.0;
-  /// λmax / λmin of Ῡᵀ M_s Ῡ, of G with the original fields (+inf: singular) and of the stored G; and of
-  /// the stored G Jacobi-scaled (D^-1/2 G D^-1/2, D = diag G: free of the units of G's blocks).
+  /// λmax / λmin of Ῡᵀ M_s Ῡ (+inf: singular). Its fields all carry kg^-1/2, so it does not depend on the
+  /// part's size or units.
   double condition_mode_gram_before = 0.0;
+  /// λmax / λmin of G in SI units, built with the original fields (+inf: singular) and the stored G. G's
+  /// blocks carry kg, kg m^2 and 1, so for the same shape these change with its size L (towards L^-5 for
+  /// small parts, L^5 for large ones): informative only, and +inf is accepted for both.
   double condition_mass_before = 0.0;
   double condition_mass_after = 0.0;
+  /// The same of the Jacobi-scaled G, D^-1/2 G D^-1/2 with D = diag G: free of the units of G's blocks, so
+  /// equal (to round-off) for the same shape at every size; what limits a Cholesky factorization of G.
+  /// The one before is absent (nullopt) in files written before fbprep recorded it.
+  std::optional<double> condition_mass_scaled_before;
   double condition_mass_scaled_after = 0.0;
 
   [[nodiscard]] Eigen::Index field_count() const { return fields.cols(); }

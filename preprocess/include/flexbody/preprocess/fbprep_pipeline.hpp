@@ -99,10 +99,12 @@ struct PrepSummary {
   int solver_runs = 0, restarts = 0, operator_applies = 0;
   ShiftSolveStats factor;
   /// GCMS fields kept and dropped (FORMULATION.md section 7), and the condition numbers of
-  /// Ῡᵀ M_s Ῡ and of G before and of G after (+inf: singular to working precision).
+  /// Ῡᵀ M_s Ῡ and of G before and of G after (+inf: singular to working precision): Jacobi-scaled
+  /// (D^-1/2 G D^-1/2, D = diag G: unit-free, the same for the same shape at every size) and in SI units
+  /// (which change with the part's size).
   Eigen::Index gcms_fields = 0, dropped_fields = 0;
   double condition_mode_gram_before = 0.0, condition_mass_before = 0.0, condition_mass_after = 0.0;
-  double condition_mass_scaled_after = 0.0;  ///< of D^-1/2 G D^-1/2, D = diag G (unit-free)
+  double condition_mass_scaled_before = 0.0, condition_mass_scaled_after = 0.0;
   /// The interfaces built: name, coupling, node count, reference point in the input frame.
   struct InterfaceLine {
     std::string name, coupling;

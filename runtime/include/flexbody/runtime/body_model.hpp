@@ -63,10 +63,13 @@ struct BodyModel {
   /// full-order reference, full_order.hpp) the translational Tisserand rows Σ_f G[0, 4 + f] ξ_f = 0 (Eq. 77) are
   /// imposed too.
   [[nodiscard]] bool needs_translational_tisserand() const {
-    if (field_count() == 0) return false;
-    double largest = 0.0;
-    for (Eigen::Index f = 0; f < field_count(); ++f) largest = std::max(largest, std::abs(g_border(0, 4 + f)));
-    return largest > 1e-12 * mass;
+    // |G[0, 4 + f]| = |∫ φ_f dm| ≤ √(m G_ff(f, f)) (Cauchy-Schwarz): compared with that bound, so that the test reads
+    // the same at any part size and for fields of any unit (round-off of 1e-15 √m at 1 mm must not add Eq. 77 rows).
+    for (Eigen::Index f = 0; f < field_count(); ++f) {
+      const double g_ff = sparse ? sparse->mass.coeff(f, f) : mass_matrix(4 + f, 4 + f);
+      if (std::abs(g_border(0, 4 + f)) > 1e-8 * std::sqrt(mass * std::abs(g_ff))) return true;
+    }
+    return false;
   }
   [[nodiscard]] Eigen::Index field_count() const { return sparse ? sparse->mass.rows() : stiffness.rows() / 3; }
   /// G(r, c) for one of G's first four rows (r < 4), dense or sparse body alike.

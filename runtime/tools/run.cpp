@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <fstream>
@@ -133,22 +134,30 @@ Eigen::VectorXd monitor_values(const Scene& scene, const runtime::GeneralizedAlp
 }
 
 // The angular momentum about the system's centre of mass [kg m²/s]: per body Σ_kl G_kl x_k × v_l = Σ_k x_k × w_k with
-// w = (G ⊗ I3) v in blocks of 3 (the nodal sum Σ m_i r_i × ṙ_i through G), less M r_c × v_c.
-Eigen::Vector3d angular_momentum(const runtime::System& system, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
+// w = (G ⊗ I3) v in blocks of 3 (the nodal sum Σ m_i r_i × ṙ_i through G), less M r_c × v_c; and the sum of its
+// terms' magnitudes, Σ |x_k| |w_k| + |r_c| |M v_c|, the scale its round-off is relative to.
+struct AngularMomentum {
+  Eigen::Vector3d value;
+  double terms = 0.0;
+};
+AngularMomentum angular_momentum(const runtime::System& system, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
   Eigen::Vector3d about_origin = Eigen::Vector3d::Zero(), first_moment = Eigen::Vector3d::Zero(),
                   momentum = Eigen::Vector3d::Zero();
-  double mass = 0.0;
+  double mass = 0.0, terms = 0.0;
   for (int b = 0; b < system.body_count(); ++b) {
     const runtime::BodyModel& model = system.model(b);
     const Eigen::VectorXd q_b = system.body_coordinates(q, b), v_b = system.body_coordinates(v, b);
     const Eigen::VectorXd w = runtime::mass_times(model, v_b);
-    for (Eigen::Index k = 0; k < q_b.size() / 3; ++k)
+    for (Eigen::Index k = 0; k < q_b.size() / 3; ++k) {
       about_origin += q_b.segment<3>(3 * k).cross(w.segment<3>(3 * k));
+      terms += q_b.segment<3>(3 * k).norm() * w.segment<3>(3 * k).norm();
+    }
     first_moment += runtime::mass_times(model, q_b).head<3>();  // m r_c (G's first row)
     momentum += w.head<3>();
     mass += model.mass;
   }
-  return about_origin - (first_moment / mass).cross(momentum);
+  const Eigen::Vector3d center = first_moment / mass;
+  return {about_origin - center.cross(momentum), terms + center.norm() * momentum.norm()};
 }
 
 }  // namespace
@@ -192,9 +201,18 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
   summary.energy_initial = summary.energy_final = e0.total();
   // The drift's scale: the largest kinetic + elastic + spring energy of the run (independent of where the
   // gravity potential is zero).
-  double exchanged = e0.kinetic + e0.elastic + e0.springs, largest_change = 0.0, largest_gain = 0.0;
-  const double momentum_initial =
-      scene.conserves.angular_momentum ? angular_momentum(system, integrator.coordinates(), integrator.velocities()).norm() : 0.0;
+  double exchanged = e0.kinetic + e0.elastic + e0.springs, largest_change = 0.0;
+  // The scales that E(t) − E_0 and |L(t)| − |L_0| round relative to: the magnitudes of the terms summed in them (the
+  // gravity potential depends on where its zero is; |L_0| may be round-off of a body that only translates).
+  // Growth is measured against max(exchanged energy, 1e-9 of those), so round-off never warns.
+  double energy_terms = std::abs(e0.gravity) + e0.kinetic + e0.elastic + e0.springs;
+  double momentum_initial = 0.0, momentum_terms = 0.0;
+  if (scene.conserves.angular_momentum) {
+    const AngularMomentum l0 = angular_momentum(system, integrator.coordinates(), integrator.velocities());
+    momentum_initial = l0.value.norm();
+    momentum_terms = l0.terms;
+  }
+  constexpr double kRoundOffScale = 1e-9;
   bool energy_warned = false, momentum_warned = false;
   // Energies, residuals and momenta at a checked step; a conservation law broken beyond kConservationTolerance is
   // reported once, when it first happens.
@@ -209,20 +227,25 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
     largest_change = std::max(largest_change, std::abs(e.total() - summary.energy_initial));
     summary.energy_final = e.total();
     if (scene.conserves.energy) {
-      largest_gain = std::max(largest_gain, e.total() - summary.energy_initial);
-      summary.energy_growth = largest_gain / std::max(exchanged, 1e-300);
-      if (!energy_warned && summary.energy_growth > kConservationTolerance) {
+      energy_terms = std::max(energy_terms, std::abs(e.gravity) + e.kinetic + e.elastic + e.springs);
+      const double growth =
+          (e.total() - summary.energy_initial) / std::max({exchanged, kRoundOffScale * energy_terms, 1e-300});
+      summary.energy_growth = std::max(summary.energy_growth, growth);  // the largest ratio tested, as warned
+      if (!energy_warned && growth > kConservationTolerance) {
         energy_warned = true;
         summary.warnings.push_back(fmt::format(
             "t = {:.6g} s: the energy of this conservative scene (no damping, no driven joint, no applied load) grew by "
             "{:.3g} % of its largest kinetic + elastic + spring energy (warning above {:.3g} %); generalized-alpha only "
             "dissipates, so the motion is not to be trusted: try a smaller step or a smaller rho_inf",
-            t, 100.0 * summary.energy_growth, 100.0 * kConservationTolerance));
+            t, 100.0 * growth, 100.0 * kConservationTolerance));
         if (warn) warn(summary.warnings.back());
       }
     }
-    if (scene.conserves.angular_momentum && momentum_initial > 0.0) {
-      const double growth = (angular_momentum(system, q, v).norm() - momentum_initial) / momentum_initial;
+    if (scene.conserves.angular_momentum) {
+      const AngularMomentum l = angular_momentum(system, q, v);
+      momentum_terms = std::max(momentum_terms, l.terms);
+      const double growth = (l.value.norm() - momentum_initial) /
+                            std::max({momentum_initial, kRoundOffScale * momentum_terms, 1e-300});
       summary.angular_momentum_growth = std::max(summary.angular_momentum_growth, growth);
       if (!momentum_warned && growth > kConservationTolerance) {
         momentum_warned = true;

@@ -20,8 +20,10 @@ struct RunSummary {
   double max_constraint_residual = 0.0;  ///< max over the checked steps (every kCheckEvery-th) of |Φ|∞
   double wall_seconds = 0.0;             ///< the whole run: integration, checks and outputs
   double integrator_wall_seconds = 0.0;  ///< GeneralizedAlpha::step alone
-  /// Conservative scenes (Scene::conserves): max_t (E(t) − E_0) / max_t (kinetic + elastic + spring energy), and
-  /// max_t (|L(t)| − |L_0|) / |L_0| of the angular momentum about the centre of mass; 0 when not checked.
+  /// Conservative scenes (Scene::conserves), over the checked steps: the largest (E(t) − E_0) / (the largest kinetic +
+  /// elastic + spring energy so far), and the largest (|L(t)| − |L_0|) / |L_0| of the angular momentum about the
+  /// centre of mass; each denominator at least 1e-9 of the magnitudes of the terms summed (round-off); 0 when not
+  /// checked.
   double energy_growth = 0.0, angular_momentum_growth = 0.0;
   /// One line per conservation law that a conservative scene broke by more than kConservationTolerance.
   std::vector<std::string> warnings;

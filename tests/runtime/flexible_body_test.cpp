@@ -97,7 +97,8 @@ TEST(FlexibleBody, OscillatesAtItsModeFrequencyAndConservesMomentum) {
     options.rho_infinity = 1.0;
     options.step = period / 800;
     // The discrete equations conserve momentum exactly; Newton must then converge to round-off, not to the default
-    // 1e-10 (whose remainder, with a kept Newton matrix, shows up as 1e-9 of the momentum scale).
+    // 1e-6 of each step's predictor-corrector distance (whose remainder, with a kept Newton matrix, shows up in the
+    // momentum); 1e-14 leaves only the round-off floor to stop it.
     options.tolerance = 1e-14;
     fr::GeneralizedAlpha integrator(system, options);
     // Zero crossings of η(t) over 4 periods: 8 crossings, T = (last − first) / 3.5.

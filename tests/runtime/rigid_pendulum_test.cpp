@@ -42,13 +42,14 @@ double elliptic_k(double k) {
 }
 
 // The bar along x with its left end at the origin, pinned there about z; gravity along −y.
-fr::System pendulum(const fr::BodyModel& model) {
+// The pivot at `pivot` (the origin by default).
+fr::System pendulum(const fr::BodyModel& model, const Eigen::Vector3d& pivot = Eigen::Vector3d::Zero()) {
   fr::System system;
   fr::BodyState state;
-  state.position = Eigen::Vector3d(kLength / 2, 0, 0);
+  state.position = pivot + Eigen::Vector3d(kLength / 2, 0, 0);
   const int bar = system.add_body("bar", model, state);
   const fr::Marker pin = fr::point_marker(model, bar, "bar", Eigen::Vector3d(-kLength / 2, 0, 0));
-  system.add_joint(fr::make_joint("pivot", fr::JointType::revolute, pin, fr::ground_marker(Eigen::Vector3d::Zero()),
+  system.add_joint(fr::make_joint("pivot", fr::JointType::revolute, pin, fr::ground_marker(pivot),
                                   Eigen::Vector3d::UnitZ(), system.initial_coordinates(), Eigen::VectorXd()));
   system.set_gravity(Eigen::Vector3d(0, -kGravity, 0));
   return system;
@@ -140,6 +141,41 @@ TEST(RigidPendulum, DefaultSettingsConvergeAtSecondOrder) {
   }
 }
 
+// The same pendulum pivoted 1 km from the origin moves as the one at the origin: the joint's residual rounds at
+// ε × 1 km, and Newton's round-off floor must know it (helper review of a5b7c38: pivoted at 20 m to 1 km it stopped
+// with "did not converge" and a residual of 1.8e-15, pure round-off).
+TEST(RigidPendulum, APendulumFarFromTheOriginConvergesLikeOneAtIt) {
+  const fr::BodyModel model = rigid_bar();
+  const Eigen::Vector3d far(1000.0, -300.0, 20.0);
+  const fr::System here = pendulum(model), there = pendulum(model, far);
+  fr::GeneralizedAlphaOptions options;
+  options.step = 1e-4;
+  fr::GeneralizedAlpha at_origin(here, options), far_away(there, options);
+  for (int i = 0; i < 5000; ++i) {
+    at_origin.step();
+    ASSERT_NO_THROW(far_away.step()) << "step " << i;
+  }
+  // Positions 1 km out round at ε × 1 km = 2.3e-13 m, and a position error e is a velocity error γ e/(β h), 4.5e-9 m/s
+  // per step here: a random walk over 5000 steps gives ~3e-7 m/s and ~1e-7 m after 0.5 s (measured 1.6e-7 m). That is
+  // the round-off of absolute coordinates, not an iteration error: 1e-6 m allows for it.
+  const Eigen::Vector3d moved = far_away.coordinates().head<3>() - far;
+  EXPECT_LT((moved - at_origin.coordinates().head<3>()).norm(), 1e-6);
+  EXPECT_LT(static_cast<double>(far_away.total_iterations()), 1.2 * static_cast<double>(at_origin.total_iterations()));
+}
+
+// A tolerance is relative to each step's predictor-corrector distance: above 1e-3 the iteration error would exceed
+// the discretisation error (helper review of a5b7c38: at 2e-3 every step stopped after one iteration and the
+// pendulum blew up at 0.15 s). Such options are refused.
+TEST(RigidPendulum, ToleranceAboveTheLargestIsRefused) {
+  const fr::BodyModel model = rigid_bar();
+  const fr::System system = pendulum(model);
+  fr::GeneralizedAlphaOptions options;
+  options.tolerance = 2e-3;
+  EXPECT_THROW(fr::GeneralizedAlpha(system, options), std::invalid_argument);
+  options.tolerance = fr::kLargestTolerance;
+  EXPECT_NO_THROW(fr::GeneralizedAlpha(system, options));
+}
+
 TEST(RigidPendulum, EnergyIsConservedWithoutNumericalDamping) {
   const fr::BodyModel model = rigid_bar();
   const fr::System system = pendulum(model);
@@ -176,8 +212,8 @@ TEST(RigidBody, TorqueAndSpringActAsNewtonSays) {
     const Eigen::Matrix3d a = fr::orientation_of(integrator.coordinates()), a_dot = fr::orientation_of(integrator.velocities());
     const double omega = (a_dot * a.transpose())(1, 0);
     const double izz = kMass * (kLength * kLength + kWidth * kWidth) / 12.0;
-    // Newton stops at corrections of 1e-10 of the coordinates; a velocity carries that divided by β h (~1e-3 s):
-    // ~1e-7 absolute, 1e-6 of ω here.
+    // Newton's remaining error is below 1e-6 of each step's predictor-corrector distance or at round-off; a velocity
+    // carries it divided by β h (~1e-3 s): well within 1e-6 of ω here.
     EXPECT_NEAR(omega, 2.0 / izz * 0.1, 1e-6 * 2.0 / izz * 0.1);
   }
   // A mass on a spring to ground (k, rest length 0, along x through the centre of mass): it oscillates with
@@ -199,8 +235,8 @@ TEST(RigidBody, TorqueAndSpringActAsNewtonSays) {
     const double e0 = system.energies(integrator.coordinates(), integrator.velocities()).total();
     for (int i = 0; i < 200; ++i) integrator.step();
     EXPECT_NEAR(integrator.coordinates()(0), 0.1, 0.1 * 1e-5);  // back at the start after one period
-    // ρ∞ = 1 conserves the energy of a linear oscillator up to the Newton tolerance (1e-10 of the coordinates,
-    // measured 1.2e-8 of the energy after 200 steps).
+    // ρ∞ = 1 conserves the energy of a linear oscillator up to the Newton iteration's error (the default test:
+    // 1e-6 of each step's predictor-corrector distance).
     EXPECT_NEAR(system.energies(integrator.coordinates(), integrator.velocities()).total(), e0, 1e-7 * e0);
   }
 }

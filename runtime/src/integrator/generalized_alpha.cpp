@@ -88,13 +88,13 @@ std::string GeneralizedAlpha::last_state_diagnosis() const {
     const Eigen::Matrix3d a = orientation_of(q_.segment(o, 12)), a_dot = orientation_of(v_.segment(o, 12));
     const Eigen::Matrix3d w = a_dot * a.transpose();  // [ω]×
     const double turn = Eigen::Vector3d(w(2, 1) - w(1, 2), w(0, 2) - w(2, 0), w(1, 0) - w(0, 1)).norm() / 2 * h;
-    if (turn > largest_turn) largest_turn = turn, fastest = b;
+    if (!(turn <= largest_turn)) largest_turn = turn, fastest = b;  // a non-finite rate is the one to report
     const BodyModel& model = system_.model(b);
     const double size = body_sizes_[static_cast<std::size_t>(b)];
     if (model.rigid() || !(size > 0.0)) continue;
     const double squared = field_mass_norm_squared(model, q_.segment(o + 12, model.coordinate_count() - 12));
     const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
-    if (rms / size >= largest_share) largest_share = rms / size, most_deformed = b, rms_of_most = rms;
+    if (!(rms / size < largest_share)) largest_share = rms / size, most_deformed = b, rms_of_most = rms;
   }
   std::ostringstream out;
   out << "; at the last converged step, t = " << t_ << " s,";
@@ -103,8 +103,9 @@ std::string GeneralizedAlpha::last_state_diagnosis() const {
         << (largest_turn > 0.1 ? " (more than 0.1 rad per step: try a smaller step)" : "");
   if (most_deformed >= 0)
     out << (fastest >= 0 ? " and" : "") << " body '" << system_.body_name(most_deformed) << "' had an RMS elastic "
-        << "displacement of " << rms_of_most << " m = " << 100.0 * largest_share << " % of its size (limit "
-        << 100.0 * options_.deformation_limit << " %)";
+        << "displacement of " << rms_of_most << " m = " << 100.0 * largest_share << " % of its size ("
+        << (options_.deformation_limit > 0.0 ? "limit " + std::to_string(100.0 * options_.deformation_limit) + " %"
+                                             : std::string("no limit set")) << ")";
   if (fastest < 0 && most_deformed < 0) out << " every body was at rest and undeformed";
   return out.str();
 }
@@ -115,9 +116,10 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   if (!(rho >= 0.0 && rho <= 1.0)) throw std::invalid_argument("generalized-alpha: rho_inf must lie in [0, 1]");
   if (!(options.step > 0.0) || !std::isfinite(options.step))
     throw std::invalid_argument("generalized-alpha: the step must be positive");
-  if (options.max_iterations < 1 || !(options.tolerance > 0.0) || !(options.deformation_limit >= 0.0))
-    throw std::invalid_argument("generalized-alpha: max_iterations >= 1, tolerance > 0 and deformation_limit >= 0 "
-                                "are required");
+  if (options.max_iterations < 1 || !(options.tolerance > 0.0 && options.tolerance <= kLargestTolerance) ||
+      !(options.deformation_limit >= 0.0))
+    throw std::invalid_argument("generalized-alpha: max_iterations >= 1, 0 < tolerance <= 1e-3 (relative to each step's "
+                                "predictor-corrector distance) and deformation_limit >= 0 are required");
   alpha_m_ = (2.0 * rho - 1.0) / (rho + 1.0);
   alpha_f_ = rho / (rho + 1.0);
   gamma_ = 0.5 + alpha_f_ - alpha_m_;
@@ -125,7 +127,15 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   q_ = system.initial_coordinates();
   v_ = system.initial_velocities();
   scales_.resize(q_.size());
-  for (int b = 0; b < system.body_count(); ++b) append_scales(system.model(b), scales_, system.offset(b));
+  reach_.resize(q_.size());
+  for (int b = 0; b < system.body_count(); ++b) {
+    append_scales(system.model(b), scales_, system.offset(b));
+    const Eigen::Index o = system.offset(b), n_b = system.model(b).coordinate_count();
+    reach_.segment(o, n_b) = scales_.segment(o, n_b) / scales_(o);  // scale per metre: τ's scale is r
+  }
+  for (const Joint& j : system.joints())
+    for (const Marker* m : {&j.first, &j.second})
+      if (m->body == kGround) ground_extent_ = std::max(ground_extent_, m->ground_point.norm());
   if (!scales_.allFinite() || !(scales_.minCoeff() > 0.0))
     throw std::invalid_argument("generalized-alpha: a body has no length scale for Newton's stopping test (zero or "
                                 "non-finite radius of gyration, or a field that displaces no node)");
@@ -223,8 +233,12 @@ void GeneralizedAlpha::step() {
     q = q_ + h * v_ + h * h * (0.5 - beta_) * a_ + h * h * beta_ * a;
     mu = lambda_ / beta_prime;  // the scaled multipliers
     work_.predicted = q;
+    // The world's extent [m]: joints and springs compare positions of this size, so their residuals round at ε times
+    // it, wherever the body is (a pendulum pivoted 100 m from the origin).
+    double extent = ground_extent_;
+    for (int b = 0; b < system_.body_count(); ++b) extent = std::max(extent, q_.segment<3>(system_.offset(b)).norm());
     double previous_correction = std::numeric_limits<double>::infinity();
-    double rate = last_rate_;  // before a second iteration has measured it, the last step's contraction
+    double rate = std::numeric_limits<double>::infinity();  // unknown until a second iteration measures it
     bool converged = false;
     for (iterations_ = 1; iterations_ <= options_.max_iterations; ++iterations_) {
       const Eigen::VectorXd phi = system_.constraints(t1, q);
@@ -253,20 +267,22 @@ void GeneralizedAlpha::step() {
       qdd += beta_prime * dx.head(n);
       mu += dx.tail(m);
       // The stopping test (GeneralizedAlphaOptions::tolerance), in each coordinate's length scale: the remaining
-      // error ρ/(1 − ρ) |Δq| against tolerance × |q − q_pred|, or |Δq| at the coordinates' round-off.
+      // error ρ/(1 − ρ) |Δq| against tolerance × |q − q_pred|, or |Δq| at the round-off of the coordinate and of the
+      // world positions it moves (8 ε (|q_i| + scale_i + reach_i × extent)).
       const Eigen::Index n_q = n;
       double correction = 0.0, distance = 0.0, above_floor = 0.0;
       for (Eigen::Index i = 0; i < n_q; ++i) {
         const double step_i = std::abs(dx(i)), inverse = 1.0 / scales_(i);
         correction = std::max(correction, step_i * inverse);
         distance = std::max(distance, std::abs(q(i) - work_.predicted(i)) * inverse);
-        above_floor = std::max(above_floor, step_i / (kRoundOffFloor * (std::abs(q(i)) + scales_(i))));
+        above_floor = std::max(above_floor, step_i / (kRoundOffFloor * (std::abs(q(i)) + scales_(i) + reach_(i) * extent)));
       }
       if (iterations_ > 1 && previous_correction > 0.0) rate = correction / previous_correction;
       const double remaining = rate < 1.0 ? correction * rate / (1.0 - rate) : std::numeric_limits<double>::infinity();
-      if (above_floor <= 1.0 || remaining <= options_.tolerance * distance) {
+      // Corrections that stopped shrinking within 100 floors are round-off of a source the floor does not know.
+      const bool stagnated = iterations_ > 2 && rate > 0.5 && above_floor <= 100.0;
+      if (above_floor <= 1.0 || remaining <= options_.tolerance * distance || stagnated) {
         converged = true;
-        if (iterations_ > 1) last_rate_ = std::max(rate, 1e-3);
         break;
       }
       if (correction > 0.25 * previous_correction) refresh_ = true;

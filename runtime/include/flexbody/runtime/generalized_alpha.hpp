@@ -30,6 +30,10 @@ enum class NewtonMatrix {
   dense,  ///< the whole matrix, LU per iteration: the reference the constant core is tested against
 };
 
+/// The largest GeneralizedAlphaOptions::tolerance accepted: above it the iteration error exceeds the discretisation
+/// error (bench/README.md, "convergence_bench": at 1e-4 the convergence is gone).
+inline constexpr double kLargestTolerance = 1e-3;
+
 struct GeneralizedAlphaOptions {
   NewtonMatrix newton_matrix = NewtonMatrix::constant_core;
   double rho_infinity = 0.9;  ///< spectral radius at infinite frequency, [0, 1]
@@ -39,9 +43,11 @@ struct GeneralizedAlphaOptions {
   /// (the radius of gyration √(tr J / m)): τ [m] against r, vec(A) as it is (a change δa moves a point at r by
   /// r δa), a field coordinate ξ_f against r / max_i |Ῡ'(i, f)| (the largest nodal displacement it makes). The
   /// iteration stops when its remaining error, estimated as ρ/(1 − ρ) times the last correction (ρ the observed
-  /// contraction per iteration), is below `tolerance` times the step's predictor-corrector distance ‖q − q_pred‖
-  /// (β h² ‖q̈_{n+1} − q̈_n‖, which is proportional to the step's local error), or when the corrections reach the
-  /// round-off of the coordinates (8 ε (|q_i| + scale_i)). An iteration error e in q is an acceleration error
+  /// contraction per iteration, so at least two iterations), is below `tolerance` times the step's
+  /// predictor-corrector distance ‖q − q_pred‖ (β h² (1 − α_f)/(1 − α_m) ‖q̈_{n+1} − q̈_n‖, proportional to the step's
+  /// local error), or when the corrections reach the round-off of the coordinate and of the world positions it moves
+  /// (8 ε (|q_i| + scale_i + reach_i × the largest |τ| or joint ground point)), or stagnate within 100 times that.
+  /// At most kLargestTolerance. An iteration error e in q is an acceleration error
   /// e/(β h²): a lag of about tolerance × h in the forces, far below the time discretisation error while
   /// tolerance ≪ ω h (ω the motion's frequency). bench/convergence_bench: at 1e-6 the errors of a rigid pendulum,
   /// a heavy top and a flexible pendulum agree with those at 1e-8 to 2.5 % for h = 2e-4 ... 1e-5 s; at 1e-5 they
@@ -108,7 +114,9 @@ class GeneralizedAlpha {
   std::vector<double> body_sizes_;  ///< bounding-box diagonal of each body's mesh [m]
   /// Per coordinate, the length scale Newton's corrections are measured in (see GeneralizedAlphaOptions::tolerance).
   Eigen::VectorXd scales_;
-  double last_rate_ = 1.0;  ///< the contraction of the last step's final Newton iteration
+  /// Per coordinate, its scale per metre (scales_ / the body's r): how far a world position of 1 m moves it.
+  Eigen::VectorXd reach_;
+  double ground_extent_ = 0.0;  ///< the largest distance of a joint's ground point from the origin [m]
   std::unique_ptr<detail::NewtonSolver> solver_;
   int iterations_ = 0;
   long total_iterations_ = 0, factorizations_ = 0;

@@ -298,7 +298,13 @@ Scene read_scene(const std::filesystem::path& file) {
   if (scene.integrator.step > scene.end_time)
     r.fail(integrator["step"], fmt::format("integrator step {} s is larger than the end time {} s",
                                            scene.integrator.step, scene.end_time));
-  if (const YAML::Node tol = integrator["tolerance"]) scene.integrator.tolerance = r.positive(tol, "integrator tolerance");
+  if (const YAML::Node tol = integrator["tolerance"]) {
+    scene.integrator.tolerance = r.positive(tol, "integrator tolerance");
+    if (scene.integrator.tolerance > runtime::kLargestTolerance)
+      r.fail(tol, fmt::format("integrator tolerance {} is above {}: it is relative to each step's predictor-corrector "
+                              "distance (the step's local error), and above that the iteration error exceeds it",
+                              scene.integrator.tolerance, runtime::kLargestTolerance));
+  }
   if (const YAML::Node limit = integrator["deformation_limit"]) {
     scene.integrator.deformation_limit = r.number(limit, "integrator deformation_limit");
     if (scene.integrator.deformation_limit < 0.0)

@@ -118,6 +118,8 @@ TEST(FbsimCli, BadScenesNameTheLine) {
                             "  b: {type: spherical, body: bar, interface: root}\n" + tail, 5,
                      "joint 'b' is redundant: with the joints before it, it constrains some motion twice");
   expect_scene_error(head + "paraview: {every: 0}\n" + tail, 3, "paraview every must be at least 1");
+  expect_scene_error(head + "integrator: {step: 1.0e-3, end: 0.01, tolerance: 1.0e-2}\n", 3,
+                     "integrator tolerance 0.01 is above 0.001: it is relative to each step's predictor-corrector");
 }
 
 TEST(FbsimCli, RegionDisplacementsStressesAndOrientationsAreWritten) {

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Plot bench/results/convergence_bench.csv (written by build/bin/convergence_bench): each scene's error against the
 step size at the integrator's default settings, with a slope-2 guide, and optionally the same scenes run by an
 earlier version (dashed).

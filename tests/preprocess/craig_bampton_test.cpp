@@ -201,12 +201,7 @@ TEST(CraigBampton, SlenderWireIsAcceptedAtItsRoundingFloor) {
   // residuals of 1.6e-6 against rounding floors of 2.7e-6 (eigen_residual.hpp). 521de58 refused them; they are
   // accepted now, and a dense solve of the same clamped matrices has the same eigenvalues.
   const auto& wire = flexbody::test::steel_wire();
-  std::vector<int> root_nodes;
-  for (Eigen::Index i = 0; i < wire.mesh.nodes.rows(); ++i)
-    if (wire.mesh.nodes(i, 0) == 0.0) root_nodes.push_back(static_cast<int>(i));
-  fp::RigidInterface root;
-  root.nodes = Eigen::Map<const Eigen::VectorXi>(root_nodes.data(), static_cast<Eigen::Index>(root_nodes.size()));
-  root.reference_point = Eigen::Vector3d(0.0, 0.00125, 0.00125);
+  const fp::RigidInterface root = flexbody::test::steel_wire_root();
   fp::CraigBamptonOptions options;
   options.fixed_interface_modes = 4;
   const auto cb = fp::craig_bampton_modes(wire.mesh.nodes, wire.stiffness, wire.scalar_mass, kSteel, {root}, options);

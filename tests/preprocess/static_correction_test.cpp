@@ -235,12 +235,7 @@ TEST(StaticCorrection, SlenderWireUnderItsWeightIsAcceptedAtItsRoundingFloor) {
   // ε‖|K̄||u|‖/‖b‖. 521de58 refused it against a fixed 1e-8; it is accepted now, and the basis holds the
   // clamped static response of a dense solve.
   const auto& wire = flexbody::test::steel_wire();
-  std::vector<int> root_nodes;
-  for (Eigen::Index i = 0; i < wire.mesh.nodes.rows(); ++i)
-    if (wire.mesh.nodes(i, 0) == 0.0) root_nodes.push_back(static_cast<int>(i));
-  fp::RigidInterface root;
-  root.nodes = Eigen::Map<const Eigen::VectorXi>(root_nodes.data(), static_cast<Eigen::Index>(root_nodes.size()));
-  root.reference_point = Eigen::Vector3d(0.0, 0.00125, 0.00125);
+  const fp::RigidInterface root = flexbody::test::steel_wire_root();
   // The weight: each node carries its row of M_s times g, downwards (y), interface nodes left out (the tie takes it).
   const fp::SparseMatrix ms = fp::full_from_upper(wire.scalar_mass);
   const Eigen::VectorXd nodal_mass = ms * Eigen::VectorXd::Ones(ms.cols());

@@ -129,4 +129,15 @@ const AssembledMesh& steel_wire() {
   return wire;
 }
 
+preprocess::RigidInterface steel_wire_root() {
+  const AssembledMesh& wire = steel_wire();
+  std::vector<int> nodes;
+  for (Eigen::Index i = 0; i < wire.mesh.nodes.rows(); ++i)
+    if (wire.mesh.nodes(i, 0) == 0.0) nodes.push_back(static_cast<int>(i));
+  preprocess::RigidInterface root;
+  root.nodes = Eigen::Map<const Eigen::VectorXi>(nodes.data(), static_cast<Eigen::Index>(nodes.size()));
+  root.reference_point = Eigen::Vector3d(0.0, 0.00125, 0.00125);
+  return root;
+}
+
 }  // namespace flexbody::test

@@ -1,6 +1,7 @@
 #pragma once
 // Meshes and references the tests build themselves: structured boxes, the Abaqus block.
 
+#include "flexbody/preprocess/craig_bampton.hpp"
 #include "flexbody/preprocess/material.hpp"
 #include "flexbody/preprocess/tet4_element.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
@@ -47,5 +48,7 @@ struct AssembledMesh {
 /// clamped at x = 0. Its cross-section is one cell, which locks in bending (the free-free first mode is
 /// 60.7 Hz against Euler-Bernoulli's 13.3 Hz): a case for the numerics, not for frequencies.
 [[nodiscard]] const AssembledMesh& steel_wire();
+/// The wire's end face x = 0 as an rbe2 interface about the centre of that face (the wire clamped there).
+[[nodiscard]] preprocess::RigidInterface steel_wire_root();
 
 }  // namespace flexbody::test

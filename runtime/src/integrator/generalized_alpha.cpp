@@ -269,9 +269,8 @@ void GeneralizedAlpha::step() {
       // The stopping test (GeneralizedAlphaOptions::tolerance), in each coordinate's length scale: the remaining
       // error ρ/(1 − ρ) |Δq| against tolerance × |q − q_pred|, or |Δq| at the round-off of the coordinate and of the
       // world positions it moves (8 ε (|q_i| + scale_i + reach_i × extent)).
-      const Eigen::Index n_q = n;
       double correction = 0.0, distance = 0.0, above_floor = 0.0;
-      for (Eigen::Index i = 0; i < n_q; ++i) {
+      for (Eigen::Index i = 0; i < n; ++i) {
         const double step_i = std::abs(dx(i)), inverse = 1.0 / scales_(i);
         correction = std::max(correction, step_i * inverse);
         distance = std::max(distance, std::abs(q(i) - work_.predicted(i)) * inverse);

@@ -88,7 +88,8 @@ int main(int argc, char** argv) {
     j["conserves_angular_momentum"] = scene.conserves.angular_momentum;
     j["energy_growth"] = summary.energy_growth;
     j["angular_momentum_growth"] = summary.angular_momentum_growth;
-    j["conservation_warnings"] = summary.warnings.size();
+    j["conservation_warnings"] = summary.conservation_warnings;
+    j["validity_warnings"] = summary.validity_warnings;
     j["warnings"] = summary.warnings;
     std::vector<std::string> files;
     for (const auto& f : summary.files) files.push_back(f.string());
@@ -106,7 +107,7 @@ int main(int argc, char** argv) {
                              summary.energy_initial, summary.energy_final, summary.energy_drift,
                              summary.max_constraint_residual);
     if (!summary.warnings.empty())
-      std::cout << fmt::format("  {} conservation warning{} (on stderr)\n", summary.warnings.size(),
+      std::cout << fmt::format("  {} warning{} (on stderr)\n", summary.warnings.size(),
                                summary.warnings.size() == 1 ? "" : "s");
     for (const auto& f : summary.files) std::cout << "  wrote " << f.string() << '\n';
   }

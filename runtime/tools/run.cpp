@@ -233,6 +233,7 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
       summary.energy_growth = std::max(summary.energy_growth, growth);  // the largest ratio tested, as warned
       if (!energy_warned && growth > kConservationTolerance) {
         energy_warned = true;
+        ++summary.conservation_warnings;
         summary.warnings.push_back(fmt::format(
             "t = {:.6g} s: the energy of this conservative scene (no damping, no driven joint, no applied load) grew by "
             "{:.3g} % of its largest kinetic + elastic + spring energy (warning above {:.3g} %); generalized-alpha only "
@@ -249,6 +250,7 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
       summary.angular_momentum_growth = std::max(summary.angular_momentum_growth, growth);
       if (!momentum_warned && growth > kConservationTolerance) {
         momentum_warned = true;
+        ++summary.conservation_warnings;
         summary.warnings.push_back(fmt::format(
             "t = {:.6g} s: the angular momentum about the centre of mass of this free, torque-free scene grew by "
             "{:.3g} % of its initial {:.6g} kg m^2/s (warning above {:.3g} %): the motion is not to be trusted; try a "
@@ -268,6 +270,11 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
       const auto step_start = std::chrono::steady_clock::now();
       integrator.step();
       in_integrator += std::chrono::steady_clock::now() - step_start;
+      for (std::size_t w = summary.validity_warnings; w < integrator.warnings().size(); ++w) {  // the model's validity
+        summary.warnings.push_back(integrator.warnings()[w]);
+        ++summary.validity_warnings;
+        if (warn) warn(summary.warnings.back());
+      }
       written = drawn = false;
       ++summary.steps;
       summary.newton_iterations += integrator.last_iterations();

@@ -25,8 +25,10 @@ struct RunSummary {
   /// centre of mass; each denominator at least 1e-9 of the magnitudes of the terms summed (round-off); 0 when not
   /// checked.
   double energy_growth = 0.0, angular_momentum_growth = 0.0;
-  /// One line per conservation law that a conservative scene broke by more than kConservationTolerance.
+  /// One line per conservation law that a conservative scene broke by more than kConservationTolerance, and the
+  /// integrator's lines about the model's validity (GeneralizedAlpha::warnings), in the order they arose.
   std::vector<std::string> warnings;
+  std::size_t conservation_warnings = 0, validity_warnings = 0;  ///< how many of each
   std::vector<std::filesystem::path> files;
 };
 

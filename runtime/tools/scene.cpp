@@ -285,7 +285,8 @@ Scene read_scene(const std::filesystem::path& file) {
 
   const YAML::Node integrator = r.required(root, "integrator", "the scene");
   r.expect_map(integrator, "integrator",
-               {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every", "deformation_limit"});
+               {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every", "deformation_limit",
+                "spin_warning", "spin_limit"});
   if (const YAML::Node t = integrator["type"]; t && r.text(t, "integrator type") != "generalized-alpha")
     r.fail(t, fmt::format("integrator type '{}' is unknown; use generalized-alpha", t.Scalar()));
   if (const YAML::Node rho = integrator["rho_inf"]) {
@@ -305,6 +306,13 @@ Scene read_scene(const std::filesystem::path& file) {
                               "distance (the step's local error), and above that the iteration error exceeds it",
                               scene.integrator.tolerance, runtime::kLargestTolerance));
   }
+  for (const char* key : {"spin_warning", "spin_limit"})
+    if (const YAML::Node ratio = integrator[key]) {
+      const double value = r.number(ratio, fmt::format("integrator {}", key));
+      if (value < 0.0) r.fail(ratio, fmt::format("integrator {} must be >= 0 (a fraction of the lowest elastic frequency; 0: "
+                                                 "no check), got {}", key, value));
+      (std::string(key) == "spin_warning" ? scene.integrator.spin_warning : scene.integrator.spin_limit) = value;
+    }
   if (const YAML::Node limit = integrator["deformation_limit"]) {
     scene.integrator.deformation_limit = r.number(limit, "integrator deformation_limit");
     if (scene.integrator.deformation_limit < 0.0)

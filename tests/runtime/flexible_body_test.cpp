@@ -317,8 +317,11 @@ struct SpinResult {
   double largest_rms = 0.0;
   bool finite = true;
   double speed_at_end = 0.0;  ///< Ω at the last completed step, in units of ω_1
+  std::vector<std::string> warnings;
 };
-SpinResult spin_up(double speed_over_first_mode) {
+// The beam spun up to speed_over_first_mode ω_1; the spin checks at their defaults unless `spin_checks` is false,
+// where the deformation limit alone watches (as before issue 12).
+SpinResult spin_up(double speed_over_first_mode, bool spin_checks = false, double deformation_limit = 0.02) {
   static const flexbody::format::BodyData body = [] {
     const auto model = flexbody::test::assemble(flexbody::test::box_mesh(1.0, 0.02, 0.02, 40, 2, 2), kSteel);
     flexbody::format::BodyData b;
@@ -350,6 +353,8 @@ SpinResult spin_up(double speed_over_first_mode) {
   fr::GeneralizedAlphaOptions options;
   options.rho_infinity = 0.8;
   options.step = 2 * std::numbers::pi / omega_1 / 40;
+  options.deformation_limit = deformation_limit;
+  if (!spin_checks) options.spin_warning = options.spin_limit = 0.0;
   fr::GeneralizedAlpha integrator(system, options);
   SpinResult result;
   try {
@@ -363,6 +368,7 @@ SpinResult spin_up(double speed_over_first_mode) {
     result.message = e.what();
   }
   result.finite = integrator.coordinates().allFinite();
+  result.warnings = integrator.warnings();
   const double t = std::min(integrator.time(), ramp);
   result.speed_at_end = speed_over_first_mode * 0.5 * (1 - std::cos(std::numbers::pi * t / ramp));
   return result;
@@ -387,6 +393,26 @@ TEST(FlexibleBody, SpinUpBeyondTheFirstBendingFrequencyIsReported) {
   // (measured), well past the slow case and before the target speed.
   EXPECT_GT(fast.speed_at_end, 0.25);
   EXPECT_LT(fast.speed_at_end, 1.5);
+}
+
+// Issue 12, item 7: the loss of validity is detected from its cause, the spin against the body's lowest elastic
+// frequency ω₁ (here the free-free first mode), without waiting for a large deformation: with the deformation
+// limit off, the run warns once at Ω = 0.25 ω₁ and stops at 0.5 ω₁, naming the spin and the model's error. On
+// 521de58 nothing watched the spin (the issue's clamped beam ran to 1.5 ω₁ with exit 0, 43 % off at the peak).
+TEST(FlexibleBody, ASpinAboveHalfTheLowestFrequencyIsRefused) {
+  const SpinResult slow = spin_up(0.2, true, 0.0);
+  EXPECT_FALSE(slow.failed) << slow.message;
+  EXPECT_TRUE(slow.warnings.empty());
+  const SpinResult fast = spin_up(1.5, true, 0.0);
+  ASSERT_TRUE(fast.failed);
+  EXPECT_NE(fast.message.find("body 'beam' spins at"), std::string::npos) << fast.message;
+  EXPECT_NE(fast.message.find("has no centrifugal stiffening"), std::string::npos) << fast.message;
+  EXPECT_NE(fast.message.find("(limit: 0.5 of it)"), std::string::npos) << fast.message;
+  EXPECT_TRUE(fast.finite);
+  // The last completed step is just below the limit (a step changes Ω by ~1e-3 ω₁ on this ramp).
+  EXPECT_NEAR(fast.speed_at_end, 0.5, 0.01);
+  ASSERT_EQ(fast.warnings.size(), 1u);
+  EXPECT_NE(fast.warnings[0].find("(warning above 0.25 of it)"), std::string::npos) << fast.warnings[0];
 }
 
 TEST(FlexibleBody, AVeryStiffBarPendulumHasTheRigidPeriod) {

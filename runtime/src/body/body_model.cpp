@@ -1,5 +1,7 @@
 #include "flexbody/runtime/body_model.hpp"
 
+#include <algorithm>
+
 #include <stdexcept>
 
 namespace flexbody::runtime {
@@ -102,6 +104,11 @@ BodyModel make_body_model(const format::BodyData& body, std::optional<Eigen::Ind
   model.fields = body.gcms.fields.leftCols(n_f);
   model.mode_coefficients = body.gcms.mode_coefficients.topLeftCorner(n_f, 3 * k);
   model.frequencies_hz = body.modes.frequencies_hz.head(k);
+  if (k > 0) {  // the lowest elastic frequency the body can show: a clamped Craig-Bampton body's is its first clamped one
+    model.lowest_frequency_hz = body.modes.frequencies_hz(0);
+    const Eigen::VectorXd& clamped = body.modes.fixed_interface_frequencies_hz;
+    if (clamped.size() > 0) model.lowest_frequency_hz = std::min(model.lowest_frequency_hz, clamped(0));
+  }
   model.nodes = body.mesh.nodes;
   model.surface_triangles = body.mesh.surface_triangles;
   for (format::Interface i : body.interfaces) {

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 namespace flexbody::runtime {
@@ -77,6 +78,33 @@ void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) con
   }
 }
 
+void GeneralizedAlpha::check_spin(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
+  if (!(options_.spin_warning > 0.0) && !(options_.spin_limit > 0.0)) return;
+  for (int b = 0; b < system_.body_count(); ++b) {
+    const BodyModel& model = system_.model(b);
+    if (model.rigid() || !(model.lowest_frequency_hz > 0.0)) continue;
+    const Eigen::Index o = system_.offset(b);
+    const Eigen::Matrix3d w = orientation_of(v.segment(o, 12)) * orientation_of(q.segment(o, 12)).transpose();  // [ω]×
+    const double spin = Eigen::Vector3d(w(2, 1) - w(1, 2), w(0, 2) - w(2, 0), w(1, 0) - w(0, 1)).norm() / 2;
+    const double ratio = spin / (2.0 * std::numbers::pi * model.lowest_frequency_hz);
+    std::ostringstream what;
+    what << "t = " << t << " s: body '" << system_.body_name(b) << "' spins at " << spin << " rad/s = " << ratio
+         << " of its lowest elastic frequency (" << model.lowest_frequency_hz << " Hz); a linear corotational model "
+         << "has no centrifugal stiffening (FORMULATION.md section 8), so its deformation is wrong by about "
+         << 100.0 * 0.36 * ratio * ratio << " % in the spin plane and " << 100.0 * 1.2 * ratio * ratio
+         << " % out of it";
+    if (options_.spin_limit > 0.0 && ratio > options_.spin_limit) {
+      what << " (limit: " << options_.spin_limit << " of it)";
+      throw StepFailure(what.str());
+    }
+    if (options_.spin_warning > 0.0 && ratio > options_.spin_warning && !spin_warned_[static_cast<std::size_t>(b)]) {
+      spin_warned_[static_cast<std::size_t>(b)] = 1;
+      what << " (warning above " << options_.spin_warning << " of it)";
+      warnings_.push_back(what.str());
+    }
+  }
+}
+
 // Why a step may have failed, from the last converged state (the failed iterate says nothing reliable): the body
 // that turned most per step, and the one closest to the deformation limit.
 std::string GeneralizedAlpha::last_state_diagnosis() const {
@@ -117,9 +145,10 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   if (!(options.step > 0.0) || !std::isfinite(options.step))
     throw std::invalid_argument("generalized-alpha: the step must be positive");
   if (options.max_iterations < 1 || !(options.tolerance > 0.0 && options.tolerance <= kLargestTolerance) ||
-      !(options.deformation_limit >= 0.0))
+      !(options.deformation_limit >= 0.0) || !(options.spin_warning >= 0.0) || !(options.spin_limit >= 0.0))
     throw std::invalid_argument("generalized-alpha: max_iterations >= 1, 0 < tolerance <= 1e-3 (relative to each step's "
-                                "predictor-corrector distance) and deformation_limit >= 0 are required");
+                                "predictor-corrector distance), and deformation_limit, spin_warning and spin_limit "
+                                ">= 0 are required");
   alpha_m_ = (2.0 * rho - 1.0) / (rho + 1.0);
   alpha_f_ = rho / (rho + 1.0);
   gamma_ = 0.5 + alpha_f_ - alpha_m_;
@@ -139,6 +168,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   if (!scales_.allFinite() || !(scales_.minCoeff() > 0.0))
     throw std::invalid_argument("generalized-alpha: a body has no length scale for Newton's stopping test (zero or "
                                 "non-finite radius of gyration, or a field that displaces no node)");
+  spin_warned_.assign(static_cast<std::size_t>(system.body_count()), 0);
   for (int b = 0; b < system.body_count(); ++b) {  // bounding-box diagonals, for the deformation limit
     const format::RowMatrixX3d& nodes = system.model(b).nodes;
     body_sizes_.push_back(nodes.rows() ? (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm() : 0.0);
@@ -303,6 +333,7 @@ void GeneralizedAlpha::step() {
   }
   if (!all_finite(q) || !all_finite(v) || !all_finite(qdd)) throw StepFailure("t = " + std::to_string(t1) + " s: non-finite state");
   check_deformation(t1, q);
+  check_spin(t1, q, v);
   a = (alpha_f_ * qdd_ - alpha_m_ * a_ + (1.0 - alpha_f_) * qdd) / (1.0 - alpha_m_);
   q_ = q;
   v_ = v;

@@ -51,6 +51,10 @@ struct BodyModel {
   /// η_m = Σ_f,d C(f, 3m + d) ξ̄_f[d] (the modes are M-orthonormal), and a pure mode m has ξ̄_f = η C(f, 3m..3m+2).
   Eigen::MatrixXd mode_coefficients;
   Eigen::VectorXd frequencies_hz;                 ///< of the k modes kept
+  /// The lowest elastic frequency [Hz] the body shows: its first mode's, or for a Craig-Bampton basis its first
+  /// clamped (fixed-interface) frequency if that is lower; 0 when unknown (rigid, full-order or built by hand). The
+  /// integrator compares the body's spin with it (GeneralizedAlphaOptions::spin_limit).
+  double lowest_frequency_hz = 0.0;
   /// D̂ (3 n_f square) [1/s] on the body-frame field velocities (damping.hpp); empty: undamped.
   Eigen::MatrixXd damping;
   format::RowMatrixX3d nodes;                     ///< X̄ (body frame) [m]

@@ -60,6 +60,14 @@ struct GeneralizedAlphaOptions {
   /// after which a flexible body's RMS elastic displacement ‖ξ̄‖/√m exceeds this fraction of its size (the
   /// bounding-box diagonal) stops the run with a StepFailure that says so; 0 disables the check.
   double deformation_limit = 0.02;
+  /// A linear corotational model has no centrifugal (geometric) stiffening, so its deformation of a body spinning at
+  /// Ω is wrong by about c (Ω/ω₁)², ω₁ = 2π BodyModel::lowest_frequency_hz: c ≈ 0.36 measured in the spin plane of
+  /// a clamped beam (10 % at Ω = 0.53 ω₁, issue 12), c ≈ 1.2 out of it (Southwell's coefficient of a cantilever's
+  /// first mode). After each step, a flexible body whose Ω/ω₁ exceeds `spin_warning` gets a line in warnings()
+  /// (once), and one whose Ω/ω₁ exceeds `spin_limit` stops the run with a StepFailure that says why. 0 disables
+  /// either. Bodies without a known frequency are not checked.
+  double spin_warning = 0.25;  ///< Ω/ω₁: the model's error passes ~2 % (in plane) to 8 % (out of plane)
+  double spin_limit = 0.5;     ///< Ω/ω₁: ~9 % (in plane) to 30 % (out of plane)
 };
 
 /// A step whose Newton iteration did not converge, or that produced a non-finite value. what() says which body
@@ -97,9 +105,13 @@ class GeneralizedAlpha {
   [[nodiscard]] int last_iterations() const { return iterations_; }
   [[nodiscard]] long total_iterations() const { return total_iterations_; }
   [[nodiscard]] long factorizations() const { return factorizations_; }  ///< Newton matrices built so far
+  /// Lines about the model's validity, in the order they arose (GeneralizedAlphaOptions::spin_warning): a simulator
+  /// shows the new ones after each step.
+  [[nodiscard]] const std::vector<std::string>& warnings() const { return warnings_; }
 
  private:
   void check_deformation(double t, const Eigen::VectorXd& q) const;
+  void check_spin(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
   [[nodiscard]] std::string last_state_diagnosis() const;
 
   const System& system_;
@@ -117,6 +129,8 @@ class GeneralizedAlpha {
   /// Per coordinate, its scale per metre (scales_ / the body's r): how far a world position of 1 m moves it.
   Eigen::VectorXd reach_;
   double ground_extent_ = 0.0;  ///< the largest distance of a joint's ground point from the origin [m]
+  std::vector<std::string> warnings_;
+  std::vector<char> spin_warned_;  ///< per body: its spin warning was given
   std::unique_ptr<detail::NewtonSolver> solver_;
   int iterations_ = 0;
   long total_iterations_ = 0, factorizations_ = 0;

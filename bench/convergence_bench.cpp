@@ -28,6 +28,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <functional>
@@ -255,10 +256,22 @@ Result run(const Scene& scene, const fr::GeneralizedAlphaOptions& options) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: convergence_bench OUTPUT.csv [--quick]\n");
+    std::fprintf(stderr, "usage: convergence_bench OUTPUT.csv [--quick] [--index3] [--fresh] [--tolerance T] [--rho R]\n");
     return 2;
   }
-  const bool quick = argc > 2 && std::strcmp(argv[2], "--quick") == 0;
+  bool quick = false;
+  fr::GeneralizedAlphaOptions defaults;  // the integrator's defaults, but for what the command line sets
+  for (int i = 2; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--quick") == 0) quick = true;
+    else if (std::strcmp(argv[i], "--index3") == 0) defaults.constraints = fr::ConstraintForm::index3;
+    else if (std::strcmp(argv[i], "--fresh") == 0) defaults.reuse_newton_matrix = false;
+    else if (std::strcmp(argv[i], "--tolerance") == 0 && i + 1 < argc) defaults.tolerance = std::atof(argv[++i]);
+    else if (std::strcmp(argv[i], "--rho") == 0 && i + 1 < argc) defaults.rho_infinity = std::atof(argv[++i]);
+    else {
+      std::fprintf(stderr, "convergence_bench: unknown argument '%s'\n", argv[i]);
+      return 2;
+    }
+  }
   const std::vector<double> fine{2e-4, 1e-4, 5e-5, 2.5e-5, 1e-5};
   std::vector<Scene> scenes;
   scenes.push_back({"rigid pendulum", rigid_pendulum,
@@ -276,7 +289,7 @@ int main(int argc, char** argv) {
                     Eigen::Vector3d::Zero()});
   {  // the flexible pendulum's reference: the same model at a quarter of the smallest step, a tight Newton test
     Scene& s = scenes.back();
-    fr::GeneralizedAlphaOptions tight;
+    fr::GeneralizedAlphaOptions tight = defaults;
     tight.step = s.steps.back() / 4;
     tight.tolerance *= 1e-3;
     const Result ref = run(s, tight);
@@ -293,7 +306,7 @@ int main(int argc, char** argv) {
   for (const Scene& s : scenes) {
     double previous_error = 0.0, previous_step = 0.0;
     for (double h : s.steps) {
-      fr::GeneralizedAlphaOptions options;  // the defaults, but for the step
+      fr::GeneralizedAlphaOptions options = defaults;
       options.step = h;
       const Result r = run(s, options);
       if (r.failed) {

@@ -35,14 +35,18 @@ struct Timing {
 
 // The three Newton variants: the constant core with the matrix kept across steps (the default), the constant
 // core rebuilt every iteration, the dense matrix rebuilt every iteration.
+// And the default with the index-3 form (positions only), for the cost of the velocity rows of the stabilised
+// index-2 form.
 struct Variant {
   const char* name;
   fr::NewtonMatrix matrix;
   bool reuse;
+  fr::ConstraintForm form = fr::ConstraintForm::stabilized_index2;
 };
 constexpr Variant kVariants[] = {{"core_kept", fr::NewtonMatrix::constant_core, true},
                                  {"core_every_iteration", fr::NewtonMatrix::constant_core, false},
-                                 {"dense_every_iteration", fr::NewtonMatrix::dense, false}};
+                                 {"dense_every_iteration", fr::NewtonMatrix::dense, false},
+                                 {"core_kept_index3", fr::NewtonMatrix::constant_core, true, fr::ConstraintForm::index3}};
 
 constexpr int kRuns = 3;
 
@@ -50,6 +54,7 @@ Timing time_steps(const fr::System& system, const Variant& variant, double step,
   fr::GeneralizedAlphaOptions options;
   options.newton_matrix = variant.matrix;
   options.reuse_newton_matrix = variant.reuse;
+  options.constraints = variant.form;
   options.step = step;
   fr::GeneralizedAlpha integrator(system, options);
   for (int i = 0; i < 5; ++i) integrator.step();  // warm-up (allocations, caches)
@@ -104,8 +109,8 @@ int main(int argc, char** argv) {
 
   std::ofstream csv(argv[1]);
   csv << "scene,modes,fields,coordinates,newton,us_per_step,iterations_per_step,factorizations_per_step\n";
-  std::printf("%-8s %5s %6s %6s  %22s %22s %22s\n", "scene", "n_m", "n_f", "n_q", "core, kept [us (it)]",
-              "core, fresh [us (it)]", "dense, fresh [us (it)]");
+  std::printf("%-8s %5s %6s %6s  %22s %22s %22s %22s\n", "scene", "n_m", "n_f", "n_q", "core, kept [us (it)]",
+              "core, fresh [us (it)]", "dense, fresh [us (it)]", "core, kept, index 3");
   auto report = [&](const char* scene, int n_m, Eigen::Index n_f, Eigen::Index n_q, const fr::System& system,
                     double step, int steps) {
     std::printf("%-8s %5d %6ld %6ld ", scene, n_m, static_cast<long>(n_f), static_cast<long>(n_q));

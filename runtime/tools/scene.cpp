@@ -286,7 +286,7 @@ Scene read_scene(const std::filesystem::path& file) {
   const YAML::Node integrator = r.required(root, "integrator", "the scene");
   r.expect_map(integrator, "integrator",
                {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every", "deformation_limit",
-                "spin_warning", "spin_limit"});
+                "spin_warning", "spin_limit", "constraints"});
   if (const YAML::Node t = integrator["type"]; t && r.text(t, "integrator type") != "generalized-alpha")
     r.fail(t, fmt::format("integrator type '{}' is unknown; use generalized-alpha", t.Scalar()));
   if (const YAML::Node rho = integrator["rho_inf"]) {
@@ -317,6 +317,16 @@ Scene read_scene(const std::filesystem::path& file) {
     scene.integrator.deformation_limit = r.number(limit, "integrator deformation_limit");
     if (scene.integrator.deformation_limit < 0.0)
       r.fail(limit, "integrator deformation_limit must be >= 0 (0: no check)");
+  }
+  if (const YAML::Node form = integrator["constraints"]) {
+    const std::string f = r.text(form, "integrator constraints");
+    if (f == "stabilized-index2")
+      scene.integrator.constraints = runtime::ConstraintForm::stabilized_index2;
+    else if (f == "index3")
+      scene.integrator.constraints = runtime::ConstraintForm::index3;
+    else
+      r.fail(form, fmt::format("integrator constraints '{}' is unknown; use stabilized-index2 (positions and "
+                               "velocities, the default) or index3 (positions only)", f));
   }
   if (const YAML::Node it = integrator["max_iterations"]) scene.integrator.max_iterations = r.count(it, "integrator max_iterations");
   if (const YAML::Node every = integrator["output_every"]) {

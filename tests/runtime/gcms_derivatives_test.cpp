@@ -171,3 +171,14 @@ TEST(ReferenceConstraints, TransposedProductEqualsTheJacobiansTranspose) {
   const Eigen::VectorXd expected = fr::reference_jacobian(s.g, s.a, s.xi).transpose() * mu;
   EXPECT_LT((fr::reference_jacobian_transpose_product(s.g, s.a, s.xi, mu) - expected).norm(), 1e-14 * expected.norm());
 }
+
+TEST(ReferenceConstraints, ProductEqualsTheJacobianTimesTheVelocity) {
+  // The velocity constraints of the stabilised index-2 form take Φ_q v without forming Φ_q.
+  const State s;
+  Eigen::VectorXd v(9 + s.xi.size());
+  for (Eigen::Index i = 0; i < v.size(); ++i) v(i) = std::sin(1.7 * static_cast<double>(i) + 0.3);
+  const Eigen::Matrix3d a_dot = Eigen::Map<const Eigen::Matrix3d>(v.data());
+  const Eigen::VectorXd xi_dot = v.tail(s.xi.size());
+  const Eigen::VectorXd expected = fr::reference_jacobian(s.g, s.a, s.xi) * v;
+  EXPECT_LT((fr::reference_jacobian_product(s.g, s.a, s.xi, a_dot, xi_dot) - expected).norm(), 1e-14 * expected.norm());
+}

@@ -84,6 +84,23 @@ Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, c
   return out;
 }
 
+Eigen::Matrix<double, 9, 1> reference_jacobian_product(const TisserandMatrix& g, const Eigen::Matrix3d& a,
+                                                       const VectorRef& xi, const Eigen::Matrix3d& a_dot,
+                                                       const VectorRef& xi_dot) {
+  check_sizes(g, xi);
+  check_sizes(g, xi_dot);
+  Eigen::Matrix<double, 9, 1> rate;
+  for (int k = 0; k < kOrthogonalityRows; ++k) {  // d/dt of Eq. 79
+    const auto [i, j] = kPairs[static_cast<std::size_t>(k)];
+    rate(k) = a_dot.col(i).dot(a.col(j)) + a.col(i).dot(a_dot.col(j));
+  }
+  // d/dt of Eq. 78, as in reference_residual: the axial vector of Ṗ.
+  const auto fields = [&g](const VectorRef& x) { return Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, g.cols()); };
+  const Eigen::Matrix3d p = detail::outer_sum(g, fields(xi_dot)) * a + detail::outer_sum(g, fields(xi)) * a_dot;
+  rate.tail<3>() << p(1, 2) - p(2, 1), p(2, 0) - p(0, 2), p(0, 1) - p(1, 0);
+  return rate;
+}
+
 Eigen::Matrix<double, 9, Eigen::Dynamic> reference_hessian_a_rows(const TisserandMatrix& g, const VectorRef& xi,
                                                                   const Eigen::Matrix<double, 9, 1>& lambda) {
   check_sizes(g, xi);

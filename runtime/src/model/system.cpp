@@ -381,6 +381,33 @@ Eigen::VectorXd System::constraint_jacobian_transpose_product(double t, const Ei
   return out;
 }
 
+Eigen::VectorXd System::constraint_jacobian_product(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
+  Eigen::VectorXd out(constraint_count());
+  Eigen::Index row = 0;
+  for (const Body& b : bodies_) {
+    const Eigen::Index n = b.model.coordinate_count(), rows = std::min<Eigen::Index>(9, reference_rows(b));
+    const auto q_b = q.segment(b.offset, n), v_b = v.segment(b.offset, n);
+    out.segment(row, rows) = reference_jacobian_product(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12),
+                                                        orientation_of(v_b), v_b.tail(n - 12))
+                                 .head(rows);
+    if (reference_rows(b) == 12) {
+      out.segment<3>(row + 9).setZero();
+      for (Eigen::Index f = 0; f < b.model.field_count(); ++f)
+        out.segment<3>(row + 9) += b.model.g_border(0, 4 + f) * v_b.segment<3>(12 + 3 * f);
+    }
+    row += reference_rows(b);
+  }
+  for (const Joint& j : joints_) {
+    const JointEvaluation e = evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
+    auto out_j = out.segment(row, j.rows());
+    out_j.setZero();
+    if (j.first.body != kGround) out_j += e.jacobian_first * v.segment(offset(j.first.body), e.jacobian_first.cols());
+    if (j.second.body != kGround) out_j += e.jacobian_second * v.segment(offset(j.second.body), e.jacobian_second.cols());
+    row += j.rows();
+  }
+  return out;
+}
+
 Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const {
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(coordinates_, coordinates_);
   Eigen::Index row = 0;

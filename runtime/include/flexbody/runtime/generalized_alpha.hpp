@@ -1,18 +1,21 @@
 #pragma once
-// flexbody/runtime/generalized_alpha.hpp: the generalized-α method for the index-3 DAE of a System (Arnold &
-// Brüls 2007), with the constraint rows and multipliers scaled as Bottasso, Bauchau & Cardona (2007) propose so
-// that the Newton matrix stays O(1) as h → 0, and consistent initial accelerations and multipliers.
+// flexbody/runtime/generalized_alpha.hpp: the generalized-α method for the constrained equations of a System, by
+// default in the stabilised index-2 form of Arnold, Cardona & Brüls (2016), with the constraint rows and multipliers
+// scaled as Bottasso, Bauchau & Cardona (2007) propose so that the Newton matrix stays O(1) as h → 0, and consistent
+// initial velocities, accelerations and multipliers.
 //
-//   q_{n+1} = q_n + h v_n + h² (½ − β) a_n + h² β a_{n+1},   v_{n+1} = v_n + h (1 − γ) a_n + h γ a_{n+1},
-//   (1 − α_m) a_{n+1} + α_m a_n = (1 − α_f) q̈_{n+1} + α_f q̈_n,
-//   M q̈_{n+1} − Q(q_{n+1}) + Φ_qᵀ λ_{n+1} = 0,   Φ(q_{n+1}, t_{n+1}) = 0,
+//   q_{n+1} = q_n + h v_n + h² (½ − β) a_n + h² β a_{n+1} + W Φ_q(q_n)ᵀ ν_{n+1},
+//   v_{n+1} = v_n + h (1 − γ) a_n + h γ a_{n+1},   (1 − α_m) a_{n+1} + α_m a_n = (1 − α_f) q̈_{n+1} + α_f q̈_n,
+//   M q̈_{n+1} − Q(q_{n+1}) + Φ_qᵀ λ_{n+1} = 0,   Φ(q_{n+1}, t_{n+1}) = 0,   Φ_q v_{n+1} + Φ_t = 0,
 //
 // with α_m = (2ρ∞ − 1)/(ρ∞ + 1), α_f = ρ∞/(ρ∞ + 1), γ = ½ + α_f − α_m, β = ¼ (γ + ½)²: second order, and
-// unconditionally stable for linear problems, with high-frequency damping set by ρ∞ ∈ [0, 1].
+// unconditionally stable for linear problems, with high-frequency damping set by ρ∞ ∈ [0, 1]. The index-3 form
+// (Arnold & Brüls 2007; ConstraintForm::index3) drops ν and the velocity rows.
 // Newton corrects q; the dynamic rows are divided by β' = (1 − α_m)/(β h² (1 − α_f)) and the unknown is β'⁻¹λ.
 
 #include "flexbody/runtime/system.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 #include <memory>
@@ -30,12 +33,28 @@ enum class NewtonMatrix {
   dense,  ///< the whole matrix, LU per iteration: the reference the constant core is tested against
 };
 
+/// Which constraint equations each step solves.
+enum class ConstraintForm {
+  /// Φ(q_{n+1}) = 0 and Φ_q v_{n+1} + Φ_t = 0: the stabilised index-2 form of Arnold, Cardona & Brüls (2016, the
+  /// GGL form of generalized-α). The velocity constraints are met at every step by the Newmark update itself, and
+  /// the position constraints by a second multiplier ν that moves the positions off the Newmark update,
+  /// q_{n+1} = (Newmark) + W Φ_qᵀ ν, W = diag(scale²) (the coordinates' length scales; ν → 0 with h). Without
+  /// the velocity rows the velocities drift off the hidden constraints and, at ρ∞ near 1, a spinning body gains
+  /// energy and angular momentum (issue 12: a heavy top at 150 rad/s diverges at ρ∞ = 1, a flipping plate gains
+  /// 17.6 % energy at ρ∞ = 0.99).
+  stabilized_index2,
+  /// Φ(q_{n+1}) = 0 only (Arnold & Brüls 2007): one linear solve per iteration less (a product with Φ_q and a
+  /// Cholesky of an m x m matrix), stable for ρ∞ < 1 only on fast spins.
+  index3,
+};
+
 /// The largest GeneralizedAlphaOptions::tolerance accepted: above it the iteration error exceeds the discretisation
 /// error (bench/README.md, "convergence_bench": at 1e-4 the convergence is gone).
 inline constexpr double kLargestTolerance = 1e-3;
 
 struct GeneralizedAlphaOptions {
   NewtonMatrix newton_matrix = NewtonMatrix::constant_core;
+  ConstraintForm constraints = ConstraintForm::stabilized_index2;
   double rho_infinity = 0.9;  ///< spectral radius at infinite frequency, [0, 1]
   double step = 1e-3;         ///< h [s]
   int max_iterations = 25;    ///< Newton iterations per step before the step fails
@@ -122,7 +141,15 @@ class GeneralizedAlpha {
   Eigen::VectorXd q_, v_, qdd_, a_, lambda_;
   struct Iterate {  // step()'s Newton iterate and its residual and correction: storage reused across steps
     Eigen::VectorXd qdd, a, v, q, mu, dx, residual, predicted;
+    Eigen::VectorXd velocity_rows, nu, nu_step, position_step;  ///< Ψ/γ', Δν, W Φ_qᵀ Δν (stabilized_index2)
+    Eigen::MatrixXd jacobian;                      ///< Φ_q at the iterate
   } work_;
+  /// ConstraintForm::stabilized_index2: W Φ_q(q_n)ᵀ of the step, and the Cholesky factor of Φ_q W Φ_qᵀ with the
+  /// Newton matrix's Φ_q (a Δν from an older matrix only converges more slowly; the direction decides the result).
+  Eigen::MatrixXd projection_;
+  Eigen::LLT<Eigen::MatrixXd> projected_;
+  Eigen::VectorXd nu_;  ///< the last step's ν, the next step's first guess
+  bool time_dependent_ = false;  ///< a constraint depends on t (a driven joint)
   std::vector<double> body_sizes_;  ///< bounding-box diagonal of each body's mesh [m]
   /// Per coordinate, the length scale Newton's corrections are measured in (see GeneralizedAlphaOptions::tolerance).
   Eigen::VectorXd scales_;

@@ -37,6 +37,12 @@ using TisserandMatrix = Eigen::Matrix<double, 3, Eigen::Dynamic>;
                                                                    const VectorRef& xi,
                                                                    const Eigen::Matrix<double, 9, 1>& mu);
 
+/// J [ȧ; ξ̇] for the 9 rows without forming J: O(n_f), the velocity constraints of the stabilised index-2 form.
+/// Orthogonality: ȧ_i·a_j + a_i·ȧ_j; Tisserand: the axial vector of Ṗ = (Σ_f g_f ξ̇_fᵀ) A + (Σ_f g_f ξ_fᵀ) Ȧ.
+[[nodiscard]] Eigen::Matrix<double, 9, 1> reference_jacobian_product(const TisserandMatrix& g, const Eigen::Matrix3d& a,
+                                                                     const VectorRef& xi, const Eigen::Matrix3d& a_dot,
+                                                                     const VectorRef& xi_dot);
+
 /// The first 9 rows (those of a) of Σ_k λ_k ∂²Φ_k/∂[a; ξ]² (9 x (9 + 3 n_f)): all of it that is not zero, since
 /// the ξξ block vanishes (Φ is linear in ξ for fixed A). O(n_f), for large bodies.
 [[nodiscard]] Eigen::Matrix<double, 9, Eigen::Dynamic> reference_hessian_a_rows(const TisserandMatrix& g,

@@ -130,6 +130,9 @@ class System {
   /// Φ_qᵀ μ without forming Φ_q (the reference rows in O(n_f) per body): what a Newton residual needs.
   [[nodiscard]] Eigen::VectorXd constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q,
                                                                       const Eigen::VectorXd& mu) const;
+  /// Φ_q v without forming Φ_q (the reference rows in O(n_f) per body): the velocity constraints Φ_q q̇ + Φ_t.
+  [[nodiscard]] Eigen::VectorXd constraint_jacobian_product(double t, const Eigen::VectorXd& q,
+                                                            const Eigen::VectorXd& v) const;
   /// Σ_k λ_k ∂²Φ_k/∂q² of the reference conditions (exact); the joints' curvature terms are left out (they only
   /// change the Newton iteration's convergence rate, not its solution).
   [[nodiscard]] Eigen::MatrixXd constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const;

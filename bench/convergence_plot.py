@@ -4,7 +4,9 @@ step size at the integrator's default settings, with a slope-2 guide, and option
 earlier version (dashed).
 
     python3 bench/convergence_plot.py bench/results/convergence_bench.csv bench/results/convergence_bench.png \
-        [bench/results/convergence_bench_521de58.csv]
+        [OTHER.csv "LABEL" ["TITLE"]]
+
+OTHER.csv is drawn dashed with LABEL after each scene's name (the index-3 form, an earlier commit, ...).
 """
 import csv
 import sys
@@ -19,7 +21,7 @@ def read(path):
     return [r for r in csv.DictReader(open(path)) if r["error_m"] != "nan"]
 
 
-def main(source, target, before=None):
+def main(source, target, before=None, before_label="", title="Generalized-α at default settings (ρ∞ = 0.9)"):
     rows = read(source)
     old = read(before) if before else []
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
@@ -34,10 +36,10 @@ def main(source, target, before=None):
         earlier = [r for r in old if r["scene"] == scene]
         if earlier:
             ax.loglog([float(r["step_s"]) for r in earlier], [float(r["error_m"]) for r in earlier], "x--",
-                      color=f"C{k}", alpha=0.5, label=f"{scene}, 521de58 (Newton test in mixed units)")
+                      color=f"C{k}", alpha=0.5, label=f"{scene}, {before_label}")
     ax.set_xlabel("step h [s]")
     ax.set_ylabel("error [m]")
-    ax.set_title("Generalized-α at default settings (ρ∞ = 0.9); dotted: h²")
+    ax.set_title(f"{title}; dotted: h²")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -46,4 +48,4 @@ def main(source, target, before=None):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2], sys.argv[3] if len(sys.argv) > 3 else None)
+    main(*sys.argv[1:])

@@ -144,15 +144,14 @@ class GeneralizedAlpha {
     Eigen::VectorXd velocity_rows, nu, nu_step, position_step;  ///< Ψ/γ', Δν, W Φ_qᵀ Δν (stabilized_index2)
     Eigen::MatrixXd jacobian;                      ///< Φ_q at the iterate
   } work_;
-  /// ConstraintForm::stabilized_index2: W Φ_q(q_n)ᵀ of the step, and the Cholesky factor of Φ_q W Φ_qᵀ with the
-  /// Newton matrix's Φ_q (a Δν from an older matrix only converges more slowly; the direction decides the result).
-  Eigen::MatrixXd projection_;
+  /// ConstraintForm::stabilized_index2: the Cholesky factor of Φ_q W Φ_qᵀ at the Newton matrix's iterate (Δν from
+  /// an older matrix only converges more slowly; the direction W Φ_q(q_n)ᵀ of each step decides the result).
   Eigen::LLT<Eigen::MatrixXd> projected_;
   Eigen::VectorXd nu_;  ///< the last step's ν, the next step's first guess
   bool time_dependent_ = false;  ///< a constraint depends on t (a driven joint)
   std::vector<double> body_sizes_;  ///< bounding-box diagonal of each body's mesh [m]
   /// Per coordinate, the length scale Newton's corrections are measured in (see GeneralizedAlphaOptions::tolerance).
-  Eigen::VectorXd scales_;
+  Eigen::VectorXd scales_, squared_scales_;  ///< squared: W of ConstraintForm::stabilized_index2
   /// Per coordinate, its scale per metre (scales_ / the body's r): how far a world position of 1 m moves it.
   Eigen::VectorXd reach_;
   double ground_extent_ = 0.0;  ///< the largest distance of a joint's ground point from the origin [m]

@@ -30,8 +30,9 @@ void check_interfaces_structure(const BodyData& body, const std::string& context
 void check_interfaces_finite(const BodyData& body, const std::string& context);
 void check_interfaces_ranges(const BodyData& body, const std::string& context);
 
-/// The /recovery part of check_structure and check_finite (recovery_checks.cpp).
+/// The /recovery part of each check above (recovery_checks.cpp).
 void check_recovery_structure(const BodyData& body, const std::string& context);
 void check_recovery_finite(const BodyData& body, const std::string& context);
+void check_recovery_ranges(const BodyData& body, const std::string& context);
 
 }  // namespace flexbody::format::detail

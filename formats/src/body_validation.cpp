@@ -122,6 +122,7 @@ void check_ranges(const BodyData& body, const std::string& context) {
     if (r[m] < 0.0) fail(context, "/reduction/relative_residuals" + index(m) + " is " + number(r[m]) + ", expected >= 0");
   }
   check_gcms_ranges(body, context);
+  check_recovery_ranges(body, context);
   check_interfaces_ranges(body, context);
 }
 

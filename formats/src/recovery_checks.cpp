@@ -1,8 +1,12 @@
-// recovery_checks.cpp: the checks of /recovery (SCHEMA.md, "Recovery"), part of check_structure and
-// check_finite.
+// recovery_checks.cpp: the checks of /recovery (SCHEMA.md, "Recovery"), part of check_structure,
+// check_finite and check_ranges.
 #include "body_checks.hpp"
 #include "check_helpers.hpp"
 
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <limits>
 #include <set>
 
 namespace flexbody::format::detail {
@@ -35,6 +39,43 @@ void check_recovery_structure(const BodyData& body, const std::string& context) 
 
 void check_recovery_finite(const BodyData& body, const std::string& context) {
   for (const RecoveryRegion& r : body.recovery) check_values(r.stress_modes, "/recovery/" + r.name + "/stress_modes", context);
+}
+
+// A stress mode is the nodal average of the constant stresses of linear tetrahedra under the displacement field
+// Ῡ'(:, f) e_d, so it cannot exceed what the stiffest element can make of that field: in an element with heights h_i
+// (|∇N_i| = 1/h_i), every entry of ∇u is at most Σ_i |u_i| / h_i ≤ 4 U_f / h_min (U_f = max_i |Ῡ'(i, f)|), and every
+// stress component at most (3 λ + 2 μ) times that. An entry above this bound (by more than rounding) was not computed
+// from this mesh, material and fields: a damaged file (issue 13: byte flips that stay finite made non-finite von
+// Mises stresses in ParaView).
+void check_recovery_ranges(const BodyData& body, const std::string& context) {
+  if (body.recovery.empty()) return;
+  const double e = body.material.youngs_modulus, nu = body.material.poisson_ratio;
+  const double lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = e / (2.0 * (1.0 + nu));
+  double smallest_height = std::numeric_limits<double>::infinity();
+  const RowMatrixX3d& x = body.mesh.nodes;
+  for (Eigen::Index t = 0; t < body.mesh.tets.rows(); ++t) {
+    Eigen::Vector3d p[4];
+    for (int k = 0; k < 4; ++k) p[k] = x.row(body.mesh.tets(t, k)).transpose();
+    const double six_volume = std::abs((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]));
+    for (int k = 0; k < 4; ++k) {  // the height over the face opposite node k: 3 V / area = 6 V / (2 area)
+      const Eigen::Vector3d& a = p[(k + 1) % 4], &b = p[(k + 2) % 4], &c = p[(k + 3) % 4];
+      const double twice_area = (b - a).cross(c - a).norm();
+      if (twice_area > 0.0) smallest_height = std::min(smallest_height, six_volume / twice_area);
+    }
+  }
+  if (!(smallest_height > 0.0)) return;  // a degenerate mesh is check_ranges' to refuse, not this bound's
+  const Eigen::Index n_f = body.gcms.field_count();
+  for (const RecoveryRegion& r : body.recovery)
+    for (Eigen::Index c = 0; c < r.stress_modes.cols() && c < 3 * n_f; ++c) {
+      const double largest_field = body.gcms.fields.col(c / 3).cwiseAbs().maxCoeff();
+      const double bound = (3.0 * lambda + 2.0 * mu) * 4.0 * largest_field / smallest_height * (1.0 + 1e-9);
+      for (Eigen::Index row = 0; row < r.stress_modes.rows(); ++row)
+        if (!(std::abs(r.stress_modes(row, c)) <= bound))
+          fail(context, "/recovery/" + r.name + "/stress_modes" + index(row) + index(c) + " is " +
+                            number(r.stress_modes(row, c)) + " Pa kg^-1/2 m^-1, above " + number(bound) +
+                            ", the most that the mesh's stiffest element can make of field " + std::to_string(c / 3) +
+                            " (damaged or not computed from this mesh and material)");
+    }
 }
 
 }  // namespace flexbody::format::detail

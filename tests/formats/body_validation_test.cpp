@@ -3,6 +3,7 @@
 
 #include "flexbody/format/body_file.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -238,6 +239,34 @@ TEST(Validate, StaticCorrectionAndRecovery) {
   body = make_body();
   body.recovery.push_back(body.recovery[0]);
   expect_invalid(body, "two output regions are named \"fillet\"");
+}
+
+// Issue 13: a K̂ with a negative eigenvalue was accepted (fbprep inspect showed its frequency range "from 0 Hz").
+// The eigenvalue is hidden: every diagonal entry stays positive and the matrix symmetric.
+TEST(Validate, StiffnessWithANegativeEigenvalueIsRefused) {
+  BodyData body = make_body();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(body.gcms.stiffness);
+  Eigen::VectorXd values = eigen.eigenvalues();
+  ASSERT_GT(values(0), 0.0);
+  values(0) = -1e-3 * values(0);
+  body.gcms.stiffness = eigen.eigenvectors() * values.asDiagonal() * eigen.eigenvectors().transpose();
+  body.gcms.stiffness = 0.5 * (body.gcms.stiffness + body.gcms.stiffness.transpose()).eval();
+  ASSERT_GT(body.gcms.stiffness.diagonal().minCoeff(), 0.0);
+  expect_invalid(body, "/gcms/K_hat is not positive semi-definite");
+  // A singular K̂ (a zero eigenvalue, up to rounding) is semi-definite: accepted.
+  values(0) = 0.0;
+  body.gcms.stiffness = eigen.eigenvectors() * values.asDiagonal() * eigen.eigenvectors().transpose();
+  body.gcms.stiffness = 0.5 * (body.gcms.stiffness + body.gcms.stiffness.transpose()).eval();
+  EXPECT_NO_THROW(validate(body));
+}
+
+// Issue 13: finite but byte-flipped stress modes reached the ParaView writer as non-finite von Mises stresses. An
+// entry above what the mesh's stiffest element can make of its field is refused, at any scale of the part.
+TEST(Validate, ImplausibleStressModesAreRefused) {
+  BodyData body = make_body();
+  body.recovery[0].stress_modes(5, 7) *= 1e6;
+  expect_invalid(body, "/recovery/fillet/stress_modes[5][7] is ");
+  for (const double scale : {1e-3, 1.0, 1e3}) EXPECT_NO_THROW(validate(scaled_body(make_body(), scale))) << scale;
 }
 
 }  // namespace

@@ -163,6 +163,29 @@ TEST_F(ReadErrors, UnitOtherThanSi) {
   expect_read_error(path, {"mm.fbh5: /length_unit is \"mm\", expected \"m\""});
 }
 
+// Issue 13: text from a file went into messages as it was: fbsim printed raw newlines, and a 200,000-character
+// string became a 200 KB error line. Every message is one line of at most BodyFileError::kMessageLimit bytes.
+TEST_F(ReadErrors, TextFromTheFileCannotBreakOrFloodTheMessage) {
+  const auto path = good_file("flood.fbh5");
+  const std::string flood = "m\nfbsim: all is well\r\n" + std::string(200000, 'x');
+  set_string_attribute(path, "/", "length_unit", flood);
+  try {
+    (void)read_body_file(path);
+    FAIL() << "accepted";
+  } catch (const BodyFileError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.find_first_of("\n\r"), std::string::npos);
+    EXPECT_LE(message.size(), BodyFileError::kMessageLimit);
+    EXPECT_NE(message.find("flood.fbh5: /length_unit is \"m fbsim: all is well  xxx"), std::string::npos) << message;
+    EXPECT_NE(message.find("bytes, cut)"), std::string::npos) << message;
+  }
+  // A short message is kept as it is; a cut never splits a UTF-8 character.
+  EXPECT_STREQ(BodyFileError("a.fbh5: short").what(), "a.fbh5: short");
+  // 1033 bytes: the cut keeps 1000 − 22 (" ... (1033 bytes, cut)") = 978, where a 2-byte ξ starts at byte 977.
+  const std::string cut = BodyFileError(std::string(977, 'a') + "\xce\xbe\xce\xbe" + std::string(52, 'b')).what();
+  EXPECT_EQ(cut, std::string(977, 'a') + " ... (1033 bytes, cut)");
+}
+
 TEST_F(ReadErrors, PhysicalRangeViolation) {
   const auto path = good_file("nu.fbh5");
   delete_attribute(path, "/material", "poisson_ratio");

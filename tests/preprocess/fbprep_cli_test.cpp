@@ -106,6 +106,17 @@ TEST(FbprepCli, BracketEndToEnd) {
   EXPECT_GE(json["condition_G_after"].get<double>(), 1.0);
 }
 
+// Issue 13: after a failed load of some damaged files, HDF5's cleanup at exit printed "HDF5: infinite loop closing
+// library" and a line of 'FL,FL,...' after the one error line (2,238 of 10,500 mutated files). This version-3 body
+// file (a rigid cylinder's, with four flipped bytes; tests/data/damaged) is one of them: stderr must hold the one line.
+TEST(FbprepCli, ADamagedFileGivesOneLineAndNothingAtExit) {
+  const auto dir = flexbody::test::scratch_dir();
+  const auto damaged = std::filesystem::path(FLEXBODY_TEST_DATA_DIR) / "damaged" / "options-bit-flips-v3.fbh5";
+  const CliRun run = fbprep(dir, fmt::format("inspect '{}'", damaged.string()));
+  EXPECT_EQ(run.exit_code, 1);  // a body file that does not read, as for every fbprep error
+  EXPECT_EQ(run.err, fmt::format("fbprep: error: {}: /provenance/options is not a group\n", damaged.string()));
+}
+
 TEST(FbprepCli, InspectReadsBackWhatWasWritten) {
   const auto dir = flexbody::test::scratch_dir();
   const CliRun prep = fbprep(dir, fmt::format("'{}' -o b.fbh5 --modes 3 --mesh-size 6 --json", bracket_step().string()));

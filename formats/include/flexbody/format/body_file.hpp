@@ -8,6 +8,7 @@
 
 #include "flexbody/format/body_data.hpp"
 
+#include <cstddef>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -15,10 +16,13 @@
 namespace flexbody::format {
 
 /// Thrown for every problem with a body file; the message names the file, the dataset or attribute,
-/// and what was expected against what was found.
+/// and what was expected against what was found. It is always one line of at most kMessageLimit bytes: text taken
+/// from a file (a name, a unit, HDF5's own description) may hold control characters or be huge, so control
+/// characters become spaces and a longer message is cut, saying how long it was.
 class BodyFileError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  static constexpr std::size_t kMessageLimit = 1000;
+  explicit BodyFileError(const std::string& message);
 };
 
 /// Checks that `body` is complete and consistent (shapes against each other, finite numbers).

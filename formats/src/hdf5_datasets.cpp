@@ -2,6 +2,8 @@
 #include "hdf5_io.hpp"
 
 #include <array>
+#include <cstddef>
+#include <cstdio>
 #include <limits>
 
 namespace flexbody::format::detail {
@@ -64,15 +66,40 @@ OpenDataset open_dataset(const Location& loc, std::string_view name, int rank, H
   return result;
 }
 
+std::string bytes_text(double bytes) {
+  const char* units[] = {"bytes", "KB", "MB", "GB", "TB", "PB", "EB"};
+  int u = 0;
+  while (bytes >= 1000.0 && u < 6) bytes /= 1000.0, ++u;
+  char text[32];
+  std::snprintf(text, sizeof text, u == 0 ? "%.0f %s" : "%.3g %s", bytes, units[u]);
+  return text;
+}
+
+// The size a dataset declares, checked before anything is allocated for it (issue 13: 10^8 nodes declared in a
+// 158 KB file took 4.7 GB and 8-18 s before the refusal): the schema's datasets are contiguous and uncompressed,
+// so the values must fit in the file and in the storage HDF5 has allocated for them.
+std::size_t checked_count(const Location& loc, std::string_view name, const OpenDataset& open, std::size_t memory_size) {
+  double declared = 1.0;  // values, in floating point: the product of 64-bit dimensions may overflow an integer
+  for (const hsize_t dim : open.dims) declared *= static_cast<double>(dim);
+  const Handle type(H5Dget_type(open.dataset.id()), H5Tclose);
+  const double stored_size = type.valid() ? static_cast<double>(H5Tget_size(type.id())) : 0.0;
+  const Handle file(H5Iget_file_id(open.dataset.id()), H5Fclose);
+  hsize_t file_size = 0;
+  if (!file.valid() || H5Fget_filesize(file.id(), &file_size) < 0) loc.fail_hdf5("cannot read the file's size");
+  const double storage = static_cast<double>(H5Dget_storage_size(open.dataset.id()));
+  const double bytes = declared * stored_size;
+  if (declared > 0.0 && (bytes > static_cast<double>(file_size) || bytes > storage))
+    loc.fail(loc.child(name) + " declares " + shape_text(open.dims) + " values (" + bytes_text(bytes) + "), but " +
+             (bytes > static_cast<double>(file_size) ? "the file has " + bytes_text(static_cast<double>(file_size))
+                                                     : "only " + bytes_text(storage) + " of them are stored"));
+  if (declared * static_cast<double>(memory_size) > static_cast<double>(std::numeric_limits<std::ptrdiff_t>::max()))
+    loc.fail(loc.child(name) + " has an implausible shape " + shape_text(open.dims));
+  return static_cast<std::size_t>(declared);
+}
+
 template <class T>
 std::vector<T> read_values(const Location& loc, std::string_view name, const OpenDataset& open, hid_t memory_type) {
-  std::size_t count = 1;
-  for (const hsize_t dim : open.dims) {
-    if (dim != 0 && count > std::numeric_limits<std::size_t>::max() / sizeof(T) / dim) {
-      loc.fail(loc.child(name) + " has an implausible shape " + shape_text(open.dims));
-    }
-    count *= static_cast<std::size_t>(dim);
-  }
+  const std::size_t count = checked_count(loc, name, open, sizeof(T));
   std::vector<T> values(count);
   if (count > 0 &&
       H5Dread(open.dataset.id(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0) {

@@ -186,6 +186,17 @@ TEST_F(ReadErrors, TextFromTheFileCannotBreakOrFloodTheMessage) {
   EXPECT_EQ(cut, std::string(977, 'a') + " ... (1033 bytes, cut)");
 }
 
+// Issue 13: a declared shape was trusted before allocating: 10^8 nodes declared in a 158 KB file took 4.7 GB and
+// 8-18 s before the refusal. The declared size is now checked against the file's size and the dataset's storage.
+TEST_F(ReadErrors, ADeclaredShapeBeyondTheFileIsRefusedBeforeAllocating) {
+  const auto path = good_file("huge.fbh5");
+  declare_double_dataset(path, "/mesh/nodes", 100000000, 3);
+  expect_read_error(path, {"/mesh/nodes declares 100000000 x 3 values (2.4 GB), but the file has "});
+  const auto unwritten = good_file("unwritten.fbh5");
+  declare_double_dataset(unwritten, "/mesh/nodes", 5, 3);  // fits in the file, but never written: no storage
+  expect_read_error(unwritten, {"/mesh/nodes declares 5 x 3 values (120 bytes), but only 0 bytes of them are stored"});
+}
+
 TEST_F(ReadErrors, PhysicalRangeViolation) {
   const auto path = good_file("nu.fbh5");
   delete_attribute(path, "/material", "poisson_ratio");

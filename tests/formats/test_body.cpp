@@ -61,7 +61,9 @@ void replace_dataset(const std::filesystem::path& file, const std::string& path,
   const Id space(H5Screate_simple(2, dims, nullptr), H5Sclose, "space");
   const Id d(H5Dcreate2(f.get(), path.c_str(), type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
              H5Dclose, path);
-  ASSERT_GE(H5Dwrite(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values), 0);
+  if (values != nullptr) {
+    ASSERT_GE(H5Dwrite(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values), 0);
+  }
 }
 
 }  // namespace
@@ -277,6 +279,11 @@ void replace_double_dataset(const std::filesystem::path& file, const std::string
                             std::size_t cols, const std::vector<double>& values) {
   ASSERT_EQ(values.size(), rows * cols);
   replace_dataset(file, path, rows, cols, H5T_NATIVE_DOUBLE, values.data());
+}
+
+void declare_double_dataset(const std::filesystem::path& file, const std::string& path, std::size_t rows,
+                            std::size_t cols) {
+  replace_dataset(file, path, rows, cols, H5T_NATIVE_DOUBLE, nullptr);
 }
 
 void replace_int_dataset(const std::filesystem::path& file, const std::string& path, std::size_t rows,

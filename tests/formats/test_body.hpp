@@ -60,6 +60,10 @@ void delete_link(const std::filesystem::path& file, const std::string& path);
 /// Replaces the dataset `path` by a rows x cols double dataset with row-major `values`.
 void replace_double_dataset(const std::filesystem::path& file, const std::string& path, std::size_t rows,
                             std::size_t cols, const std::vector<double>& values);
+/// Replaces the dataset `path` by a rows x cols double dataset that is declared but never written (HDF5 allocates
+/// no storage for it: a huge shape in a small file).
+void declare_double_dataset(const std::filesystem::path& file, const std::string& path, std::size_t rows,
+                            std::size_t cols);
 /// Replaces the dataset `path` by a rows x cols int32 dataset with row-major `values`.
 void replace_int_dataset(const std::filesystem::path& file, const std::string& path, std::size_t rows,
                          std::size_t cols, const std::vector<int>& values);

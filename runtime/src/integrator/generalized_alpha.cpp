@@ -26,14 +26,6 @@ Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen
   return (phi_dot(s) - phi_dot(-s)) / (2 * s);
 }
 
-// Φ_t at (t, q) by central differences in t, with a step that rounds exactly: ε^⅓ (1 + |t|) balances the truncation
-// error (step² Φ_ttt) against rounding (ε Φ / step), about 1e-11 of Φ_t for the driven joints' smooth angles.
-Eigen::VectorXd constraint_rate(const System& system, double t, const Eigen::VectorXd& q) {
-  const double dt = std::cbrt(std::numeric_limits<double>::epsilon()) * (1.0 + std::abs(t));
-  const double before = t - dt, after = t + dt;
-  return (system.constraints(after, q) - system.constraints(before, q)) / (after - before);
-}
-
 // Whether every entry is finite, in one vectorized pass: a NaN or an infinity in any entry makes the sum NaN or
 // infinite. (Eigen's allFinite() tests entry by entry; a sum of finite entries could only overflow near 1e308,
 // which is no state to go on from either.)
@@ -43,6 +35,8 @@ bool all_finite(const Eigen::VectorXd& x) { return std::isfinite(x.sum()); }
 // products of coordinates, so its rounding is a few ε |q|, and so is the correction it asks for. Measured: the
 // corrections of a flexible pendulum stagnate at 1-2 ε (|q_i| + scale_i); 8 ε stops there without a false stop.
 constexpr double kRoundOffFloor = 8.0 * std::numeric_limits<double>::epsilon();
+// Corrections that stagnate within this many round-off floors (~2e-12 of the positions) end the iteration.
+constexpr double kStagnationFloors = 1000.0;
 
 // The length scale of each of one body's coordinates (GeneralizedAlphaOptions::tolerance): the radius of gyration
 // r = √(tr J / m) for τ, 1 for vec(A) (δa moves a point at distance r by r δa, as δτ = r δa would), and for a field
@@ -176,6 +170,10 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
       if (m->body == kGround) ground_extent_ = std::max(ground_extent_, m->ground_point.norm());
   }
   squared_scales_ = scales_.array().square();
+  for (int b = 0; b < system.body_count(); ++b) {  // W: divided by each body's m r² (see metric_)
+    const Eigen::Index o = system.offset(b), n_b = system.model(b).coordinate_count();
+    squared_scales_.segment(o, n_b) /= system.model(b).mass * scales_(o) * scales_(o);
+  }
   if (!scales_.allFinite() || !(scales_.minCoeff() > 0.0))
     throw std::invalid_argument("generalized-alpha: a body has no length scale for Newton's stopping test (zero or "
                                 "non-finite radius of gyration, or a field that displaces no node)");
@@ -276,6 +274,15 @@ void GeneralizedAlpha::step() {
   auto correction_of = [&](const Eigen::VectorXd& nu) {
     return Eigen::VectorXd(squared_scales_.cwiseProduct(system_.constraint_jacobian_transpose_product(t_, q_, nu)));
   };
+  auto diverged = [&](const Eigen::VectorXd& phi) {
+    std::ostringstream why;
+    Eigen::Index worst = 0;
+    if (m > 0) phi.cwiseAbs().maxCoeff(&worst);
+    why << "t = " << t1 << " s: the Newton iteration diverged or its matrix is singular: a correction was not finite at "
+        << "iteration " << iterations_ << " (largest constraint residual in "
+        << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")" << last_state_diagnosis();
+    throw StepFailure(why.str());
+  };
   for (int attempt = 0;; ++attempt) {
     // Predictor: q̈_{n+1} = q̈_n.
     qdd = qdd_;
@@ -299,79 +306,82 @@ void GeneralizedAlpha::step() {
     double previous_correction = std::numeric_limits<double>::infinity();
     double rate = std::numeric_limits<double>::infinity();  // unknown until a second iteration measures it
     bool converged = false;
+    bool slow = false;  // a correction shrank less than fourfold in this attempt: the kept matrix may be stale
     for (iterations_ = 1; iterations_ <= options_.max_iterations; ++iterations_) {
       const Eigen::VectorXd phi = system_.constraints(t1, q);
-      const Eigen::VectorXd inertia = system_.mass_product(qdd);
-      residual = (inertia - system_.forces(t1, q, v)) * (1.0 / beta_prime) +  // a product: a division per entry costs
-                 system_.constraint_jacobian_transpose_product(t1, q, mu);   // more than the rest of this line
       const bool refresh = refresh_ || !options_.reuse_newton_matrix;
       if (refresh) {
         jacobian = system_.constraint_jacobian(t1, q);
         solver_->factor(q, v, mu, jacobian);
-        if (stabilized) projected_.compute(jacobian * squared_scales_.asDiagonal() * jacobian.transpose());  // Φ_q W Φ_qᵀ
+        if (stabilized) {  // Φ_q W Φ_qᵀ
+          projected_.compute(jacobian * squared_scales_.asDiagonal() * jacobian.transpose());
+          if (projected_.info() != Eigen::Success)
+            throw StepFailure("t = " + std::to_string(t1) + " s: the constraint rows are dependent (Φ_q W Φ_qᵀ is not "
+                              "positive definite)" + last_state_diagnosis());
+        }
         refresh_ = false;
         extra_iterations_ = 0;
         fresh_this_step = true;
         ++factorizations_;
       }
       if (stabilized) {
-        // The stabilised index-2 step (ConstraintForm::stabilized_index2). The Newmark correction δ (v += γ' δ,
-        // q̈ += β' δ) meets the velocity rows, γ' Φ_q δ = −Ψ with Ψ = Φ_q v + Φ_t; the position rows are met by
-        // ν alone, Φ_q W Φ_qᵀ Δν = −Φ − Φ_q δ = −Φ + Ψ/γ'. The two decouple; the dynamic rows see W Φ_qᵀ Δν at the
-        // next iteration (ν is of the order of the step's local error, so this costs no extra iteration).
+        // The stabilised index-2 step (ConstraintForm::stabilized_index2), position rows first. The Newmark correction
+        // δ (v += γ' δ, q̈ += β' δ) will meet the velocity rows, γ' Φ_q δ = −Ψ with Ψ = Φ_q v + Φ_t; the position
+        // rows are then met by ν alone: Φ_q W Φ_qᵀ Δν = −Φ − Φ_q δ = −Φ + Ψ/γ'. The position moves by W Φ_qᵀ Δν before
+        // the dynamic rows are evaluated, so that δ sees it in the same iteration (with the move applied one
+        // iteration late, the corrections of the two cancelled and the stopping test ended the iteration early:
+        // velocities off by 6.5e-7 of 3 m/s, helper review of 77a5e2a).
         velocity_rows = system_.constraint_jacobian_product(t1, q, v);
-        if (time_dependent_) velocity_rows += constraint_rate(system_, t1, q);
+        if (time_dependent_) velocity_rows += system_.constraint_time_derivative(t1, q);
         velocity_rows /= gamma_prime;
-        solver_->solve(q, residual, velocity_rows, dx);
         work_.nu_step = velocity_rows - phi;
         projected_.solveInPlace(work_.nu_step);
         position_step = correction_of(work_.nu_step);
+        if (!all_finite(position_step)) diverged(phi);
         work_.nu += work_.nu_step;
-      } else {
-        solver_->solve(q, residual, phi, dx);
+        q += position_step;
       }
-      if (!all_finite(dx) || (stabilized && !all_finite(position_step))) {
-        std::ostringstream why;
-        Eigen::Index worst = 0;
-        if (m > 0) phi.cwiseAbs().maxCoeff(&worst);
-        why << "t = " << t1 << " s: the Newton iteration diverged or its matrix is singular: a correction was not "
-            << "finite at iteration " << iterations_ << " (largest constraint residual in " << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")"
-            << last_state_diagnosis();
-        throw StepFailure(why.str());
-      }
+      const Eigen::VectorXd inertia = system_.mass_product(qdd);
+      residual = (inertia - system_.forces(t1, q, v)) * (1.0 / beta_prime) +  // a product: a division per entry costs
+                 system_.constraint_jacobian_transpose_product(t1, q, mu);   // more than the rest of this line
+      solver_->solve(q, residual, stabilized ? velocity_rows : phi, dx);
+      if (!all_finite(dx)) diverged(phi);
       q += dx.head(n);
       v += gamma_prime * dx.head(n);
       qdd += beta_prime * dx.head(n);
       mu += dx.tail(m);
-      if (stabilized) {
-        q += position_step;
-        dx.head(n) += position_step;  // the whole correction of q, for the stopping test
-      }
       // The stopping test (GeneralizedAlphaOptions::tolerance), in each coordinate's length scale: the remaining
       // error ρ/(1 − ρ) |Δq| against tolerance × |q − q_pred|, or |Δq| at the round-off of the coordinate and of the
-      // world positions it moves (8 ε (|q_i| + scale_i + reach_i × extent)).
+      // world positions it moves (8 ε (|q_i| + scale_i + reach_i × extent)) and, in the stabilised form, γ' |δ_i|
+      // at the round-off of the velocity. |Δq_i| is |δ_i| + |W Φ_qᵀ Δν|_i: the two must not cancel in the test.
       double correction = 0.0, distance = 0.0, above_floor = 0.0;
       double above_velocity_floor = 0.0;
       const double speed = stabilized ? (v.cwiseAbs().array() / scales_.array()).maxCoeff() : 0.0;  // fastest [1/s]
       for (Eigen::Index i = 0; i < n; ++i) {
-        const double step_i = std::abs(dx(i)), inverse = 1.0 / scales_(i);
+        const double step_i = std::abs(dx(i)) + (stabilized ? std::abs(position_step(i)) : 0.0), inverse = 1.0 / scales_(i);
         correction = std::max(correction, step_i * inverse);
         distance = std::max(distance, std::abs(q(i) - work_.predicted(i)) * inverse);
         above_floor = std::max(above_floor, step_i / (kRoundOffFloor * (std::abs(q(i)) + scales_(i) + reach_(i) * extent)));
         if (stabilized) {
-          const double velocity_step = gamma_prime * std::abs(dx(i) - position_step(i));
+          const double velocity_step = gamma_prime * std::abs(dx(i));
           above_velocity_floor = std::max(above_velocity_floor, velocity_step / (kRoundOffFloor * (std::abs(v(i)) + scales_(i) * speed)));
         }
       }
       if (iterations_ > 1 && previous_correction > 0.0) rate = correction / previous_correction;
       const double remaining = rate < 1.0 ? correction * rate / (1.0 - rate) : std::numeric_limits<double>::infinity();
-      // Corrections that stopped shrinking within 100 floors are round-off of a source the floor does not know.
-      const bool stagnated = iterations_ > 2 && rate > 0.5 && above_floor <= 100.0;
-      if ((above_floor <= 1.0 && above_velocity_floor <= 1.0) || remaining <= options_.tolerance * distance || stagnated) {
+      // Corrections that stopped shrinking within kStagnationFloors floors are round-off of a source the floor does
+      // not know: the rounding of the linear solve, whose saddle-point matrix can have a condition number of 1e14
+      // (helper review of 77a5e2a: a 1 mm bar on the tip of a 100 m bar repeated a correction of 250 floors).
+      const bool stagnated = iterations_ > 2 && rate > 0.5 && above_floor <= kStagnationFloors;
+      const bool at_round_off = (above_floor <= 1.0 && above_velocity_floor <= 1.0) || stagnated;
+      if (at_round_off || remaining <= options_.tolerance * distance) {
+        // Slow contraction that ends at round-off says nothing about the matrix: keep it (helper review: the rigid
+        // pendulum at h = 1e-5 s rebuilt it 121 times instead of once).
+        if (at_round_off && slow) refresh_ = false;
         converged = true;
         break;
       }
-      if (correction > 0.25 * previous_correction) refresh_ = true;
+      if (correction > 0.25 * previous_correction) refresh_ = slow = true;
       previous_correction = correction;
     }
     if (converged) break;

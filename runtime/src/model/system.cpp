@@ -7,6 +7,8 @@
 
 #include <Eigen/Geometry>
 
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace flexbody::runtime {
@@ -406,6 +408,23 @@ Eigen::VectorXd System::constraint_jacobian_product(double t, const Eigen::Vecto
     row += j.rows();
   }
   return out;
+}
+
+Eigen::VectorXd System::constraint_time_derivative(double t, const Eigen::VectorXd& q) const {
+  Eigen::VectorXd rate = Eigen::VectorXd::Zero(constraint_count());
+  Eigen::Index row = 0;
+  for (const Body& b : bodies_) row += reference_rows(b);
+  const double dt = std::cbrt(std::numeric_limits<double>::epsilon() * (1.0 + std::abs(t)));
+  const double before = t - dt, after = t + dt;  // divided by after − before: exact, whatever t + dt rounds to
+  for (const Joint& j : joints_) {
+    if (j.type == JointType::driven_revolute) {
+      const auto q1 = body_view(q, j.first.body), q2 = body_view(q, j.second.body);
+      rate.segment(row, j.rows()) =
+          (evaluate_joint(j, after, q1, q2).residual - evaluate_joint(j, before, q1, q2).residual) / (after - before);
+    }
+    row += j.rows();
+  }
+  return rate;
 }
 
 Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const {

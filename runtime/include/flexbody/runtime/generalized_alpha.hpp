@@ -38,7 +38,8 @@ enum class ConstraintForm {
   /// Φ(q_{n+1}) = 0 and Φ_q v_{n+1} + Φ_t = 0: the stabilised index-2 form of Arnold, Cardona & Brüls (2016, the
   /// GGL form of generalized-α). The velocity constraints are met at every step by the Newmark update itself, and
   /// the position constraints by a second multiplier ν that moves the positions off the Newmark update,
-  /// q_{n+1} = (Newmark) + W Φ_qᵀ ν, W = diag(scale²) (the coordinates' length scales; ν → 0 with h). Without
+  /// q_{n+1} = (Newmark) + W Φ_q(q_n)ᵀ ν, W = diag(scale²)/(m r²) per body (the coordinates' length scales,
+  /// divided by each body's m r²; ν → 0 with h). Without
   /// the velocity rows the velocities drift off the hidden constraints and, at ρ∞ near 1, a spinning body gains
   /// energy and angular momentum (issue 12: a heavy top at 150 rad/s diverges at ρ∞ = 1, a flipping plate gains
   /// 17.6 % energy at ρ∞ = 0.99).
@@ -151,7 +152,12 @@ class GeneralizedAlpha {
   bool time_dependent_ = false;  ///< a constraint depends on t (a driven joint)
   std::vector<double> body_sizes_;  ///< bounding-box diagonal of each body's mesh [m]
   /// Per coordinate, the length scale Newton's corrections are measured in (see GeneralizedAlphaOptions::tolerance).
-  Eigen::VectorXd scales_, squared_scales_;  ///< squared: W of ConstraintForm::stabilized_index2
+  Eigen::VectorXd scales_;
+  /// Per coordinate, W of ConstraintForm::stabilized_index2: scale_i² / (m r²) of its body. Within a body the
+  /// coordinates' own metric; between bodies 1/(m r²), so that a light body takes the position correction rather
+  /// than a heavy one (with scale² alone a 1 mm bar on the tip of a 100 m bar moved the big bar, and Newton stalled;
+  /// helper review of 77a5e2a).
+  Eigen::VectorXd squared_scales_;
   /// Per coordinate, its scale per metre (scales_ / the body's r): how far a world position of 1 m moves it.
   Eigen::VectorXd reach_;
   double ground_extent_ = 0.0;  ///< the largest distance of a joint's ground point from the origin [m]

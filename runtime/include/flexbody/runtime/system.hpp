@@ -133,6 +133,9 @@ class System {
   /// Φ_q v without forming Φ_q (the reference rows in O(n_f) per body): the velocity constraints Φ_q q̇ + Φ_t.
   [[nodiscard]] Eigen::VectorXd constraint_jacobian_product(double t, const Eigen::VectorXd& q,
                                                             const Eigen::VectorXd& v) const;
+  /// Φ_t: zero but in the rows of driven joints, where it is the central difference in t of the joint's rows, with
+  /// the step ∛(ε (1 + |t|)) that balances truncation (step² φ‴) against the rounding of the angle (ε |φ|).
+  [[nodiscard]] Eigen::VectorXd constraint_time_derivative(double t, const Eigen::VectorXd& q) const;
   /// Σ_k λ_k ∂²Φ_k/∂q² of the reference conditions (exact); the joints' curvature terms are left out (they only
   /// change the Newton iteration's convergence rate, not its solution).
   [[nodiscard]] Eigen::MatrixXd constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const;

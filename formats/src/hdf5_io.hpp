@@ -101,6 +101,8 @@ enum class ObjectKind { missing, group, dataset, other };
 /// True if the object at absolute `object_path` (which must exist) carries an attribute `name`.
 [[nodiscard]] bool has_attribute(const Location& file, const std::string& object_path, std::string_view name);
 
+/// Writes a scalar string attribute: fixed-length UTF-8, NUL-padded (an empty string as one NUL byte), so that
+/// the file needs no global heap (the heap variable-length strings live in; SCHEMA.md, "Types").
 void write_string_attribute(const Location& loc, std::string_view name, std::string_view value);
 void write_double_attribute(const Location& loc, std::string_view name, double value);
 void write_int_attribute(const Location& loc, std::string_view name, int value);

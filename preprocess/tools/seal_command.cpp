@@ -14,7 +14,7 @@ namespace {
 
 std::string describe_seal(const format::BodyData& body) {
   if (body.sealed) return "its seal matched";
-  return body.format_version == format::kUnsealedFormatVersion ? "unsealed" : "its seal did not match";
+  return body.format_version == format::kUnsealedFormatVersion ? "unsealed" : "without a matching seal";
 }
 
 }  // namespace

@@ -1,9 +1,11 @@
 // body_file_reader.cpp: read_body_file(), checking a file against SCHEMA.md.
 //
-// Order of the checks: the file exists and is readable, is HDF5, says format "flexbody" and
-// the supported format_version, holds every required group, dataset and attribute, has consistent shapes,
+// Order of the checks: the file exists and is readable; its seal, if it has one, matches its bytes (plain
+// I/O, before the HDF5 library parses anything); it is HDF5, says format "flexbody" and a supported
+// format_version (4 must be sealed, unless ReadOptions say otherwise; 3 is never sealed), holds every required group, dataset and attribute, has consistent shapes,
 // finite values, and finally passes the same checks as validate().
 #include "body_checks.hpp"
+#include "body_file_seal.hpp"
 #include "hdf5_io.hpp"
 
 #include "flexbody/format/body_file.hpp"
@@ -67,7 +69,8 @@ void check_readable(const std::filesystem::path& path, const std::string& label)
   std::fclose(probe);
 }
 
-void check_identity(const Location& root) {
+/// Checks /format and /format_version; returns the version.
+int check_identity(const Location& root) {
   if (!detail::has_attribute(root, "/", "format")) {
     root.fail("missing root attribute /format; this HDF5 file is not a flexbody body file");
   }
@@ -76,10 +79,12 @@ void check_identity(const Location& root) {
     root.fail("/format is \"" + format + "\", expected \"" + kFormatName + "\"; not a flexbody body file");
   }
   const int version = detail::read_int_attribute(root, "format_version");
-  if (version != kFormatVersion) {
+  if (version != kFormatVersion && version != kUnsealedFormatVersion) {
     root.fail("format_version " + std::to_string(version) + " is not supported by this reader (supports " +
-              std::to_string(kFormatVersion) + "); re-run fbprep to write the current version");
+              std::to_string(kUnsealedFormatVersion) + " and " + std::to_string(kFormatVersion) +
+              "); re-run fbprep to write the current version");
   }
+  return version;
 }
 
 void check_presence(const Location& root) {
@@ -297,15 +302,24 @@ std::vector<RecoveryRegion> read_recovery(const Location& root) {
 
 }  // namespace
 
-BodyData read_body_file(const std::filesystem::path& path) {
+BodyData read_body_file(const std::filesystem::path& path, const ReadOptions& options) {
   const std::string label = path.string();
   check_readable(path, label);
+  const detail::SealCheck seal = detail::check_seal(path, label);
+  if (seal.state == detail::SealState::damaged && options.require_seal)
+    throw BodyFileDamaged(detail::damaged_message(label, seal.problem));
   if (!detail::is_hdf5_file(path)) throw BodyFileError(label + ": not an HDF5 file");
   const detail::QuietHdf5Errors quiet;
   BodyData body;
+  body.sealed = seal.state == detail::SealState::valid;
   {
     const Location root = detail::open_file(path, label);
-    check_identity(root);
+    body.format_version = check_identity(root);
+    // Only a version-3 file may come without a seal; a version-4 file that lost its seal was rewritten.
+    if (body.format_version != kUnsealedFormatVersion && !body.sealed && options.require_seal) {
+      throw BodyFileDamaged(detail::damaged_message(
+          label, "it says format_version " + std::to_string(body.format_version) + " but carries no seal"));
+    }
     check_presence(root);
     body.provenance = read_provenance(root);
     body.material = read_material(root);

@@ -1,4 +1,5 @@
-// body_file_writer.cpp: write_body_file(), the layout of SCHEMA.md, written atomically.
+// body_file_writer.cpp: write_body_file(), the layout of SCHEMA.md, sealed and written atomically.
+#include "body_file_seal.hpp"
 #include "hdf5_io.hpp"
 
 #include "flexbody/format/body_file.hpp"
@@ -151,7 +152,7 @@ void write_recovery(const Location& root, const std::vector<RecoveryRegion>& reg
 
 /// Writes the whole layout into a new file at `path`; every handle is closed on return.
 void write_layout(const BodyData& body, const std::filesystem::path& path, const std::string& label) {
-  Location file = detail::create_file(path, label);
+  Location file = detail::create_file(path, label, detail::kSealBytes);
   write_root(file, body.provenance);
   write_provenance(file, body.provenance);
   write_material(file, body.material);
@@ -197,6 +198,7 @@ void write_body_file(const BodyData& body, const std::filesystem::path& path) {
   const std::filesystem::path temporary = temporary_beside(path);
   try {
     write_layout(body, temporary, label);
+    detail::write_seal(temporary, label);  // after HDF5 closed the file: every byte of it is final
     sync_to_disk(temporary, label);
     std::error_code error;
     std::filesystem::rename(temporary, path, error);

@@ -78,12 +78,17 @@ bool has_attribute(const Location& file, const std::string& object_path, std::st
 }
 
 void write_string_attribute(const Location& loc, std::string_view name, std::string_view value) {
+  // HDF5 has no zero-size string type: "" is stored as one NUL byte, which reads back as "".
+  std::string text(value);
+  if (text.empty()) text.push_back('\0');
   const Handle type(H5Tcopy(H5T_C_S1), H5Tclose);
-  if (!type.valid() || H5Tset_size(type.id(), H5T_VARIABLE) < 0 || H5Tset_cset(type.id(), H5T_CSET_UTF8) < 0) {
+  if (!type.valid() || H5Tset_size(type.id(), text.size()) < 0 || H5Tset_strpad(type.id(), H5T_STR_NULLPAD) < 0 ||
+      H5Tset_cset(type.id(), H5T_CSET_UTF8) < 0) {
     loc.fail_hdf5("cannot create a string type for " + loc.child(name));
   }
-  const std::string text(value);
-  write_scalar_attribute(loc, name, type.id(), type.id(), text.c_str());
+  const Handle space(H5Screate(H5S_SCALAR), H5Sclose);
+  if (!space.valid()) loc.fail_hdf5("cannot create a dataspace for " + loc.child(name));
+  write_attribute(loc, name, type.id(), type.id(), space, text.data());
 }
 
 void write_double_attribute(const Location& loc, std::string_view name, double value) {

@@ -91,14 +91,18 @@ void Location::close() {
   if (!handle_.close()) fail_hdf5("cannot close " + path_);
 }
 
-Location create_file(const std::filesystem::path& path, const std::string& file_label) {
+Location create_file(const std::filesystem::path& path, const std::string& file_label, std::size_t user_block_bytes) {
   const Location context(Handle(), file_label, "/");
   const Handle access = file_access(context);
   if (H5Pset_libver_bounds(access.id(), H5F_LIBVER_V18, H5F_LIBVER_V18) < 0 ||
       H5Pset_fclose_degree(access.id(), H5F_CLOSE_SEMI) < 0) {
     context.fail_hdf5("cannot set up file access properties");
   }
-  Handle file(H5Fcreate(path.string().c_str(), H5F_ACC_EXCL, H5P_DEFAULT, access.id()), H5Fclose);
+  Handle creation(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
+  if (!creation.valid() || (user_block_bytes > 0 && H5Pset_userblock(creation.id(), user_block_bytes) < 0)) {
+    context.fail_hdf5("cannot set up file creation properties");
+  }
+  Handle file(H5Fcreate(path.string().c_str(), H5F_ACC_EXCL, creation.id(), access.id()), H5Fclose);
   if (!file.valid()) context.fail_hdf5("cannot create the file " + path.string());
   return {std::move(file), file_label, "/"};
 }

@@ -82,8 +82,11 @@ class Location {
   std::string path_;
 };
 
-/// Creates a new file (fails if `path` exists); objects are laid out for HDF5 1.8 and later readers.
-[[nodiscard]] Location create_file(const std::filesystem::path& path, const std::string& file_label);
+/// Creates a new file (fails if `path` exists); objects are laid out for HDF5 1.8 and later readers. The
+/// HDF5 data starts after a user block of `user_block_bytes` (0, or a power of 2 from 512), which HDF5
+/// leaves alone.
+[[nodiscard]] Location create_file(const std::filesystem::path& path, const std::string& file_label,
+                                   std::size_t user_block_bytes = 0);
 /// True if the file at `path` carries the HDF5 signature (it may still be truncated or damaged).
 [[nodiscard]] bool is_hdf5_file(const std::filesystem::path& path);
 /// Opens an existing file read-only.
@@ -101,6 +104,8 @@ enum class ObjectKind { missing, group, dataset, other };
 /// True if the object at absolute `object_path` (which must exist) carries an attribute `name`.
 [[nodiscard]] bool has_attribute(const Location& file, const std::string& object_path, std::string_view name);
 
+/// Writes a scalar string attribute: fixed-length UTF-8, NUL-padded (an empty string as one NUL byte), so that
+/// the file needs no global heap (the heap variable-length strings live in; SCHEMA.md, "Types").
 void write_string_attribute(const Location& loc, std::string_view name, std::string_view value);
 void write_double_attribute(const Location& loc, std::string_view name, double value);
 void write_int_attribute(const Location& loc, std::string_view name, int value);

@@ -34,7 +34,7 @@ int export_command(int argc, char** argv) {
     preprocess::write_body_vtu(body, target);
     std::cout << target.string() << '\n';
   } catch (const std::exception& e) {
-    return fail(e.what(), kFailed);
+    return fail_reading(e);
   }
   return 0;
 }

@@ -4,6 +4,7 @@
 //   fbprep part.step -o part.fbh5 --material steel --modes 12
 //   fbprep inspect part.fbh5 [--json]
 //   fbprep export-vtu part.fbh5 -o DIR
+//   fbprep seal part.fbh5 [-o sealed.fbh5]
 //   fbprep list-surfaces part.step
 //
 // The first argument picks the command; anything else is the input of the main command (a part file
@@ -16,6 +17,7 @@ int main(int argc, char** argv) {
   const std::string_view command = argc >= 2 ? argv[1] : "";
   if (command == "inspect") return flexbody::cli::inspect_command(argc - 1, argv + 1);
   if (command == "export-vtu") return flexbody::cli::export_command(argc - 1, argv + 1);
+  if (command == "seal") return flexbody::cli::seal_command(argc - 1, argv + 1);
   if (command == "list-surfaces") return flexbody::cli::list_surfaces_command(argc - 1, argv + 1);
   return flexbody::cli::prep_command(argc, argv);
 }

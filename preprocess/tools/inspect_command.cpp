@@ -30,7 +30,7 @@ int inspect_command(int argc, char** argv) {
     if (json) std::cout << preprocess::body_json(body, file) << '\n';
     else std::cout << preprocess::body_report(body, file);
   } catch (const std::exception& e) {
-    return fail(e.what(), kFailed);
+    return fail_reading(e);
   }
   return 0;
 }

@@ -309,14 +309,15 @@ std::string read_raw_string_attribute(const std::filesystem::path& file, const s
                                       const std::string& name) {
   const Id f(H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, file.string());
   const Id a(H5Aopen_by_name(f.get(), object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, name);
-  const Id type(H5Tcopy(H5T_C_S1), H5Tclose, "string type");
-  H5Tset_size(type.get(), H5T_VARIABLE);
-  H5Tset_cset(type.get(), H5T_CSET_UTF8);
-  char* text = nullptr;
-  EXPECT_GE(H5Aread(a.get(), type.get(), static_cast<void*>(&text)), 0);
-  std::string result = text != nullptr ? text : "";
-  H5free_memory(text);
-  return result;
+  // Version 4 stores fixed-length UTF-8 strings, NUL-padded (SCHEMA.md, "Types"): read the bytes as stored.
+  const Id type(H5Aget_type(a.get()), H5Tclose, "type of " + name);
+  EXPECT_EQ(H5Tget_class(type.get()), H5T_STRING) << name;
+  EXPECT_EQ(H5Tis_variable_str(type.get()), 0) << name;
+  EXPECT_EQ(H5Tget_strpad(type.get()), H5T_STR_NULLPAD) << name;
+  EXPECT_EQ(H5Tget_cset(type.get()), H5T_CSET_UTF8) << name;
+  std::string bytes(H5Tget_size(type.get()), '\0');
+  EXPECT_GE(H5Aread(a.get(), type.get(), bytes.data()), 0);
+  return bytes.substr(0, bytes.find('\0'));
 }
 
 }  // namespace flexbody::format::test

@@ -74,7 +74,8 @@ struct RawDataset {
 };
 /// Reads the floating-point dataset `path` as stored, without the library under test.
 [[nodiscard]] RawDataset read_raw_dataset(const std::filesystem::path& file, const std::string& path);
-/// Reads the string attribute `name` of the object `object`, without the library under test.
+/// Reads the string attribute `name` of the object `object`, without the library under test, expecting the
+/// type the writer uses (fixed-length, NUL-padded, UTF-8).
 [[nodiscard]] std::string read_raw_string_attribute(const std::filesystem::path& file, const std::string& object,
                                                     const std::string& name);
 

@@ -126,7 +126,8 @@ TEST(FbprepCli, InspectReadsBackWhatWasWritten) {
   const CliRun json_run = fbprep(dir, "inspect b.fbh5 --json");
   ASSERT_EQ(json_run.exit_code, 0) << json_run.err;
   const auto read = nlohmann::json::parse(json_run.out);
-  EXPECT_EQ(read["format_version"], 3);
+  EXPECT_EQ(read["format_version"], 4);
+  EXPECT_EQ(read["sealed"], true);
   EXPECT_EQ(read["frequencies_hz"], written["frequencies_hz"]);  // the same doubles, through HDF5
   EXPECT_EQ(read["nodes"], written["nodes"]);
   EXPECT_EQ(read["gcms_fields"], written["gcms_fields"]);
@@ -140,7 +141,7 @@ TEST(FbprepCli, InspectReadsBackWhatWasWritten) {
 
   const CliRun report = fbprep(dir, "inspect b.fbh5");
   ASSERT_EQ(report.exit_code, 0) << report.err;
-  EXPECT_NE(report.out.find("flexbody body file, format version 3"), std::string::npos) << report.out;
+  EXPECT_NE(report.out.find("flexbody body file, format version 4, sealed"), std::string::npos) << report.out;
   EXPECT_NE(report.out.find("GCMS constants"), std::string::npos) << report.out;
 
   write(dir / "input-broken.fbh5", "not an HDF5 file at all");

@@ -39,8 +39,9 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
   std::string r;
   auto line = [&r](std::string_view label, const std::string& value) { r += fmt::format("  {:<22}{}\n", label, value); };
   const auto& p = body.provenance;
-  r += fmt::format("{} ({:.3g} MB): flexbody body file, format version {}\n", file.string(),
-                   static_cast<double>(file_bytes(file)) / 1e6, format::kFormatVersion);
+  r += fmt::format("{} ({:.3g} MB): flexbody body file, format version {}{}\n", file.string(),
+                   static_cast<double>(file_bytes(file)) / 1e6, body.format_version,
+                   body.sealed ? ", sealed" : ", unsealed (not protected against damage: fbprep seal converts it)");
   line("created by", fmt::format("{}, {}", p.created_by, p.created_utc));
   line("source", fmt::format("{} (sha256 {})", p.source_file, p.source_sha256));
   line("length unit", fmt::format("{}: {}", p.input_unit, p.unit_reason));
@@ -116,7 +117,8 @@ std::string body_json(const format::BodyData& body, const std::filesystem::path&
   const auto& p = body.provenance;
   j["file"] = file.string();
   j["file_bytes"] = file_bytes(file);
-  j["format_version"] = format::kFormatVersion;
+  j["format_version"] = body.format_version;
+  j["sealed"] = body.sealed;
   j["created_by"] = p.created_by;
   j["created_utc"] = p.created_utc;
   j["source_file"] = p.source_file;

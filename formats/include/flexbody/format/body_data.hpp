@@ -20,8 +20,10 @@ using RowMatrixX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 using RowMatrixX4i = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 4, Eigen::RowMajor>;
 using RowMatrixX3i = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
-/// The schema version this library writes, and the only one it reads.
-inline constexpr int kFormatVersion = 3;
+/// The schema version this library writes: sealed files without a global heap (SCHEMA.md, "Seal").
+inline constexpr int kFormatVersion = 4;
+/// The previous version, unsealed, which this library still reads (and `fbprep seal` converts).
+inline constexpr int kUnsealedFormatVersion = 3;
 /// Value of the root attribute `format`.
 inline constexpr const char* kFormatName = "flexbody";
 
@@ -155,6 +157,12 @@ struct RecoveryRegion {
 
 /// Everything a flexible body file holds.
 struct BodyData {
+  /// The file's format version as read (kFormatVersion or kUnsealedFormatVersion); the writer ignores it and
+  /// always writes kFormatVersion.
+  int format_version = kFormatVersion;
+  /// As read: whether the file carried a seal that matched its bytes (SCHEMA.md, "Seal"); the writer ignores
+  /// it and always seals.
+  bool sealed = false;
   Provenance provenance;
   Material material;
   MassProperties mass;

@@ -25,16 +25,34 @@ class BodyFileError : public std::runtime_error {
   explicit BodyFileError(const std::string& message);
 };
 
+/// Thrown when a file's seal shows that its bytes changed after it was written: damaged in storage or
+/// transfer, or edited (SCHEMA.md, "Seal"). The message is one line that says how to re-seal an intended edit.
+class BodyFileDamaged : public BodyFileError {
+ public:
+  using BodyFileError::BodyFileError;
+};
+
+/// How read_body_file() treats the seal.
+struct ReadOptions {
+  /// true (the default, for simulators): a version-4 file must carry a seal that matches its bytes, checked
+  /// with plain file I/O before the HDF5 library parses anything, so a damaged file never reaches it.
+  /// false: a seal is checked if present (BodyData::sealed says how it went) but a missing or mismatching one
+  /// is no error, and the file goes through every other check. That is for a file edited on purpose (with
+  /// h5py) before `fbprep seal` re-seals it; HDF5 then parses bytes nobody vouched for.
+  bool require_seal = true;
+};
+
 /// Checks that `body` is complete and consistent (shapes against each other, finite numbers).
 /// Throws BodyFileError naming the first problem found.
 void validate(const BodyData& body);
 
-/// Writes `body` atomically: to a temporary file beside `path`, then renamed onto it. A failure at any
-/// point leaves no file under `path` (and an existing file there untouched). Validates first.
+/// Writes `body` atomically: to a temporary file beside `path`, sealed, then renamed onto it. A failure at
+/// any point leaves no file under `path` (and an existing file there untouched). Validates first.
 void write_body_file(const BodyData& body, const std::filesystem::path& path);
 
-/// Reads a body file and validates it. Throws BodyFileError for a missing file, a file that is not a
-/// flexbody file, another format version, missing datasets, wrong shapes or non-finite values.
-[[nodiscard]] BodyData read_body_file(const std::filesystem::path& path);
+/// Reads a body file and validates it. Throws BodyFileDamaged for a file whose seal does not match (see
+/// ReadOptions), BodyFileError for a missing file, a file that is not a flexbody file, another format
+/// version, missing datasets, wrong shapes or non-finite values.
+[[nodiscard]] BodyData read_body_file(const std::filesystem::path& path, const ReadOptions& options = {});
 
 }  // namespace flexbody::format

@@ -308,7 +308,11 @@ void GeneralizedAlpha::step() {
     bool converged = false;
     bool slow = false;  // a correction shrank less than fourfold in this attempt: the kept matrix may be stale
     for (iterations_ = 1; iterations_ <= options_.max_iterations; ++iterations_) {
-      const Eigen::VectorXd phi = system_.constraints(t1, q);
+      Eigen::VectorXd& phi = work_.phi;
+      if (stabilized)
+        system_.constraints_and_rates(t1, q, v, phi, velocity_rows);  // Φ and Φ_q v, each joint evaluated once
+      else
+        phi = system_.constraints(t1, q);
       const bool refresh = refresh_ || !options_.reuse_newton_matrix;
       if (refresh) {
         jacobian = system_.constraint_jacobian(t1, q);
@@ -331,7 +335,6 @@ void GeneralizedAlpha::step() {
         // the dynamic rows are evaluated, so that δ sees it in the same iteration (with the move applied one
         // iteration late, the corrections of the two cancelled and the stopping test ended the iteration early:
         // velocities off by 6.5e-7 of 3 m/s, helper review of 77a5e2a).
-        velocity_rows = system_.constraint_jacobian_product(t1, q, v);
         if (time_dependent_) velocity_rows += system_.constraint_time_derivative(t1, q);
         velocity_rows /= gamma_prime;
         work_.nu_step = velocity_rows - phi;

@@ -308,8 +308,7 @@ std::vector<SpringTangent> System::spring_tangents(const Eigen::VectorXd& q, con
   return tangents;
 }
 
-Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
-  Eigen::VectorXd phi(constraint_count());
+Eigen::Index System::reference_residuals(const Eigen::VectorXd& q, Eigen::VectorXd& phi) const {
   Eigen::Index row = 0;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
@@ -323,6 +322,37 @@ Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
     }
     row += reference_rows(b);
   }
+  return row;
+}
+
+Eigen::Index System::reference_rates(const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& rate) const {
+  Eigen::Index row = 0;
+  for (const Body& b : bodies_) {
+    const Eigen::Index n = b.model.coordinate_count(), rows = std::min<Eigen::Index>(9, reference_rows(b));
+    const auto q_b = q.segment(b.offset, n), v_b = v.segment(b.offset, n);
+    rate.segment(row, rows) = reference_jacobian_product(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12),
+                                                         orientation_of(v_b), v_b.tail(n - 12))
+                                  .head(rows);
+    if (reference_rows(b) == 12) {
+      rate.segment<3>(row + 9).setZero();
+      for (Eigen::Index f = 0; f < b.model.field_count(); ++f)
+        rate.segment<3>(row + 9) += b.model.g_border(0, 4 + f) * v_b.segment<3>(12 + 3 * f);
+    }
+    row += reference_rows(b);
+  }
+  return row;
+}
+
+Eigen::VectorXd System::joint_rate(const Joint& j, const JointEvaluation& e, const Eigen::VectorXd& v) const {
+  Eigen::VectorXd rate = Eigen::VectorXd::Zero(j.rows());
+  if (j.first.body != kGround) rate += e.jacobian_first * v.segment(offset(j.first.body), e.jacobian_first.cols());
+  if (j.second.body != kGround) rate += e.jacobian_second * v.segment(offset(j.second.body), e.jacobian_second.cols());
+  return rate;
+}
+
+Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
+  Eigen::VectorXd phi(constraint_count());
+  Eigen::Index row = reference_residuals(q, phi);
   for (const Joint& j : joints_) {
     const JointEvaluation e =
         evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
@@ -330,6 +360,20 @@ Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
     row += j.rows();
   }
   return phi;
+}
+
+void System::constraints_and_rates(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& phi,
+                                   Eigen::VectorXd& rate) const {
+  phi.resize(constraint_count());
+  rate.resize(constraint_count());
+  Eigen::Index row = reference_residuals(q, phi);
+  reference_rates(q, v, rate);
+  for (const Joint& j : joints_) {  // each joint evaluated once for both
+    const JointEvaluation e = evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
+    phi.segment(row, j.rows()) = e.residual;
+    rate.segment(row, j.rows()) = joint_rate(j, e, v);
+    row += j.rows();
+  }
 }
 
 Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) const {
@@ -385,26 +429,10 @@ Eigen::VectorXd System::constraint_jacobian_transpose_product(double t, const Ei
 
 Eigen::VectorXd System::constraint_jacobian_product(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   Eigen::VectorXd out(constraint_count());
-  Eigen::Index row = 0;
-  for (const Body& b : bodies_) {
-    const Eigen::Index n = b.model.coordinate_count(), rows = std::min<Eigen::Index>(9, reference_rows(b));
-    const auto q_b = q.segment(b.offset, n), v_b = v.segment(b.offset, n);
-    out.segment(row, rows) = reference_jacobian_product(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12),
-                                                        orientation_of(v_b), v_b.tail(n - 12))
-                                 .head(rows);
-    if (reference_rows(b) == 12) {
-      out.segment<3>(row + 9).setZero();
-      for (Eigen::Index f = 0; f < b.model.field_count(); ++f)
-        out.segment<3>(row + 9) += b.model.g_border(0, 4 + f) * v_b.segment<3>(12 + 3 * f);
-    }
-    row += reference_rows(b);
-  }
+  Eigen::Index row = reference_rates(q, v, out);
   for (const Joint& j : joints_) {
     const JointEvaluation e = evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
-    auto out_j = out.segment(row, j.rows());
-    out_j.setZero();
-    if (j.first.body != kGround) out_j += e.jacobian_first * v.segment(offset(j.first.body), e.jacobian_first.cols());
-    if (j.second.body != kGround) out_j += e.jacobian_second * v.segment(offset(j.second.body), e.jacobian_second.cols());
+    out.segment(row, j.rows()) = joint_rate(j, e, v);
     row += j.rows();
   }
   return out;

@@ -142,7 +142,7 @@ class GeneralizedAlpha {
   Eigen::VectorXd q_, v_, qdd_, a_, lambda_;
   struct Iterate {  // step()'s Newton iterate and its residual and correction: storage reused across steps
     Eigen::VectorXd qdd, a, v, q, mu, dx, residual, predicted;
-    Eigen::VectorXd velocity_rows, nu, nu_step, position_step;  ///< Ψ/γ', Δν, W Φ_qᵀ Δν (stabilized_index2)
+    Eigen::VectorXd phi, velocity_rows, nu, nu_step, position_step;  ///< Φ; Ψ/γ', ν, Δν, W Φ_qᵀ Δν (stabilized_index2)
     Eigen::MatrixXd jacobian;                      ///< Φ_q at the iterate
   } work_;
   /// ConstraintForm::stabilized_index2: the Cholesky factor of Φ_q W Φ_qᵀ at the Newton matrix's iterate (Δν from

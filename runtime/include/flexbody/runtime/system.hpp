@@ -133,6 +133,9 @@ class System {
   /// Φ_q v without forming Φ_q (the reference rows in O(n_f) per body): the velocity constraints Φ_q q̇ + Φ_t.
   [[nodiscard]] Eigen::VectorXd constraint_jacobian_product(double t, const Eigen::VectorXd& q,
                                                             const Eigen::VectorXd& v) const;
+  /// Φ and Φ_q v in one pass, each joint evaluated once (an iteration of the stabilised index-2 form needs both).
+  void constraints_and_rates(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& phi,
+                             Eigen::VectorXd& rate) const;
   /// Φ_t: zero but in the rows of driven joints, where it is the central difference in t of the joint's rows, with
   /// the step ∛(ε (1 + |t|)) that balances truncation (step² φ‴) against the rounding of the angle (ε |φ|).
   [[nodiscard]] Eigen::VectorXd constraint_time_derivative(double t, const Eigen::VectorXd& q) const;
@@ -162,6 +165,12 @@ class System {
   [[nodiscard]] Energies energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
 
  private:
+  struct Body;
+  /// The reference rows' residuals and Φ_q v into the first rows of `phi` / `rate`; return how many rows.
+  Eigen::Index reference_residuals(const Eigen::VectorXd& q, Eigen::VectorXd& phi) const;
+  Eigen::Index reference_rates(const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& rate) const;
+  /// Φ_q v of one joint from its evaluation.
+  [[nodiscard]] Eigen::VectorXd joint_rate(const Joint& j, const JointEvaluation& e, const Eigen::VectorXd& v) const;
   struct Body {
     std::string name;
     BodyModel model;

@@ -31,12 +31,6 @@ bool Handle::close() noexcept {
 }
 
 QuietHdf5Errors::QuietHdf5Errors() noexcept {
-  // No cleanup at exit: after a damaged file HDF5's own cleanup can fail to close its internal objects and print
-  // "HDF5: infinite loop closing library" and a long line of codes (issue 13: 2,238 of 10,500 damaged files) after
-  // the reader's one error line. The operating system releases the memory at exit anyway. Effective only before
-  // the library's first use in the process, which is here for fbsim and fbprep.
-  static const bool no_cleanup_at_exit = H5dont_atexit() >= 0;
-  (void)no_cleanup_at_exit;
   if (H5Eget_auto2(H5E_DEFAULT, &function_, &data_) < 0) {
     function_ = nullptr;
     data_ = nullptr;
@@ -163,3 +157,13 @@ ObjectKind object_kind(const Location& file, const std::string& path) {
 }
 
 }  // namespace flexbody::format::detail
+
+namespace flexbody::format {
+
+// After a damaged file HDF5's own cleanup at exit can fail to close its internal objects and print "HDF5: infinite
+// loop closing library" and a long line of codes (issue 13: 2,238 of 10,500 damaged files) after the tool's one
+// error line. In the library this would change every HDF5 user of the process (a host program's own unclosed file
+// came out damaged: review of 6efde03), so only the tools call it.
+void skip_hdf5_cleanup_at_exit() { (void)H5dont_atexit(); }
+
+}  // namespace flexbody::format

@@ -44,26 +44,27 @@ void check_recovery_finite(const BodyData& body, const std::string& context) {
 // A stress mode is the nodal average of the constant stresses of linear tetrahedra under the displacement field
 // Ῡ'(:, f) e_d, so it cannot exceed what the stiffest element can make of that field: in an element with heights h_i
 // (|∇N_i| = 1/h_i), every entry of ∇u is at most Σ_i |u_i| / h_i ≤ 4 U_f / h_min (U_f = max_i |Ῡ'(i, f)|), and every
-// stress component at most (3 λ + 2 μ) times that. An entry above this bound (by more than rounding) was not computed
+// stress component at most (3 |λ| + 2 μ) times that (|λ|: λ < 0 for ν < 0). An entry above this bound (by more than rounding) was not computed
 // from this mesh, material and fields: a damaged file (issue 13: byte flips that stay finite made non-finite von
 // Mises stresses in ParaView).
 void check_recovery_ranges(const BodyData& body, const std::string& context) {
   if (body.recovery.empty()) return;
   const double e = body.material.youngs_modulus, nu = body.material.poisson_ratio;
-  const double lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = e / (2.0 * (1.0 + nu));
+  const double lambda = std::abs(e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))), mu = e / (2.0 * (1.0 + nu));
   double smallest_height = std::numeric_limits<double>::infinity();
   const RowMatrixX3d& x = body.mesh.nodes;
   for (Eigen::Index t = 0; t < body.mesh.tets.rows(); ++t) {
     Eigen::Vector3d p[4];
     for (int k = 0; k < 4; ++k) p[k] = x.row(body.mesh.tets(t, k)).transpose();
     const double six_volume = std::abs((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]));
+    if (!(six_volume > 0.0))  // a flat element has no stress modes to bound them with (review of f0c14ad)
+      fail(context, "/mesh/tets" + index(t) + " has zero volume, so no stress of /recovery can be checked against it");
     for (int k = 0; k < 4; ++k) {  // the height over the face opposite node k: 3 V / area = 6 V / (2 area)
       const Eigen::Vector3d& a = p[(k + 1) % 4], &b = p[(k + 2) % 4], &c = p[(k + 3) % 4];
       const double twice_area = (b - a).cross(c - a).norm();
       if (twice_area > 0.0) smallest_height = std::min(smallest_height, six_volume / twice_area);
     }
   }
-  if (!(smallest_height > 0.0)) return;  // a degenerate mesh is check_ranges' to refuse, not this bound's
   const Eigen::Index n_f = body.gcms.field_count();
   for (const RecoveryRegion& r : body.recovery)
     for (Eigen::Index c = 0; c < r.stress_modes.cols() && c < 3 * n_f; ++c) {

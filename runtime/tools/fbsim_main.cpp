@@ -1,6 +1,7 @@
 // fbsim: runs a scene of flexible (improved GCMS) and rigid bodies and writes what it asks for.
 //
 //   fbsim scene.yaml [-o DIR] [--json] [-q]
+#include "flexbody/format/body_file.hpp"
 #include "run.hpp"
 #include "scene.hpp"
 
@@ -24,6 +25,7 @@ int fail(const std::string& message, int code) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  flexbody::format::skip_hdf5_cleanup_at_exit();  // one error line, nothing from HDF5 after it
   CLI::App app{"fbsim: simulate a scene of flexible and rigid bodies (improved GCMS, generalized-alpha)."};
   std::string scene_file, output;
   bool json = false, quiet = false;

@@ -253,6 +253,12 @@ TEST(Validate, StiffnessWithANegativeEigenvalueIsRefused) {
   body.gcms.stiffness = 0.5 * (body.gcms.stiffness + body.gcms.stiffness.transpose()).eval();
   ASSERT_GT(body.gcms.stiffness.diagonal().minCoeff(), 0.0);
   expect_invalid(body, "/gcms/K_hat is not positive semi-definite");
+  // An indefinite block with zero diagonal, which a pivoted LDLᵀ passed with zero pivots (review of f0c14ad).
+  BodyData blocked = make_body();
+  blocked.gcms.stiffness.topLeftCorner<2, 2>() << 0.0, 1e6, 1e6, 0.0;
+  blocked.gcms.stiffness.block(0, 2, 2, blocked.gcms.stiffness.cols() - 2).setZero();
+  blocked.gcms.stiffness.block(2, 0, blocked.gcms.stiffness.rows() - 2, 2).setZero();
+  expect_invalid(blocked, "/gcms/K_hat is not positive semi-definite");
   // A singular K̂ (a zero eigenvalue, up to rounding) is semi-definite: accepted.
   values(0) = 0.0;
   body.gcms.stiffness = eigen.eigenvectors() * values.asDiagonal() * eigen.eigenvectors().transpose();
@@ -267,6 +273,10 @@ TEST(Validate, ImplausibleStressModesAreRefused) {
   body.recovery[0].stress_modes(5, 7) *= 1e6;
   expect_invalid(body, "/recovery/fillet/stress_modes[5][7] is ");
   for (const double scale : {1e-3, 1.0, 1e3}) EXPECT_NO_THROW(validate(scaled_body(make_body(), scale))) << scale;
+  // A flat element would switch the bound off (h_min = 0): refused (review of f0c14ad).
+  body = make_body();
+  body.mesh.tets(0, 1) = body.mesh.tets(0, 0);
+  expect_invalid(body, "/mesh/tets[0] has zero volume");
 }
 
 }  // namespace

@@ -42,6 +42,11 @@ struct ReadOptions {
   bool require_seal = true;
 };
 
+/// For a program that owns its process (fbprep, fbsim): tells HDF5 not to run its cleanup at exit, which after a
+/// damaged file can print lines of its own after the program's error line. Call before any other HDF5 use; a
+/// simulator that uses HDF5 itself should not call it (its files would not be flushed at exit).
+void skip_hdf5_cleanup_at_exit();
+
 /// Checks that `body` is complete and consistent (shapes against each other, finite numbers).
 /// Throws BodyFileError naming the first problem found.
 void validate(const BodyData& body);

@@ -1,20 +1,20 @@
 // body_file_reader.cpp: read_body_file(), checking a file against SCHEMA.md.
 //
-// Order of the checks: the file exists and is readable; its seal, if it has one, matches its bytes (plain
-// I/O, before the HDF5 library parses anything); it is HDF5, says format "flexbody" and a supported
-// format_version (4 must be sealed, unless ReadOptions say otherwise; 3 is never sealed), holds every required group, dataset and attribute, has consistent shapes,
-// finite values, and finally passes the same checks as validate().
+// Order of the checks: the file is a regular, readable file, read into memory once; its seal matches those bytes
+// (before the HDF5 library parses anything; a file without a seal is refused too unless ReadOptions say otherwise);
+// it is HDF5 with hard links only, says format "flexbody" and a supported format_version (4, sealed; 3, never
+// sealed, read only with require_seal off), holds every required group, dataset (contiguous, unfiltered, stored in
+// the file) and attribute, has consistent shapes, finite values, and finally passes the same checks as validate().
 #include "body_checks.hpp"
 #include "body_file_seal.hpp"
+#include "file_image.hpp"
 #include "hdf5_io.hpp"
 
 #include "flexbody/format/body_file.hpp"
 
-#include <cerrno>
-#include <cstdio>
 #include <optional>
 #include <string>
-#include <system_error>
+#include <string_view>
 #include <vector>
 
 namespace flexbody::format {
@@ -56,18 +56,6 @@ constexpr Required kRequired[] = {
     {Item::attribute, "/gcms/condition_G_scaled_after"},
     {Item::group, "/interfaces"},               {Item::attribute, "/interfaces/order"},
 };
-
-void check_readable(const std::filesystem::path& path, const std::string& label) {
-  std::error_code error;
-  const std::filesystem::file_status status = std::filesystem::status(path, error);
-  if (!std::filesystem::exists(status)) throw BodyFileError(label + ": no such file");
-  if (std::filesystem::is_directory(status)) throw BodyFileError(label + ": is a directory, not a body file");
-  std::FILE* probe = std::fopen(path.c_str(), "rb");
-  if (probe == nullptr) {
-    throw BodyFileError(label + ": cannot be opened for reading: " + std::generic_category().message(errno));
-  }
-  std::fclose(probe);
-}
 
 /// Checks /format and /format_version; returns the version.
 int check_identity(const Location& root) {
@@ -304,22 +292,26 @@ std::vector<RecoveryRegion> read_recovery(const Location& root) {
 
 BodyData read_body_file(const std::filesystem::path& path, const ReadOptions& options) {
   const std::string label = path.string();
-  check_readable(path, label);
-  const detail::SealCheck seal = detail::check_seal(path, label);
+  // Read once: the seal is checked on exactly the bytes HDF5 parses next.
+  std::vector<char> image = detail::read_file_image(path, label);
+  const std::string_view bytes(image.data(), image.size());
+  const detail::SealCheck seal = detail::check_seal(bytes);
   if (seal.state == detail::SealState::damaged && options.require_seal)
     throw BodyFileDamaged(detail::damaged_message(label, seal.problem));
-  if (!detail::is_hdf5_file(path)) throw BodyFileError(label + ": not an HDF5 file");
+  if (!detail::is_hdf5_file(bytes)) throw BodyFileError(label + ": not an HDF5 file");
+  // A simulator reads only what a seal vouches for: an unsealed file (version 3, or one rewritten by another
+  // program) is refused before HDF5 parses it, since libhdf5 can crash or hang on damaged bytes.
+  if (seal.state == detail::SealState::absent && options.require_seal) throw BodyFileError(detail::unsealed_message(label));
   const detail::QuietHdf5Errors quiet;
   BodyData body;
   body.sealed = seal.state == detail::SealState::valid;
   {
-    const Location root = detail::open_file(path, label);
+    // Variable-length strings (the global heap) only where the caller accepts unsealed files (fbprep seal):
+    // a sealed file never holds them, and a seal proves integrity, not the writer (SCHEMA.md, "Seal").
+    const Location root = detail::open_file_image(image, label, !options.require_seal);
     body.format_version = check_identity(root);
-    // Only a version-3 file may come without a seal; a version-4 file that lost its seal was rewritten.
-    if (body.format_version != kUnsealedFormatVersion && !body.sealed && options.require_seal) {
-      throw BodyFileDamaged(detail::damaged_message(
-          label, "it says format_version " + std::to_string(body.format_version) + " but carries no seal"));
-    }
+    if (body.format_version == kUnsealedFormatVersion && body.sealed)
+      root.fail("format_version 3 carries a seal, which only version 4 files have");
     check_presence(root);
     body.provenance = read_provenance(root);
     body.material = read_material(root);
@@ -330,6 +322,7 @@ BodyData read_body_file(const std::filesystem::path& path, const ReadOptions& op
     body.interfaces = read_interfaces(root);
     body.recovery = read_recovery(root);
   }
+  image = {};  // the values are in `body` now
   detail::check_structure(body, label);
   detail::check_finite(body, label);
   detail::check_ranges(body, label);

@@ -149,45 +149,42 @@ void write_seal(const std::filesystem::path& path, const std::string& file_label
   }
 }
 
-SealCheck check_seal(const std::filesystem::path& path, const std::string& file_label) {
-  const FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
-  if (fd.get() < 0) throw BodyFileError(file_label + ": cannot be opened for reading: " + last_error());
-  Block block{};
-  const long long head = read_at(fd.get(), block.data(), block.size(), 0);
-  if (head < 0) throw BodyFileError(file_label + ": cannot be read: " + last_error());
-  const auto head_bytes = static_cast<std::size_t>(head);
-  const std::string_view start(block.data(), head_bytes);
+SealCheck check_seal(std::string_view bytes) {
+  const std::string_view start = bytes.substr(0, kSealBytes);
   if (start.starts_with(kHdf5Signature)) return {};  // HDF5 from byte 0: no user block, no seal
-  if (head_bytes == 0 || !kMagicLine.starts_with(start.substr(0, kMagicLine.size()))) {
+  if (start.empty() || !kMagicLine.starts_with(start.substr(0, kMagicLine.size()))) {
     // Not a seal's first line; if the HDF5 superblock follows a user block, the seal itself is damaged.
-    std::array<char, kHdf5Signature.size()> signature{};
-    const bool superblock_after = head_bytes == kSealBytes &&
-                                  read_at(fd.get(), signature.data(), signature.size(), kSealBytes) ==
-                                      static_cast<long long>(signature.size()) &&
-                                  std::string_view(signature.data(), signature.size()) == kHdf5Signature;
-    if (superblock_after) return {SealState::damaged, "its seal (the first 512 bytes) is damaged"};
+    if (bytes.size() > kSealBytes && bytes.substr(kSealBytes).starts_with(kHdf5Signature))
+      return {SealState::damaged, "its seal (the first 512 bytes) is damaged"};
     return {};
   }
-  if (head_bytes < kSealBytes) {
+  if (start.size() < kSealBytes) {
     return {SealState::damaged,
-            "it is truncated to " + std::to_string(head_bytes) + (head_bytes == 1 ? " byte" : " bytes") +
+            "it is truncated to " + std::to_string(start.size()) + (start.size() == 1 ? " byte" : " bytes") +
                 ", less than its 512-byte seal"};
   }
+  Block block{};
+  std::copy(start.begin(), start.end(), block.begin());
   const std::optional<Recorded> recorded = parse_block(block);
   if (!recorded) return {SealState::damaged, "its seal (the first 512 bytes) is damaged"};
-  const std::uint64_t hdf5_bytes = file_size(fd.get()) - kSealBytes;
+  const std::uint64_t hdf5_bytes = bytes.size() - kSealBytes;
   if (hdf5_bytes != recorded->hdf5_bytes) {
     return {SealState::damaged, "its seal records " + std::to_string(recorded->hdf5_bytes) +
                                     " bytes after the seal, the file has " + std::to_string(hdf5_bytes) +
                                     (hdf5_bytes < recorded->hdf5_bytes ? " (truncated)" : " (bytes appended)")};
   }
-  const auto digest = digest_from(fd.get(), kSealBytes);
-  if (!digest) throw BodyFileError(file_label + ": cannot be read: " + last_error());
-  if (digest->second != recorded->hdf5_bytes)
-    return {SealState::damaged, "its length changed while it was being read"};
-  if (digest->first != recorded->hex)
+  Sha256 hash;
+  const std::string_view hdf5 = bytes.substr(kSealBytes);
+  hash.update({reinterpret_cast<const std::uint8_t*>(hdf5.data()), hdf5.size()});
+  if (to_hex(hash.finish()) != recorded->hex)
     return {SealState::damaged, "the SHA-256 digest of its contents differs from the one its seal records"};
   return {SealState::valid, ""};
+}
+
+std::string unsealed_message(const std::string& file_label) {
+  return file_label + ": is not sealed (format version 3, written by fbprep before 0.6, or an HDF5 file rewritten by "
+         "another program), so nothing shows it is undamaged; check it and convert it once with: fbprep seal " +
+         file_label;
 }
 
 std::string damaged_message(const std::string& file_label, const std::string& problem) {

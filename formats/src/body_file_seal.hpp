@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 namespace flexbody::format::detail {
 
@@ -36,9 +37,11 @@ struct SealCheck {
   std::string problem;  ///< for `damaged`: what does not match, e.g. "its seal is damaged"
 };
 
-/// Checks the seal of the file at `path` with plain I/O (reads the whole file for a sealed one).
-/// Throws BodyFileError only if the file cannot be read.
-[[nodiscard]] SealCheck check_seal(const std::filesystem::path& path, const std::string& file_label);
+/// Checks the seal of a file from its bytes (read_file_image), before the HDF5 library sees them.
+[[nodiscard]] SealCheck check_seal(std::string_view bytes);
+
+/// The one-line refusal of a file without a seal where one is required.
+[[nodiscard]] std::string unsealed_message(const std::string& file_label);
 
 /// The one-line refusal of a file whose seal does not match, with what to do about an intended edit.
 [[nodiscard]] std::string damaged_message(const std::string& file_label, const std::string& problem);

@@ -155,6 +155,21 @@ void check_gcms_ranges(const BodyData& body, const std::string& context) {
       if (std::abs(g(4 + r, 4 + c) - (r == c ? 1.0 : 0.0)) > 1e-10)
         fail(context, "/gcms/G" + index(4 + r) + index(4 + c) + " = " + number(g(4 + r, 4 + c)) +
                           ": the fields are not M_s-orthonormal (G[4:][4:] must be I)");
+  // C = Ῡ'ᵀ M_s Ῡ holds each mode's fields in the M_s-orthonormal new fields, so by Bessel's inequality the squares
+  // of the 3 columns of mode m sum to ψ_mᵀ M̄ ψ_m = 1 (the modes are M-orthonormal, M̄ = M_s ⊗ I3) less the dropped
+  // remainders: at most 3 of norm below drop_tolerance. Valid files give 1 to 1e-14 (free-free and Craig-Bampton,
+  // 3 to 48 fields); 1e-9 leaves five decades for round-off in larger bases and still refuses any change to C
+  // above its 30th bit, or a C scaled by a mistaken unit.
+  const Eigen::MatrixXd& c = gcms.mode_coefficients;
+  const double dropped = 3.0 * gcms.drop_tolerance * gcms.drop_tolerance;
+  for (Eigen::Index m = 0; m < c.cols() / 3; ++m) {
+    const double sum = c.middleCols(3 * m, 3).squaredNorm();
+    if (!(sum <= 1.0 + 1e-9 && sum >= 1.0 - dropped - 1e-9))
+      fail(context, "/gcms/mode_coefficients: the squares of columns " + std::to_string(3 * m) + " to " +
+                        std::to_string(3 * m + 2) + " (mode " + std::to_string(m) + ") sum to " + number(sum) +
+                        ", expected 1 (M-orthonormal modes in M_s-orthonormal fields; 1e-9 and the dropped "
+                        "remainders allowed)");
+  }
   // Positive definite, tested on the Jacobi-scaled matrix: the blocks of G carry different units
   // (kg, kg m, kg m^2, 1), and scaling makes the test independent of them (and of the part's size).
   const Eigen::VectorXd scale = diagonal.cwiseSqrt().cwiseInverse();

@@ -2,6 +2,7 @@
 #include "hdf5_io.hpp"
 
 #include <initializer_list>
+#include <limits>
 #include <utility>
 
 namespace flexbody::format::detail {
@@ -74,7 +75,12 @@ void write_scalar_attribute(const Location& loc, std::string_view name, hid_t fi
 
 bool has_attribute(const Location& file, const std::string& object_path, std::string_view name) {
   const std::string key(name);
-  return H5Aexists_by_name(file.id(), object_path.c_str(), key.c_str(), H5P_DEFAULT) > 0;
+  const htri_t exists = H5Aexists_by_name(file.id(), object_path.c_str(), key.c_str(), H5P_DEFAULT);
+  if (exists < 0) {
+    file.fail_hdf5("cannot look up attribute " + (object_path == "/" ? "" : object_path) + "/" + key +
+                   "; the file may be damaged");
+  }
+  return exists > 0;
 }
 
 void write_string_attribute(const Location& loc, std::string_view name, std::string_view value) {
@@ -113,7 +119,13 @@ std::string read_string_attribute(const Location& loc, std::string_view name) {
   const Handle file_type(H5Aget_type(attribute.id()), H5Tclose);
   const Handle memory_type(H5Tcopy(H5T_C_S1), H5Tclose);
   if (!file_type.valid() || !memory_type.valid()) loc.fail_hdf5("cannot read the type of " + loc.child(name));
-  if (H5Tis_variable_str(file_type.id()) > 0) {
+  const htri_t variable = H5Tis_variable_str(file_type.id());
+  if (variable < 0) loc.fail_hdf5("cannot read the type of " + loc.child(name));
+  if (variable > 0) {
+    if (!loc.variable_strings_allowed()) {
+      loc.fail(loc.child(name) + " is a variable-length string; a sealed body file holds fixed-length strings only "
+               "(SCHEMA.md, \"Seal\")");
+    }
     char* text = nullptr;
     if (H5Tset_size(memory_type.id(), H5T_VARIABLE) < 0 ||
         H5Tset_cset(memory_type.id(), H5Tget_cset(file_type.id())) < 0 ||
@@ -124,7 +136,13 @@ std::string read_string_attribute(const Location& loc, std::string_view name) {
     H5free_memory(text);
     return result;
   }
+  // The declared length is checked before a buffer is allocated for it: a damaged type may claim gigabytes.
   const std::size_t size = H5Tget_size(file_type.id());
+  if (size == 0 || size > kMaxStringBytes || size > H5Aget_storage_size(attribute.id())) {
+    loc.fail(loc.child(name) + " declares a string of " + std::to_string(size) + " bytes, but " +
+             std::to_string(H5Aget_storage_size(attribute.id())) + " are stored (at most " +
+             std::to_string(kMaxStringBytes) + " are accepted)");
+  }
   std::vector<char> buffer(size + 1, '\0');
   if (H5Tset_size(memory_type.id(), size + 1) < 0 ||
       H5Tset_cset(memory_type.id(), H5Tget_cset(file_type.id())) < 0 ||
@@ -147,9 +165,14 @@ int read_int_attribute(const Location& loc, std::string_view name) {
   const Handle attribute = open_attribute(loc, name);
   attribute_class(loc, name, attribute, {H5T_INTEGER}, "an integer");
   require_scalar(loc, name, attribute);
-  int value = 0;
-  if (H5Aread(attribute.id(), H5T_NATIVE_INT, &value) < 0) loc.fail_hdf5("cannot read attribute " + loc.child(name));
-  return value;
+  // Read as 64 bits and range-checked here: HDF5 converts an int64 value beyond int's range to INT_MAX, which a
+  // message would then report as the value found. (A value beyond 64 bits arrives clamped, still out of range.)
+  long long value = 0;
+  if (H5Aread(attribute.id(), H5T_NATIVE_LLONG, &value) < 0) loc.fail_hdf5("cannot read attribute " + loc.child(name));
+  if (value < std::numeric_limits<int>::min() || value > std::numeric_limits<int>::max()) {
+    loc.fail(loc.child(name) + " is " + std::to_string(value) + ", beyond the range of a 32-bit integer");
+  }
+  return static_cast<int>(value);
 }
 
 std::vector<double> read_double_vector_attribute(const Location& loc, std::string_view name, std::size_t size) {

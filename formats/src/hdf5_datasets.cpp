@@ -47,6 +47,23 @@ OpenDataset open_dataset(const Location& loc, std::string_view name, int rank, H
   if (H5Lexists(loc.id(), key.c_str(), H5P_DEFAULT) <= 0) loc.fail("missing dataset " + loc.child(name));
   OpenDataset result{Handle(H5Dopen2(loc.id(), key.c_str(), H5P_DEFAULT), H5Dclose), {}};
   if (!result.dataset.valid()) loc.fail_hdf5(loc.child(name) + " cannot be opened as a dataset");
+  // The writer's layout only (SCHEMA.md, "Seal"): values stored in this file, in one piece, as written. A chunked
+  // or filtered dataset would run decompression on bytes nobody checked, and external storage (or a virtual
+  // dataset) reads other files, such as a FIFO that never answers or /dev/zero that never ends.
+  const Handle creation(H5Dget_create_plist(result.dataset.id()), H5Pclose);
+  if (!creation.valid()) loc.fail_hdf5("cannot read how " + loc.child(name) + " is stored");
+  const H5D_layout_t layout = H5Pget_layout(creation.id());
+  if (layout != H5D_CONTIGUOUS && layout != H5D_COMPACT) {
+    const char* how = layout == H5D_CHUNKED   ? "in chunks"
+                      : layout == H5D_VIRTUAL ? "as a virtual dataset"
+                                              : "in an unknown layout";
+    loc.fail(loc.child(name) + " is stored " + how + "; a body file's datasets are contiguous");
+  }
+  const int filters = H5Pget_nfilters(creation.id());
+  const int external = H5Pget_external_count(creation.id());
+  if (filters < 0 || external < 0) loc.fail_hdf5("cannot read how " + loc.child(name) + " is stored");
+  if (filters > 0) loc.fail(loc.child(name) + " is compressed or filtered; a body file's datasets are not");
+  if (external > 0) loc.fail(loc.child(name) + " keeps its values in external files; a body file holds them itself");
 
   const Handle type(H5Dget_type(result.dataset.id()), H5Tclose);
   if (!type.valid() || H5Tget_class(type.id()) != type_class) {

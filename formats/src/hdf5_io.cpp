@@ -4,8 +4,8 @@
 
 #include "flexbody/format/body_file.hpp"
 
-#include <algorithm>
-#include <fstream>
+#include <hdf5_hl.h>
+
 
 namespace flexbody::format::detail {
 
@@ -101,28 +101,51 @@ Location create_file(const std::filesystem::path& path, const std::string& file_
   return {std::move(file), file_label, "/"};
 }
 
-bool is_hdf5_file(const std::filesystem::path& path) {
+bool is_hdf5_file(std::string_view bytes) {
   // The superblock signature sits at byte 0 or, after a user block, at 512, 1024, 2048, ...
-  static constexpr char kSignature[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
-  std::ifstream in(path, std::ios::binary);
-  std::error_code error;
-  const std::uintmax_t size = std::filesystem::file_size(path, error);
-  if (!in || error) return false;
-  for (std::uintmax_t offset = 0; offset + sizeof kSignature <= size; offset = offset == 0 ? 512 : 2 * offset) {
-    char buffer[sizeof kSignature] = {};
-    in.seekg(static_cast<std::streamoff>(offset));
-    if (!in.read(buffer, sizeof buffer)) return false;
-    if (std::equal(buffer, buffer + sizeof buffer, kSignature)) return true;
-  }
+  static constexpr std::string_view kSignature{"\x89HDF\r\n\x1a\n", 8};
+  for (std::size_t offset = 0; offset + kSignature.size() <= bytes.size(); offset = offset == 0 ? 512 : 2 * offset)
+    if (bytes.substr(offset, kSignature.size()) == kSignature) return true;
   return false;
 }
 
-Location open_file(const std::filesystem::path& path, const std::string& file_label) {
+namespace {
+
+struct LinkWalk {
+  std::size_t links = 0;
+  std::string refused;  ///< "<path> is a soft link", empty while every link is a hard one
+};
+
+herr_t check_link(hid_t /*group*/, const char* name, const H5L_info_t* info, void* data) {
+  auto& walk = *static_cast<LinkWalk*>(data);
+  if (info->type != H5L_TYPE_HARD) {
+    const char* kind = info->type == H5L_TYPE_SOFT ? "a soft link" : info->type == H5L_TYPE_EXTERNAL ? "an external link"
+                                                                                                    : "a user-defined link";
+    walk.refused = std::string("/") + name + " is " + kind + "; a body file holds hard links only";
+    return 1;
+  }
+  if (++walk.links > kMaxLinks) {
+    walk.refused = "it holds more than " + std::to_string(kMaxLinks) + " links (objects), far more than a body file";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+Location open_file_image(std::vector<char>& bytes, const std::string& file_label, bool variable_strings) {
   const Location context(Handle(), file_label, "/");
-  const Handle access = file_access(context);
-  Handle file(H5Fopen(path.string().c_str(), H5F_ACC_RDONLY, access.id()), H5Fclose);
+  // HDF5's core driver on the caller's buffer, not copied, never written, not freed by HDF5.
+  Handle file(H5LTopen_file_image(bytes.data(), bytes.size(), H5LT_FILE_IMAGE_DONT_COPY | H5LT_FILE_IMAGE_DONT_RELEASE),
+              H5Fclose);
   if (!file.valid()) context.fail_hdf5("cannot be opened although it is an HDF5 file; it may be truncated or damaged");
-  return {std::move(file), file_label, "/"};
+  // Before anything follows a link: visit every link once (HDF5 skips groups it has seen, so a cycle of hard links
+  // ends), and refuse soft and external ones.
+  LinkWalk walk;
+  const herr_t status = H5Lvisit(file.id(), H5_INDEX_NAME, H5_ITER_NATIVE, check_link, &walk);
+  if (!walk.refused.empty()) context.fail(walk.refused);
+  if (status < 0) context.fail_hdf5("its groups cannot be listed; it may be damaged");
+  return {std::move(file), file_label, "/", variable_strings};
 }
 
 void flush_and_close(Location& file) {
@@ -142,7 +165,7 @@ Location open_group(const Location& parent, std::string_view name) {
   if (H5Lexists(parent.id(), key.c_str(), H5P_DEFAULT) <= 0) parent.fail("missing group " + parent.child(name));
   Handle group(H5Gopen2(parent.id(), key.c_str(), H5P_DEFAULT), H5Gclose);
   if (!group.valid()) parent.fail_hdf5(parent.child(name) + " cannot be opened as a group");
-  return {std::move(group), parent.file_label(), parent.child(name)};
+  return {std::move(group), parent.file_label(), parent.child(name), parent.variable_strings_allowed()};
 }
 
 ObjectKind object_kind(const Location& file, const std::string& path) {

@@ -60,8 +60,11 @@ class QuietHdf5Errors {
 /// An open file, group or dataset together with the names used in error messages.
 class Location {
  public:
-  Location(Handle handle, std::string file_label, std::string path)
-      : handle_(std::move(handle)), file_label_(std::move(file_label)), path_(std::move(path)) {}
+  Location(Handle handle, std::string file_label, std::string path, bool variable_strings = true)
+      : handle_(std::move(handle)),
+        file_label_(std::move(file_label)),
+        path_(std::move(path)),
+        variable_strings_(variable_strings) {}
 
   [[nodiscard]] hid_t id() const noexcept { return handle_.id(); }
   [[nodiscard]] const std::string& file_label() const noexcept { return file_label_; }
@@ -75,11 +78,15 @@ class Location {
   [[noreturn]] void fail_hdf5(const std::string& message) const;
   /// Closes the object now; throws if HDF5 reports an error (for the file: data not written).
   void close();
+  /// Whether string attributes may be variable-length (they live in the file's global heap, whose damage crashed
+  /// or hung libhdf5 1.10 in issue 13's fuzz run). Members opened from here inherit it.
+  [[nodiscard]] bool variable_strings_allowed() const noexcept { return variable_strings_; }
 
  private:
   Handle handle_;
   std::string file_label_;
   std::string path_;
+  bool variable_strings_ = true;
 };
 
 /// Creates a new file (fails if `path` exists); objects are laid out for HDF5 1.8 and later readers. The
@@ -87,10 +94,14 @@ class Location {
 /// leaves alone.
 [[nodiscard]] Location create_file(const std::filesystem::path& path, const std::string& file_label,
                                    std::size_t user_block_bytes = 0);
-/// True if the file at `path` carries the HDF5 signature (it may still be truncated or damaged).
-[[nodiscard]] bool is_hdf5_file(const std::filesystem::path& path);
-/// Opens an existing file read-only.
-[[nodiscard]] Location open_file(const std::filesystem::path& path, const std::string& file_label);
+/// True if a file's bytes carry the HDF5 signature (it may still be truncated or damaged).
+[[nodiscard]] bool is_hdf5_file(std::string_view bytes);
+/// Opens a file read-only from its bytes in memory (read_file_image), which must outlive the returned Location and
+/// every object opened from it. Refuses a file with links other than hard links (a soft link may loop, an external
+/// one opens another file) or more than kMaxLinks of them. `variable_strings`: see Location.
+[[nodiscard]] Location open_file_image(std::vector<char>& bytes, const std::string& file_label, bool variable_strings);
+/// Links a body file may hold (a current one has about 60, plus 7 per interface or output region).
+inline constexpr std::size_t kMaxLinks = 100000;
 /// Flushes and closes a file created by create_file; throws if either step fails.
 void flush_and_close(Location& file);
 
@@ -101,18 +112,21 @@ void flush_and_close(Location& file);
 enum class ObjectKind { missing, group, dataset, other };
 /// Kind of the object at absolute `path`; every parent group of `path` must exist.
 [[nodiscard]] ObjectKind object_kind(const Location& file, const std::string& path);
-/// True if the object at absolute `object_path` (which must exist) carries an attribute `name`.
+/// True if the object at absolute `object_path` (which must exist) carries an attribute `name`; throws if HDF5
+/// cannot tell (a damaged object header), rather than calling the attribute missing.
 [[nodiscard]] bool has_attribute(const Location& file, const std::string& object_path, std::string_view name);
 
 /// Writes a scalar string attribute: fixed-length UTF-8, NUL-padded (an empty string as one NUL byte), so that
-/// the file needs no global heap (the heap variable-length strings live in; SCHEMA.md, "Types").
+/// the file needs no global heap (the heap variable-length strings live in; SCHEMA.md, "Seal").
 void write_string_attribute(const Location& loc, std::string_view name, std::string_view value);
 void write_double_attribute(const Location& loc, std::string_view name, double value);
 void write_int_attribute(const Location& loc, std::string_view name, int value);
 void write_double_vector_attribute(const Location& loc, std::string_view name,
                                    std::span<const double> values);
 
-/// Reads a scalar string attribute (variable- or fixed-length).
+/// Longest string attribute accepted (a source path or an option value is far shorter).
+inline constexpr std::size_t kMaxStringBytes = std::size_t{1} << 20;
+/// Reads a scalar string attribute: fixed-length, or variable-length where the Location allows it.
 [[nodiscard]] std::string read_string_attribute(const Location& loc, std::string_view name);
 /// Reads a scalar numeric attribute as double.
 [[nodiscard]] double read_double_attribute(const Location& loc, std::string_view name);

@@ -180,16 +180,22 @@ TEST_F(Seal, EditedFileIsRefusedUntilResealed) {
 TEST_F(Seal, Version4WithoutItsSealIsRefused) {
   // The HDF5 part alone (HDF5 finds the superblock at byte 0 then): nothing vouches for it any more.
   const std::string good = read_bytes(sealed_file("good.fbh5"));
-  expect_damaged("stripped.fbh5", good.substr(kSeal), "it says format_version 4 but carries no seal");
+  write_bytes(dir() / "stripped.fbh5", good.substr(kSeal));
+  expect_body_file_error([&] { (void)read_body_file(dir() / "stripped.fbh5"); },
+                         {(dir() / "stripped.fbh5").string() + ": is not sealed ", "fbprep seal "});
   const BodyData read = read_body_file(dir() / "stripped.fbh5", ReadOptions{.require_seal = false});
   EXPECT_FALSE(read.sealed);
 }
 
-TEST_F(Seal, Version3FileStillReads) {
+TEST_F(Seal, Version3FileReadsOnlyWhenTheSealIsNotRequired) {
   // Written by fbprep before files were sealed (tests/data/v3-body/README.md): no seal, variable-length strings.
   const std::filesystem::path v3 = std::filesystem::path(FLEXBODY_TEST_DATA_DIR) / "v3-body" / "beam_v3.fbh5";
   ASSERT_NE(read_bytes(v3).find("GCOL"), std::string::npos);  // so the test reads what it claims to
-  const BodyData body = read_body_file(v3);
+  // A simulator's read refuses it before HDF5 parses it (its global heap is what crashed libhdf5) ...
+  expect_body_file_error([&] { (void)read_body_file(v3); },
+                         {v3.string() + ": is not sealed (format version 3", "convert it once with: fbprep seal " + v3.string()});
+  // ... and `fbprep seal` reads it with every other check.
+  const BodyData body = read_body_file(v3, ReadOptions{.require_seal = false});
   EXPECT_EQ(body.format_version, 3);
   EXPECT_FALSE(body.sealed);
   EXPECT_EQ(body.mesh.nodes.rows(), 110);

@@ -120,6 +120,8 @@ BodyData make_body() {
   gcms.mode_coefficients.resize(kFields, 6);
   for (Eigen::Index f = 0; f < kFields; ++f)
     for (Eigen::Index j = 0; j < 6; ++j) gcms.mode_coefficients(f, j) = static_cast<double>(f + 2 * j) / 13.0;
+  // Each mode's 3 columns with a unit sum of squares, as for M-orthonormal modes (SCHEMA.md, "GCMS constants").
+  for (Eigen::Index m = 0; m < 2; ++m) gcms.mode_coefficients.middleCols(3 * m, 3).normalize();
   Eigen::MatrixXd g = Eigen::MatrixXd::Zero(4 + kFields, 4 + kFields);
   g(0, 0) = body.mass.mass;
   const Eigen::Matrix3d& inertia = body.mass.inertia_about_com;
@@ -309,7 +311,7 @@ std::string read_raw_string_attribute(const std::filesystem::path& file, const s
                                       const std::string& name) {
   const Id f(H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, file.string());
   const Id a(H5Aopen_by_name(f.get(), object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, name);
-  // Version 4 stores fixed-length UTF-8 strings, NUL-padded (SCHEMA.md, "Types"): read the bytes as stored.
+  // Version 4 stores fixed-length UTF-8 strings, NUL-padded (SCHEMA.md, "Seal"): read the bytes as stored.
   const Id type(H5Aget_type(a.get()), H5Tclose, "type of " + name);
   EXPECT_EQ(H5Tget_class(type.get()), H5T_STRING) << name;
   EXPECT_EQ(H5Tis_variable_str(type.get()), 0) << name;

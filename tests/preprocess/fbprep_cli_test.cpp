@@ -7,12 +7,20 @@
 #include "vtu_read.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstring>
 #include <fstream>
 #include <numbers>
+#include <sstream>
 
 namespace {
 
@@ -509,4 +517,31 @@ TEST(FbprepCli, UnitThatCannotBeAppliedIsRefused) {
                  "input-micro.step: the STEP file declares a length unit fbprep does not read (OpenCASCADE converts "
                  "it to mm), so --unit m cannot override it; drop it to read the file as it declares (lengths then "
                  "in mm)");
+}
+
+// Issue 13: --mesh-size 0 silently meshed at the default size and --modes 0 computed 10 modes (recording modes=10).
+// A value given is used as given: zero, negative and non-finite ones are refused, naming the option or the spec line.
+TEST(FbprepCli, NumericOptionsMustBePositive) {
+  const auto dir = flexbody::test::scratch_dir();
+  write(dir / "input-cube.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+  expect_refusal(dir, "input-cube.geo --unit m --mesh-size 0", "--mesh-size must be a positive number");
+  expect_refusal(dir, "input-cube.geo --unit m --mesh-size -0.5", "--mesh-size must be a positive number");
+  expect_refusal(dir, "input-cube.geo --unit m --modes 0", "--modes must be at least 1, got 0");
+  expect_refusal(dir, "input-cube.geo --unit m --fmax 0", "--fmax must be a positive frequency in Hz, got 0");
+  expect_refusal(dir, "input-cube.geo --unit m --fmax -5", "--fmax must be a positive frequency in Hz, got -5");
+  // On the command line they override a body spec's values, and are refused there too.
+  write(dir / "input-spec.yaml", "input: input-cube.geo\nunit: m\nmesh: {size: 0.5}\nreduction: {modes: 2}\n");
+  expect_refusal(dir, "input-spec.yaml --mesh-size 0", "--mesh-size must be a positive number");
+  expect_refusal(dir, "input-spec.yaml --modes 0", "--modes must be at least 1, got 0");
+  // The spec's own keys (read_body_spec) name their line.
+  write(dir / "input-zero-size.yaml", "input: input-cube.geo\nunit: m\nmesh: {size: 0}\n");
+  expect_refusal(dir, "input-zero-size.yaml", "input-zero-size.yaml:3: mesh size must be positive, got 0");
+  write(dir / "input-zero-modes.yaml", "input: input-cube.geo\nunit: m\nreduction: {modes: 0}\n");
+  expect_refusal(dir, "input-zero-modes.yaml", "input-zero-modes.yaml:3: reduction modes must be at least 1");
+  write(dir / "input-inf-fmax.yaml", "input: input-cube.geo\nunit: m\nreduction: {fmax: .inf}\n");
+  expect_refusal(dir, "input-inf-fmax.yaml", "input-inf-fmax.yaml:3: reduction fmax must be finite");
+  const CliRun surfaces = fbprep(dir, "list-surfaces input-cube.geo --unit m --mesh-size 0");
+  EXPECT_EQ(surfaces.exit_code, 2);
+  EXPECT_EQ(surfaces.out, "");
+  EXPECT_EQ(surfaces.err.rfind("fbprep: error: --mesh-size must be a positive number", 0), 0u) << surfaces.err;
 }

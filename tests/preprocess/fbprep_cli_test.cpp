@@ -343,10 +343,13 @@ TEST(FbprepCli, RefusesBadInputsWithOneLine) {
 TEST(FbprepCli, FailedRunLeavesAnExistingTargetUntouched) {
   const auto dir = flexbody::test::scratch_dir();
   write(dir / "input-sheet.geo", std::string(kOcc) + "Rectangle(1) = {0, 0, 0, 1, 1};\n");
-  write(dir / "input-old.fbh5", "previous contents");
+  // It begins like a body file (HDF5's signature), so fbprep would replace it; the run fails before it does.
+  const std::string previous = std::string("\x89HDF\r\n\x1a\n", 8) + "previous contents";
+  write(dir / "input-old.fbh5", previous);
   const CliRun run = fbprep(dir, "input-sheet.geo --unit m -o input-old.fbh5");
   EXPECT_NE(run.exit_code, 0);
-  EXPECT_EQ(slurp(dir / "input-old.fbh5"), "previous contents");
+  EXPECT_NE(run.err.find("input-sheet.geo: the input has no volume"), std::string::npos) << run.err;
+  EXPECT_EQ(slurp(dir / "input-old.fbh5"), previous);
   expect_no_output(dir);
 }
 
@@ -519,6 +522,38 @@ TEST(FbprepCli, UnitThatCannotBeAppliedIsRefused) {
                  "in mm)");
 }
 
+// Issue 13: `fbprep spec.yaml -o spec.yaml` replaced the spec with the body file (only the geometry was compared).
+// No input, by any path to it (relative, a symbolic or a hard link), may be the output.
+TEST(FbprepCli, OutputIsNeverAnInput) {
+  const auto dir = flexbody::test::scratch_dir();
+  write(dir / "input-cube.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+  const std::string spec = "input: input-cube.geo\nunit: m\nreduction: {modes: 2}\n";
+  write(dir / "input-spec.yaml", spec);
+  std::filesystem::create_directory(dir / "input-sub");
+  std::filesystem::create_symlink("input-spec.yaml", dir / "input-spec-link.fbh5");
+  std::filesystem::create_hard_link(dir / "input-spec.yaml", dir / "input-spec-hard.fbh5");
+  std::filesystem::create_symlink("input-cube.geo", dir / "input-cube-link.fbh5");
+  for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
+           {"input-spec.yaml -o input-spec.yaml", "the output would overwrite the body spec input-spec.yaml"},
+           {"input-spec.yaml -o ./input-sub/../input-spec.yaml", "the output would overwrite the body spec"},
+           {"input-spec.yaml -o input-spec-link.fbh5", "the output would overwrite the body spec"},
+           {"input-spec.yaml -o input-spec-hard.fbh5", "the output would overwrite the body spec"},
+           {"input-spec.yaml -o input-cube-link.fbh5", "the output would overwrite the input"},
+           {"input-cube.geo --unit m -o input-cube-link.fbh5", "the output would overwrite the input"}}) {
+    SCOPED_TRACE(arguments);
+    const CliRun run = fbprep(dir, arguments);
+    EXPECT_EQ(run.exit_code, 2);
+    EXPECT_EQ(run.out, "");
+    EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
+    EXPECT_EQ(run.err.rfind("fbprep: error: ", 0), 0u) << run.err;
+    EXPECT_NE(run.err.find(message), std::string::npos) << run.err;
+    EXPECT_EQ(slurp(dir / "input-spec.yaml"), spec);
+    EXPECT_EQ(slurp(dir / "input-cube.geo"), std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+    EXPECT_TRUE(std::filesystem::is_symlink(dir / "input-spec-link.fbh5"));
+    expect_no_output(dir);
+  }
+}
+
 // Issue 13: --mesh-size 0 silently meshed at the default size and --modes 0 computed 10 modes (recording modes=10).
 // A value given is used as given: zero, negative and non-finite ones are refused, naming the option or the spec line.
 TEST(FbprepCli, NumericOptionsMustBePositive) {
@@ -544,4 +579,58 @@ TEST(FbprepCli, NumericOptionsMustBePositive) {
   EXPECT_EQ(surfaces.exit_code, 2);
   EXPECT_EQ(surfaces.out, "");
   EXPECT_EQ(surfaces.err.rfind("fbprep: error: --mesh-size must be a positive number", 0), 0u) << surfaces.err;
+}
+
+namespace {
+
+/// A small body file (a steel box of 110 nodes, 2 modes), made once per test program in its own directory.
+const std::filesystem::path& small_body_file() {
+  static const std::filesystem::path file = [] {
+    // Its own directory, apart from the running test's (scratch_dir), which it would empty.
+    const auto dir = std::filesystem::path(FLEXBODY_TEST_SCRATCH_DIR) / "FbprepCli.small_body_file";
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    write(dir / "box.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 0.1, 0.02, 0.02};\n");
+    const CliRun prep = fbprep(dir, "box.geo --unit m --mesh-size 0.02 --modes 2 -o box.fbh5 --quiet");
+    EXPECT_EQ(prep.exit_code, 0) << prep.err;
+    return dir / "box.fbh5";
+  }();
+  return file;
+}
+
+}  // namespace
+
+// Issue 13: `fbprep seal IN -o OUT` replaced whatever OUT was. Like fbprep -o, an existing OUT is replaced only
+// when it is a body file (or empty); OUT naming IN is the in-place re-seal.
+TEST(FbprepCli, OutputReplacesOnlyBodyFiles) {
+  const auto dir = flexbody::test::scratch_dir();
+  std::filesystem::copy_file(small_body_file(), dir / "input-body.fbh5");
+  write(dir / "input-notes.txt", "my notes\n");
+  write(dir / "input-cube.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+  for (const std::string& arguments : {std::string("seal input-body.fbh5 -o input-notes.txt"),
+                                       std::string("input-cube.geo --unit m --modes 2 -o input-notes.txt")}) {
+    SCOPED_TRACE(arguments);
+    const CliRun run = fbprep(dir, arguments);
+    EXPECT_EQ(run.exit_code, 2);
+    EXPECT_EQ(run.out, "");
+    EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
+    EXPECT_EQ(run.err.rfind("fbprep: error: input-notes.txt: the output exists and is not a body file", 0), 0u)
+        << run.err;
+    EXPECT_EQ(slurp(dir / "input-notes.txt"), "my notes\n");
+    expect_no_output(dir);
+  }
+  // A body file, an empty file, a new name and the input itself (by another path) are written.
+  std::filesystem::copy_file(small_body_file(), dir / "other.fbh5");
+  write(dir / "empty.fbh5", "");
+  for (const std::string& arguments : {std::string("seal input-body.fbh5 -o other.fbh5"),
+                                       std::string("seal input-body.fbh5 -o empty.fbh5"),
+                                       std::string("seal input-body.fbh5 -o new.fbh5"),
+                                       std::string("seal input-body.fbh5 -o ./input-body.fbh5"),
+                                       std::string("input-cube.geo --unit m --modes 2 -o other.fbh5 -q")}) {
+    SCOPED_TRACE(arguments);
+    const CliRun run = fbprep(dir, arguments);
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+  }
+  for (const char* name : {"other.fbh5", "empty.fbh5", "new.fbh5", "input-body.fbh5"})
+    EXPECT_TRUE(flexbody::format::begins_like_body_file(dir / name)) << name;
 }

@@ -80,6 +80,7 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
   r.expect_map(root, "the body spec",
                {"input", "unit", "material", "mesh", "reduction", "interfaces", "load_points", "output_regions"});
   PrepOptions options;
+  options.spec = spec;
   const std::filesystem::path base = spec.parent_path();
   auto& recorded = options.recorded_options;
   recorded.emplace_back("spec", file);

@@ -634,3 +634,18 @@ TEST(FbprepCli, OutputReplacesOnlyBodyFiles) {
   for (const char* name : {"other.fbh5", "empty.fbh5", "new.fbh5", "input-body.fbh5"})
     EXPECT_TRUE(flexbody::format::begins_like_body_file(dir / name)) << name;
 }
+
+// Issue 13: an input the user cannot read said "cannot be opened for reading" (or "cannot open the body spec")
+// without why; it now says what the system says, as fbprep inspect did.
+TEST(FbprepCli, UnreadableInputsSayWhy) {
+  if (::geteuid() == 0) GTEST_SKIP() << "runs as root, which reads a file of mode 000 anyway";
+  const auto dir = flexbody::test::scratch_dir();
+  write(dir / "input-cube.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+  write(dir / "input-spec.yaml", "input: input-cube.geo\nunit: m\n");
+  std::filesystem::permissions(dir / "input-spec.yaml", std::filesystem::perms::none);
+  expect_refusal(dir, "input-spec.yaml", "input-spec.yaml: cannot open the body spec: Permission denied");
+  std::filesystem::permissions(dir / "input-cube.geo", std::filesystem::perms::none);
+  expect_refusal(dir, "input-cube.geo --unit m", "input-cube.geo: cannot be opened for reading: Permission denied");
+  std::filesystem::permissions(dir / "input-spec.yaml", std::filesystem::perms::owner_read);
+  expect_refusal(dir, "input-spec.yaml", "input-cube.geo: cannot be opened for reading: Permission denied");
+}

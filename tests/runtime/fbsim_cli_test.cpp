@@ -15,6 +15,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <unistd.h>
+
 using flexbody::test::CliRun;
 using flexbody::test::run_fbprep;
 using flexbody::test::run_fbsim;
@@ -450,4 +452,16 @@ integrator: {type: generalized-alpha, rho_inf: 0.9, step: 1.0e-4, end: 0.05}
   EXPECT_TRUE(hang["conserves_energy"].get<bool>());
   EXPECT_EQ(hang["conservation_warnings"].get<int>(), 0) << hanging.err;
   EXPECT_LT(hang["energy_growth"].get<double>(), 1e-3);
+}
+
+// Issue 13: a scene the user cannot read said "cannot open the scene" without why.
+TEST(FbsimCli, AnUnreadableSceneSaysWhy) {
+  if (::geteuid() == 0) GTEST_SKIP() << "runs as root, which reads a file of mode 000 anyway";
+  const auto& dir = bar_folder();
+  write_text(dir / "locked.yaml", kIssueScene);
+  std::filesystem::permissions(dir / "locked.yaml", std::filesystem::perms::none);
+  const CliRun run = run_fbsim(dir, "locked.yaml -o locked_out -q");
+  std::filesystem::permissions(dir / "locked.yaml", std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.err, "fbsim: error: locked.yaml: cannot open the scene: Permission denied\n");
 }

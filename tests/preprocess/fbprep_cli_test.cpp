@@ -649,3 +649,33 @@ TEST(FbprepCli, UnreadableInputsSayWhy) {
   std::filesystem::permissions(dir / "input-spec.yaml", std::filesystem::perms::owner_read);
   expect_refusal(dir, "input-spec.yaml", "input-cube.geo: cannot be opened for reading: Permission denied");
 }
+
+// Issue 13: `fbprep inspect` printed the file's strings as they were: control characters reached the terminal and a
+// name of any length was printed whole. Each is now shown escaped and cut after 200 bytes; --json cuts them too.
+TEST(FbprepCli, InspectShowsTheFilesStringsSafely) {
+  const auto dir = flexbody::test::scratch_dir();
+  flexbody::format::BodyData body = flexbody::format::read_body_file(small_body_file());
+  body.material.name = "steel\x1b[2J\x07\xc2\x9b" + std::string(1000, 'x');
+  body.provenance.created_by = "fbprep\r\nforged line";
+  body.provenance.options.emplace_back("note", "tab\there\x7f");
+  flexbody::format::write_body_file(body, dir / "odd.fbh5");
+  const CliRun report = fbprep(dir, "inspect odd.fbh5");
+  ASSERT_EQ(report.exit_code, 0) << report.err;
+  for (const char c : report.out) {
+    const auto byte = static_cast<unsigned char>(c);
+    EXPECT_TRUE(c == '\n' || (byte >= 0x20 && byte != 0x7f)) << "raw control character " << int{byte};
+  }
+  EXPECT_EQ(report.out.find("\xc2\x9b"), std::string::npos);  // U+009B, a C1 control (CSI)
+  EXPECT_NE(report.out.find("steel\\x1b[2J\\x07\\u009b" + std::string(188, 'x') + "... (1012 bytes)"), std::string::npos)
+      << report.out;
+  EXPECT_NE(report.out.find("fbprep\\x0d\\x0aforged line"), std::string::npos) << report.out;
+  EXPECT_NE(report.out.find("note=tab\\x09here\\x7f"), std::string::npos) << report.out;
+  std::istringstream lines(report.out);
+  for (std::string line; std::getline(lines, line);) EXPECT_LT(line.size(), 400u) << line;
+
+  const CliRun json = fbprep(dir, "inspect odd.fbh5 --json");
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const auto j = nlohmann::json::parse(json.out);
+  EXPECT_EQ(j["material"]["name"], "steel\x1b[2J\x07\xc2\x9b" + std::string(188, 'x') + "... (1012 bytes)");
+  EXPECT_EQ(j["created_by"], "fbprep\r\nforged line");
+}

@@ -679,3 +679,52 @@ TEST(FbprepCli, InspectShowsTheFilesStringsSafely) {
   EXPECT_EQ(j["material"]["name"], "steel\x1b[2J\x07\xc2\x9b" + std::string(188, 'x') + "... (1012 bytes)");
   EXPECT_EQ(j["created_by"], "fbprep\r\nforged line");
 }
+
+namespace {
+
+volatile sig_atomic_t tested_signal = SIGTERM;
+extern "C" void raise_tested_signal(int) { ::raise(tested_signal); }
+
+}  // namespace
+
+// Issue 13: a body file's temporary (.NAME.fbh5.tmp-PID-N) stayed behind when SIGTERM or Ctrl-C ended fbprep during
+// the write. A child process calls remove_temporary_body_file_on_signal (as fbprep's main does) and writes a body
+// file under a file-size limit far below its size: the write that crosses it raises SIGXFSZ, whose handler raises
+// the tested signal. So the signal arrives inside write_body_file, while the temporary exists, every time.
+TEST(FbprepCli, InterruptedWriteLeavesNoTemporary) {
+  const flexbody::format::BodyData body = flexbody::format::read_body_file(small_body_file());
+  const auto scratch = flexbody::test::scratch_dir();
+  for (const int signal_number : {SIGTERM, SIGINT, SIGHUP}) {
+    SCOPED_TRACE(signal_number);
+    const auto dir = scratch / std::to_string(signal_number);
+    std::filesystem::create_directories(dir);
+    std::fflush(nullptr);
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {  // only async-signal-safe work and the library's own until _exit
+      // As in a foreground process: a shell starts background jobs with SIGINT ignored, which the function keeps.
+      for (const int s : {SIGTERM, SIGINT, SIGHUP}) ::signal(s, SIG_DFL);
+      flexbody::format::remove_temporary_body_file_on_signal();
+      tested_signal = signal_number;
+      struct sigaction crossed {};
+      crossed.sa_handler = raise_tested_signal;
+      sigemptyset(&crossed.sa_mask);
+      ::sigaction(SIGXFSZ, &crossed, nullptr);
+      const rlimit limit{8192, 8192};  // the body file takes about 150 kB
+      ::setrlimit(RLIMIT_FSIZE, &limit);
+      try {
+        flexbody::format::write_body_file(body, dir / "body.fbh5");
+      } catch (...) {
+        ::_exit(3);
+      }
+      ::_exit(4);  // written under the limit: the test would show nothing
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "exit code " << (WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    EXPECT_EQ(WTERMSIG(status), signal_number);  // ended by the signal, as without the handler
+    std::vector<std::string> left;
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) left.push_back(entry.path().filename().string());
+    EXPECT_TRUE(left.empty()) << "left behind: " << fmt::format("{}", fmt::join(left, ", "));
+  }
+}

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <memory>
 #include <stdexcept>
+#include <system_error>
 
 namespace flexbody::fbsim {
 namespace {
@@ -167,7 +168,8 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
   // The integrator first: a scene whose initial state or constraints are inconsistent fails before any file.
   const std::clock_t cpu_start = std::clock();
   runtime::GeneralizedAlpha integrator(scene.system, scene.integrator);
-  std::filesystem::create_directories(directory);
+  if (std::error_code error; !std::filesystem::create_directories(directory, error) && error)
+    throw std::runtime_error(fmt::format("{}: cannot create the output directory: {}", directory.string(), error.message()));
   std::vector<std::unique_ptr<CsvFile>> files;
   RunSummary summary;
   for (const Sensor& s : scene.sensors) {

@@ -454,6 +454,32 @@ integrator: {type: generalized-alpha, rho_inf: 0.9, step: 1.0e-4, end: 0.05}
   EXPECT_LT(hang["energy_growth"].get<double>(), 1e-3);
 }
 
+// Issue 13: an output directory that is an existing file gave "filesystem error: ..." (exit code 1).
+TEST(FbsimCli, AnOutputDirectoryThatIsAFileIsRefused) {
+  const auto& dir = bar_folder();
+  std::string scene = kIssueScene;
+  scene.replace(scene.find("end: 2.0"), 8, "end: 0.001");
+  write_text(dir / "filed.yaml", scene);
+  write_text(dir / "a_file", "keep me\n");
+  const CliRun given = run_fbsim(dir, "filed.yaml -o a_file -q");
+  EXPECT_EQ(given.exit_code, 2);
+  EXPECT_EQ(given.err, "fbsim: error: -o a_file: is an existing file, not a directory; choose another output "
+                       "directory with -o\n");
+  write_text(dir / "filed_results", "keep me too\n");
+  const CliRun by_default = run_fbsim(dir, "filed.yaml -q");
+  EXPECT_EQ(by_default.exit_code, 2);
+  EXPECT_EQ(by_default.err, "fbsim: error: filed_results (the default output directory: the scene's name + _results): "
+                            "is an existing file, not a directory; choose another output directory with -o\n");
+  EXPECT_EQ(flexbody::test::slurp(dir / "a_file"), "keep me\n");
+  EXPECT_EQ(flexbody::test::slurp(dir / "filed_results"), "keep me too\n");
+  // A directory that cannot be made (its parent is a file) is one line too, naming it.
+  const CliRun below = run_fbsim(dir, "filed.yaml -o a_file/sub -q");
+  EXPECT_EQ(below.exit_code, 1);
+  EXPECT_EQ(std::count(below.err.begin(), below.err.end(), '\n'), 1) << below.err;
+  EXPECT_NE(below.err.find("a_file/sub: cannot create the output directory: Not a directory"), std::string::npos)
+      << below.err;
+}
+
 // Issue 13: a scene the user cannot read said "cannot open the scene" without why.
 TEST(FbsimCli, AnUnreadableSceneSaysWhy) {
   if (::geteuid() == 0) GTEST_SKIP() << "runs as root, which reads a file of mode 000 anyway";

@@ -263,14 +263,16 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
   };
   record();
   draw();
-  const long steps = std::lround(scene.end_time / scene.integrator.step);
+  // Whole steps, the last one shortened to end on the end time exactly (step_count; at most kMostSteps, scene.cpp).
+  const long steps = static_cast<long>(step_count(scene.end_time, scene.integrator.step));
   bool written = true, drawn = true;
   const auto wall_start = std::chrono::steady_clock::now();
   std::chrono::steady_clock::duration in_integrator{};
   try {
     for (long k = 1; k <= steps; ++k) {
       const auto step_start = std::chrono::steady_clock::now();
-      integrator.step();
+      if (k < steps) integrator.step();
+      else integrator.step_to(scene.end_time);
       in_integrator += std::chrono::steady_clock::now() - step_start;
       for (std::size_t w = summary.validity_warnings; w < integrator.warnings().size(); ++w) {  // the model's validity
         summary.warnings.push_back(integrator.warnings()[w]);

@@ -619,6 +619,18 @@ TEST(FbprepCli, OutputReplacesOnlyBodyFiles) {
     EXPECT_EQ(slurp(dir / "input-notes.txt"), "my notes\n");
     expect_no_output(dir);
   }
+  // Nor a pipe (or a device: as root, renaming onto /dev/null would have replaced it); opening it would block.
+  ASSERT_EQ(::mkfifo((dir / "input-pipe").c_str(), 0600), 0);
+  for (const std::string& arguments : {std::string("seal input-body.fbh5 -o input-pipe"),
+                                       std::string("input-cube.geo --unit m --modes 2 -o input-pipe")}) {
+    SCOPED_TRACE(arguments);
+    const CliRun run = fbprep(dir, arguments);
+    EXPECT_EQ(run.exit_code, 2);
+    EXPECT_EQ(run.err, "fbprep: error: input-pipe: the output exists and is not a regular file (a device, a pipe or a "
+                       "socket); choose another output (-o)\n");
+    EXPECT_TRUE(std::filesystem::is_fifo(dir / "input-pipe"));
+    expect_no_output(dir);
+  }
   // A body file, an empty file, a new name and the input itself (by another path) are written.
   std::filesystem::copy_file(small_body_file(), dir / "other.fbh5");
   write(dir / "empty.fbh5", "");

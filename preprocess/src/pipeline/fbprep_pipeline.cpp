@@ -55,6 +55,9 @@ void check_output_location(const PrepOptions& options) {
     throw std::invalid_argument(fmt::format("{}: the output directory does not exist", directory.string()));
   if (std::filesystem::is_directory(output, ec))
     throw std::invalid_argument(fmt::format("{}: the output is a directory, not a file", output.string()));
+  if (std::filesystem::exists(output, ec) && !std::filesystem::is_regular_file(output, ec))
+    throw std::invalid_argument(fmt::format("{}: the output exists and is not a regular file (a device, a pipe or a "
+                                            "socket); choose another output (-o)", output.string()));
   if (std::filesystem::exists(output, ec) && !std::filesystem::is_empty(output, ec) &&
       !format::begins_like_body_file(output))
     throw std::invalid_argument(fmt::format(

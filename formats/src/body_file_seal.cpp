@@ -193,3 +193,16 @@ std::string damaged_message(const std::string& file_label, const std::string& pr
 }
 
 }  // namespace flexbody::format::detail
+
+namespace flexbody::format {
+
+bool begins_like_body_file(const std::filesystem::path& path) {
+  const detail::FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  if (fd.get() < 0) return false;
+  std::array<char, detail::kMagicLine.size()> start{};
+  const long long n = detail::read_at(fd.get(), start.data(), start.size(), 0);
+  const std::string_view begins(start.data(), n < 0 ? 0 : static_cast<std::size_t>(n));
+  return begins.starts_with(detail::kMagicLine) || begins.starts_with(detail::kHdf5Signature);
+}
+
+}  // namespace flexbody::format

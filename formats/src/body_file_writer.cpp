@@ -1,6 +1,7 @@
 // body_file_writer.cpp: write_body_file(), the layout of SCHEMA.md, sealed and written atomically.
 #include "body_file_seal.hpp"
 #include "hdf5_io.hpp"
+#include "temporary_cleanup.hpp"
 
 #include "flexbody/format/body_file.hpp"
 
@@ -196,6 +197,7 @@ void write_body_file(const BodyData& body, const std::filesystem::path& path) {
   if (path.filename().empty()) throw BodyFileError(label + ": not a file name");
   const detail::QuietHdf5Errors quiet;
   const std::filesystem::path temporary = temporary_beside(path);
+  const detail::TemporaryFileGuard removed_on_signal(temporary);  // remove_temporary_body_file_on_signal
   try {
     write_layout(body, temporary, label);
     detail::write_seal(temporary, label);  // after HDF5 closed the file: every byte of it is final

@@ -16,6 +16,7 @@
 
 int main(int argc, char** argv) {
   flexbody::format::skip_hdf5_cleanup_at_exit();  // one error line, nothing from HDF5 after it
+  flexbody::format::remove_temporary_body_file_on_signal();  // Ctrl-C during a write leaves no .NAME.fbh5.tmp-*
   const std::string_view command = argc >= 2 ? argv[1] : "";
   if (command == "inspect") return flexbody::cli::inspect_command(argc - 1, argv + 1);
   if (command == "export-vtu") return flexbody::cli::export_command(argc - 1, argv + 1);

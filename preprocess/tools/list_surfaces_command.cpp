@@ -11,6 +11,7 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <iostream>
 
 namespace flexbody::cli {
@@ -39,6 +40,9 @@ int list_surfaces_command(int argc, char** argv) {
       options.unit = preprocess::length_unit_from_string(unit_text);
       if (!options.unit) throw std::invalid_argument("--unit '" + unit_text + "' is not one of mm, cm, m, in");
     }
+    if (app.count("--mesh-size") > 0 && !(std::isfinite(mesh_size) && mesh_size > 0.0))
+      throw std::invalid_argument(fmt::format("--mesh-size must be a positive number (the largest element size in the "
+                                              "input's unit; leave it out for the default), got {}", mesh_size));
     options.mesh_size = mesh_size;
     const preprocess::ImportedMesh imported = preprocess::import_tet_mesh(input, options);
     if (json) {

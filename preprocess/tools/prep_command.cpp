@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -90,9 +91,14 @@ int prep_command(int argc, char** argv) {
       }
       record("unit", unit_text.empty() ? "(from file)" : unit_text);
     }
-    if (!(mesh_size >= 0.0)) throw std::invalid_argument(fmt::format("--mesh-size must be positive, got {}", mesh_size));
-    if (modes < 0) throw std::invalid_argument(fmt::format("--modes must be positive, got {}", modes));
-    if (!(fmax >= 0.0)) throw std::invalid_argument(fmt::format("--fmax must be positive, got {}", fmax));
+    // A value given is used as given: 0 is not "the default" (leave the flag out for that).
+    if (given("--mesh-size") && !(std::isfinite(mesh_size) && mesh_size > 0.0))
+      throw std::invalid_argument(fmt::format("--mesh-size must be a positive number (the largest element size in the "
+                                              "input's unit; leave it out for the default), got {}", mesh_size));
+    if (given("--modes") && modes < 1)
+      throw std::invalid_argument(fmt::format("--modes must be at least 1, got {}", modes));
+    if (given("--fmax") && !(std::isfinite(fmax) && fmax > 0.0))
+      throw std::invalid_argument(fmt::format("--fmax must be a positive frequency in Hz, got {}", fmax));
     if (order != 1)
       throw std::invalid_argument(fmt::format("--order {}: only linear tetrahedra (--order 1) are implemented", order));
     if (!from_spec || given("--mesh-size")) {
@@ -106,7 +112,7 @@ int prep_command(int argc, char** argv) {
       record("material", material_text);
     }
     if (given("--modes") || given("--fmax")) {  // either flag replaces the spec's whole mode request
-      options.modes.modes = (modes == 0 && fmax == 0.0) ? 10 : modes;
+      options.modes.modes = modes;  // 0 with --fmax alone: every mode up to fmax
       options.modes.fmax_hz = fmax;
     }
     record("modes", std::to_string(options.modes.modes));

@@ -37,6 +37,19 @@ int seal_command(int argc, char** argv) {
     return fail(std::string(e.what()) + " (see fbprep seal --help)", kBadCommandLine);
   }
   const std::filesystem::path target = output.empty() ? std::filesystem::path(file) : std::filesystem::path(output);
+  // Like fbprep -o: an existing OUT is replaced only when it is a body file (or empty). OUT naming FILE itself
+  // (by any path) is the in-place re-seal that leaving -o out does.
+  std::error_code error;
+  const bool in_place = output.empty() || std::filesystem::equivalent(file, target, error);
+  if (!in_place && std::filesystem::exists(target, error) && !std::filesystem::is_directory(target, error) &&
+      !std::filesystem::is_regular_file(target, error))
+    return fail(target.string() + ": the output exists and is not a regular file (a device, a pipe or a socket); "
+                                  "choose another output (-o)", kBadCommandLine);
+  if (!in_place && std::filesystem::exists(target, error) && !std::filesystem::is_directory(target, error) &&
+      !std::filesystem::is_empty(target, error) && !format::begins_like_body_file(target))
+    return fail(target.string() + ": the output exists and is not a body file (it does not begin with a flexbody seal "
+                                  "or HDF5's signature); fbprep seal replaces only body files: remove it or choose "
+                                  "another output (-o)", kBadCommandLine);
   try {
     format::ReadOptions options;
     options.require_seal = false;  // what this command is for; every other check still runs

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <iostream>
+#include <system_error>
 #include <unistd.h>
 
 namespace {
@@ -43,6 +44,14 @@ int main(int argc, char** argv) {
   const std::filesystem::path scene_path(scene_file);
   const std::filesystem::path directory =
       output.empty() ? std::filesystem::path(scene_path.stem().string() + "_results") : std::filesystem::path(output);
+  // Checked before anything is read or run: an existing file is never a directory to write into.
+  if (std::error_code error; std::filesystem::exists(directory, error) && !std::filesystem::is_directory(directory, error)) {
+    const std::string origin = output.empty() ? fmt::format("{} (the default output directory: the scene's name + "
+                                                            "_results)", directory.string())
+                                              : fmt::format("-o {}", directory.string());
+    return fail(fmt::format("{}: is an existing file, not a directory; choose another output directory with -o", origin),
+                kBadInput);
+  }
   flexbody::fbsim::Scene scene;
   try {
     scene = flexbody::fbsim::read_scene(scene_path);

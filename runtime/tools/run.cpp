@@ -13,6 +13,7 @@
 #include <fstream>
 #include <memory>
 #include <stdexcept>
+#include <system_error>
 
 namespace flexbody::fbsim {
 namespace {
@@ -167,7 +168,8 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
   // The integrator first: a scene whose initial state or constraints are inconsistent fails before any file.
   const std::clock_t cpu_start = std::clock();
   runtime::GeneralizedAlpha integrator(scene.system, scene.integrator);
-  std::filesystem::create_directories(directory);
+  if (std::error_code error; !std::filesystem::create_directories(directory, error) && error)
+    throw std::runtime_error(fmt::format("{}: cannot create the output directory: {}", directory.string(), error.message()));
   std::vector<std::unique_ptr<CsvFile>> files;
   RunSummary summary;
   for (const Sensor& s : scene.sensors) {
@@ -261,14 +263,16 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
   };
   record();
   draw();
-  const long steps = std::lround(scene.end_time / scene.integrator.step);
+  // Whole steps, the last one shortened to end on the end time exactly (step_count; at most kMostSteps, scene.cpp).
+  const long steps = static_cast<long>(step_count(scene.end_time, scene.integrator.step));
   bool written = true, drawn = true;
   const auto wall_start = std::chrono::steady_clock::now();
   std::chrono::steady_clock::duration in_integrator{};
   try {
     for (long k = 1; k <= steps; ++k) {
       const auto step_start = std::chrono::steady_clock::now();
-      integrator.step();
+      if (k < steps) integrator.step();
+      else integrator.step_to(scene.end_time);
       in_integrator += std::chrono::steady_clock::now() - step_start;
       for (std::size_t w = summary.validity_warnings; w < integrator.warnings().size(); ++w) {  // the model's validity
         summary.warnings.push_back(integrator.warnings()[w]);

@@ -299,6 +299,10 @@ Scene read_scene(const std::filesystem::path& file) {
   if (scene.integrator.step > scene.end_time)
     r.fail(integrator["step"], fmt::format("integrator step {} s is larger than the end time {} s",
                                            scene.integrator.step, scene.end_time));
+  if (const double steps = step_count(scene.end_time, scene.integrator.step); !(steps <= kMostSteps))
+    r.fail(integrator["step"], fmt::format("integrator step {} s would take {:.3g} steps to the end time {} s; at most "
+                                           "{:.0e} are allowed (is the step meant to be that small?)",
+                                           scene.integrator.step, steps, scene.end_time, kMostSteps));
   if (const YAML::Node tol = integrator["tolerance"]) {
     scene.integrator.tolerance = r.positive(tol, "integrator tolerance");
     if (scene.integrator.tolerance > runtime::kLargestTolerance)
@@ -420,7 +424,7 @@ Scene read_scene(const std::filesystem::path& file) {
       }
       scene.paraview.push_back({body, stresses});
     }
-    const long steps = std::lround(scene.end_time / scene.integrator.step);
+    const long steps = static_cast<long>(step_count(scene.end_time, scene.integrator.step));
     scene.paraview_every = static_cast<int>(std::max(1L, (steps + 99) / 100));
     if (const YAML::Node every = paraview["every"]) {
       scene.paraview_every = r.count(every, "paraview every");

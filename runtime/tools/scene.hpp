@@ -5,6 +5,8 @@
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -53,6 +55,16 @@ struct Scene {
   int paraview_every = 1;               ///< a frame every n-th step
   Conservation conserves;
 };
+
+/// The most steps a scene may take: a step many orders too small (1e-20 s for 1e-4 s) would otherwise run for
+/// centuries, or (below about 1e-19 of the end time) not at all. 1e9 steps of a 20-mode body take about 6 hours.
+inline constexpr double kMostSteps = 1e9;
+
+/// The steps from 0 to `end` with step `h`: whole steps, and the last one shortened to end exactly on `end` when
+/// `end` is not a whole number of steps (a remainder below GeneralizedAlpha::kStepToSlack h is rounding, not a step).
+[[nodiscard]] inline double step_count(double end, double h) {
+  return std::max(1.0, std::ceil(end / h - runtime::GeneralizedAlpha::kStepToSlack));
+}
 
 /// Reads and assembles a scene; body files are read relative to the scene's directory.
 [[nodiscard]] Scene read_scene(const std::filesystem::path& file);

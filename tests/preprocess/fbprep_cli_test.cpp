@@ -7,12 +7,20 @@
 #include "vtu_read.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstring>
 #include <fstream>
 #include <numbers>
+#include <sstream>
 
 namespace {
 
@@ -340,10 +348,13 @@ TEST(FbprepCli, RefusesBadInputsWithOneLine) {
 TEST(FbprepCli, FailedRunLeavesAnExistingTargetUntouched) {
   const auto dir = flexbody::test::scratch_dir();
   write(dir / "input-sheet.geo", std::string(kOcc) + "Rectangle(1) = {0, 0, 0, 1, 1};\n");
-  write(dir / "input-old.fbh5", "previous contents");
+  // It begins like a body file (HDF5's signature), so fbprep would replace it; the run fails before it does.
+  const std::string previous = std::string("\x89HDF\r\n\x1a\n", 8) + "previous contents";
+  write(dir / "input-old.fbh5", previous);
   const CliRun run = fbprep(dir, "input-sheet.geo --unit m -o input-old.fbh5");
   EXPECT_NE(run.exit_code, 0);
-  EXPECT_EQ(slurp(dir / "input-old.fbh5"), "previous contents");
+  EXPECT_NE(run.err.find("input-sheet.geo: the input has no volume"), std::string::npos) << run.err;
+  EXPECT_EQ(slurp(dir / "input-old.fbh5"), previous);
   expect_no_output(dir);
 }
 
@@ -514,4 +525,223 @@ TEST(FbprepCli, UnitThatCannotBeAppliedIsRefused) {
                  "input-micro.step: the STEP file declares a length unit fbprep does not read (OpenCASCADE converts "
                  "it to mm), so --unit m cannot override it; drop it to read the file as it declares (lengths then "
                  "in mm)");
+}
+
+// Issue 13: `fbprep spec.yaml -o spec.yaml` replaced the spec with the body file (only the geometry was compared).
+// No input, by any path to it (relative, a symbolic or a hard link), may be the output.
+TEST(FbprepCli, OutputIsNeverAnInput) {
+  const auto dir = flexbody::test::scratch_dir();
+  write(dir / "input-cube.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+  const std::string spec = "input: input-cube.geo\nunit: m\nreduction: {modes: 2}\n";
+  write(dir / "input-spec.yaml", spec);
+  std::filesystem::create_directory(dir / "input-sub");
+  std::filesystem::create_symlink("input-spec.yaml", dir / "input-spec-link.fbh5");
+  std::filesystem::create_hard_link(dir / "input-spec.yaml", dir / "input-spec-hard.fbh5");
+  std::filesystem::create_symlink("input-cube.geo", dir / "input-cube-link.fbh5");
+  for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
+           {"input-spec.yaml -o input-spec.yaml", "the output would overwrite the body spec input-spec.yaml"},
+           {"input-spec.yaml -o ./input-sub/../input-spec.yaml", "the output would overwrite the body spec"},
+           {"input-spec.yaml -o input-spec-link.fbh5", "the output would overwrite the body spec"},
+           {"input-spec.yaml -o input-spec-hard.fbh5", "the output would overwrite the body spec"},
+           {"input-spec.yaml -o input-cube-link.fbh5", "the output would overwrite the input"},
+           {"input-cube.geo --unit m -o input-cube-link.fbh5", "the output would overwrite the input"}}) {
+    SCOPED_TRACE(arguments);
+    const CliRun run = fbprep(dir, arguments);
+    EXPECT_EQ(run.exit_code, 2);
+    EXPECT_EQ(run.out, "");
+    EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
+    EXPECT_EQ(run.err.rfind("fbprep: error: ", 0), 0u) << run.err;
+    EXPECT_NE(run.err.find(message), std::string::npos) << run.err;
+    EXPECT_EQ(slurp(dir / "input-spec.yaml"), spec);
+    EXPECT_EQ(slurp(dir / "input-cube.geo"), std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+    EXPECT_TRUE(std::filesystem::is_symlink(dir / "input-spec-link.fbh5"));
+    expect_no_output(dir);
+  }
+}
+
+// Issue 13: --mesh-size 0 silently meshed at the default size and --modes 0 computed 10 modes (recording modes=10).
+// A value given is used as given: zero, negative and non-finite ones are refused, naming the option or the spec line.
+TEST(FbprepCli, NumericOptionsMustBePositive) {
+  const auto dir = flexbody::test::scratch_dir();
+  write(dir / "input-cube.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+  expect_refusal(dir, "input-cube.geo --unit m --mesh-size 0", "--mesh-size must be a positive number");
+  expect_refusal(dir, "input-cube.geo --unit m --mesh-size -0.5", "--mesh-size must be a positive number");
+  expect_refusal(dir, "input-cube.geo --unit m --modes 0", "--modes must be at least 1, got 0");
+  expect_refusal(dir, "input-cube.geo --unit m --fmax 0", "--fmax must be a positive frequency in Hz, got 0");
+  expect_refusal(dir, "input-cube.geo --unit m --fmax -5", "--fmax must be a positive frequency in Hz, got -5");
+  // On the command line they override a body spec's values, and are refused there too.
+  write(dir / "input-spec.yaml", "input: input-cube.geo\nunit: m\nmesh: {size: 0.5}\nreduction: {modes: 2}\n");
+  expect_refusal(dir, "input-spec.yaml --mesh-size 0", "--mesh-size must be a positive number");
+  expect_refusal(dir, "input-spec.yaml --modes 0", "--modes must be at least 1, got 0");
+  // The spec's own keys (read_body_spec) name their line.
+  write(dir / "input-zero-size.yaml", "input: input-cube.geo\nunit: m\nmesh: {size: 0}\n");
+  expect_refusal(dir, "input-zero-size.yaml", "input-zero-size.yaml:3: mesh size must be positive, got 0");
+  write(dir / "input-zero-modes.yaml", "input: input-cube.geo\nunit: m\nreduction: {modes: 0}\n");
+  expect_refusal(dir, "input-zero-modes.yaml", "input-zero-modes.yaml:3: reduction modes must be at least 1");
+  write(dir / "input-inf-fmax.yaml", "input: input-cube.geo\nunit: m\nreduction: {fmax: .inf}\n");
+  expect_refusal(dir, "input-inf-fmax.yaml", "input-inf-fmax.yaml:3: reduction fmax must be finite");
+  const CliRun surfaces = fbprep(dir, "list-surfaces input-cube.geo --unit m --mesh-size 0");
+  EXPECT_EQ(surfaces.exit_code, 2);
+  EXPECT_EQ(surfaces.out, "");
+  EXPECT_EQ(surfaces.err.rfind("fbprep: error: --mesh-size must be a positive number", 0), 0u) << surfaces.err;
+}
+
+namespace {
+
+/// A small body file (a steel box of 110 nodes, 2 modes), made once per test program in its own directory.
+const std::filesystem::path& small_body_file() {
+  static const std::filesystem::path file = [] {
+    // Its own directory, apart from the running test's (scratch_dir), which it would empty.
+    const auto dir = std::filesystem::path(FLEXBODY_TEST_SCRATCH_DIR) / "FbprepCli.small_body_file";
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    write(dir / "box.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 0.1, 0.02, 0.02};\n");
+    const CliRun prep = fbprep(dir, "box.geo --unit m --mesh-size 0.02 --modes 2 -o box.fbh5 --quiet");
+    EXPECT_EQ(prep.exit_code, 0) << prep.err;
+    return dir / "box.fbh5";
+  }();
+  return file;
+}
+
+}  // namespace
+
+// Issue 13: `fbprep seal IN -o OUT` replaced whatever OUT was. Like fbprep -o, an existing OUT is replaced only
+// when it is a body file (or empty); OUT naming IN is the in-place re-seal.
+TEST(FbprepCli, OutputReplacesOnlyBodyFiles) {
+  const auto dir = flexbody::test::scratch_dir();
+  std::filesystem::copy_file(small_body_file(), dir / "input-body.fbh5");
+  write(dir / "input-notes.txt", "my notes\n");
+  write(dir / "input-cube.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+  for (const std::string& arguments : {std::string("seal input-body.fbh5 -o input-notes.txt"),
+                                       std::string("input-cube.geo --unit m --modes 2 -o input-notes.txt")}) {
+    SCOPED_TRACE(arguments);
+    const CliRun run = fbprep(dir, arguments);
+    EXPECT_EQ(run.exit_code, 2);
+    EXPECT_EQ(run.out, "");
+    EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
+    EXPECT_EQ(run.err.rfind("fbprep: error: input-notes.txt: the output exists and is not a body file", 0), 0u)
+        << run.err;
+    EXPECT_EQ(slurp(dir / "input-notes.txt"), "my notes\n");
+    expect_no_output(dir);
+  }
+  // Nor a pipe (or a device: as root, renaming onto /dev/null would have replaced it); opening it would block.
+  ASSERT_EQ(::mkfifo((dir / "input-pipe").c_str(), 0600), 0);
+  for (const std::string& arguments : {std::string("seal input-body.fbh5 -o input-pipe"),
+                                       std::string("input-cube.geo --unit m --modes 2 -o input-pipe")}) {
+    SCOPED_TRACE(arguments);
+    const CliRun run = fbprep(dir, arguments);
+    EXPECT_EQ(run.exit_code, 2);
+    EXPECT_EQ(run.err, "fbprep: error: input-pipe: the output exists and is not a regular file (a device, a pipe or a "
+                       "socket); choose another output (-o)\n");
+    EXPECT_TRUE(std::filesystem::is_fifo(dir / "input-pipe"));
+    expect_no_output(dir);
+  }
+  // A body file, an empty file, a new name and the input itself (by another path) are written.
+  std::filesystem::copy_file(small_body_file(), dir / "other.fbh5");
+  write(dir / "empty.fbh5", "");
+  for (const std::string& arguments : {std::string("seal input-body.fbh5 -o other.fbh5"),
+                                       std::string("seal input-body.fbh5 -o empty.fbh5"),
+                                       std::string("seal input-body.fbh5 -o new.fbh5"),
+                                       std::string("seal input-body.fbh5 -o ./input-body.fbh5"),
+                                       std::string("input-cube.geo --unit m --modes 2 -o other.fbh5 -q")}) {
+    SCOPED_TRACE(arguments);
+    const CliRun run = fbprep(dir, arguments);
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+  }
+  for (const char* name : {"other.fbh5", "empty.fbh5", "new.fbh5", "input-body.fbh5"})
+    EXPECT_TRUE(flexbody::format::begins_like_body_file(dir / name)) << name;
+}
+
+// Issue 13: an input the user cannot read said "cannot be opened for reading" (or "cannot open the body spec")
+// without why; it now says what the system says, as fbprep inspect did.
+TEST(FbprepCli, UnreadableInputsSayWhy) {
+  if (::geteuid() == 0) GTEST_SKIP() << "runs as root, which reads a file of mode 000 anyway";
+  const auto dir = flexbody::test::scratch_dir();
+  write(dir / "input-cube.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
+  write(dir / "input-spec.yaml", "input: input-cube.geo\nunit: m\n");
+  std::filesystem::permissions(dir / "input-spec.yaml", std::filesystem::perms::none);
+  expect_refusal(dir, "input-spec.yaml", "input-spec.yaml: cannot open the body spec: Permission denied");
+  std::filesystem::permissions(dir / "input-cube.geo", std::filesystem::perms::none);
+  expect_refusal(dir, "input-cube.geo --unit m", "input-cube.geo: cannot be opened for reading: Permission denied");
+  std::filesystem::permissions(dir / "input-spec.yaml", std::filesystem::perms::owner_read);
+  expect_refusal(dir, "input-spec.yaml", "input-cube.geo: cannot be opened for reading: Permission denied");
+}
+
+// Issue 13: `fbprep inspect` printed the file's strings as they were: control characters reached the terminal and a
+// name of any length was printed whole. Each is now shown escaped and cut after 200 bytes; --json cuts them too.
+TEST(FbprepCli, InspectShowsTheFilesStringsSafely) {
+  const auto dir = flexbody::test::scratch_dir();
+  flexbody::format::BodyData body = flexbody::format::read_body_file(small_body_file());
+  body.material.name = "steel\x1b[2J\x07\xc2\x9b" + std::string(1000, 'x');
+  body.provenance.created_by = "fbprep\r\nforged line";
+  body.provenance.options.emplace_back("note", "tab\there\x7f");
+  flexbody::format::write_body_file(body, dir / "odd.fbh5");
+  const CliRun report = fbprep(dir, "inspect odd.fbh5");
+  ASSERT_EQ(report.exit_code, 0) << report.err;
+  for (const char c : report.out) {
+    const auto byte = static_cast<unsigned char>(c);
+    EXPECT_TRUE(c == '\n' || (byte >= 0x20 && byte != 0x7f)) << "raw control character " << int{byte};
+  }
+  EXPECT_EQ(report.out.find("\xc2\x9b"), std::string::npos);  // U+009B, a C1 control (CSI)
+  EXPECT_NE(report.out.find("steel\\x1b[2J\\x07\\u009b" + std::string(188, 'x') + "... (1012 bytes)"), std::string::npos)
+      << report.out;
+  EXPECT_NE(report.out.find("fbprep\\x0d\\x0aforged line"), std::string::npos) << report.out;
+  EXPECT_NE(report.out.find("note=tab\\x09here\\x7f"), std::string::npos) << report.out;
+  std::istringstream lines(report.out);
+  for (std::string line; std::getline(lines, line);) EXPECT_LT(line.size(), 400u) << line;
+
+  const CliRun json = fbprep(dir, "inspect odd.fbh5 --json");
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const auto j = nlohmann::json::parse(json.out);
+  EXPECT_EQ(j["material"]["name"], "steel\x1b[2J\x07\xc2\x9b" + std::string(188, 'x') + "... (1012 bytes)");
+  EXPECT_EQ(j["created_by"], "fbprep\r\nforged line");
+}
+
+namespace {
+
+volatile sig_atomic_t tested_signal = SIGTERM;
+extern "C" void raise_tested_signal(int) { ::raise(tested_signal); }
+
+}  // namespace
+
+// Issue 13: a body file's temporary (.NAME.fbh5.tmp-PID-N) stayed behind when SIGTERM or Ctrl-C ended fbprep during
+// the write. A child process calls remove_temporary_body_file_on_signal (as fbprep's main does) and writes a body
+// file under a file-size limit far below its size: the write that crosses it raises SIGXFSZ, whose handler raises
+// the tested signal. So the signal arrives inside write_body_file, while the temporary exists, every time.
+TEST(FbprepCli, InterruptedWriteLeavesNoTemporary) {
+  const flexbody::format::BodyData body = flexbody::format::read_body_file(small_body_file());
+  const auto scratch = flexbody::test::scratch_dir();
+  for (const int signal_number : {SIGTERM, SIGINT, SIGHUP}) {
+    SCOPED_TRACE(signal_number);
+    const auto dir = scratch / std::to_string(signal_number);
+    std::filesystem::create_directories(dir);
+    std::fflush(nullptr);
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {  // only async-signal-safe work and the library's own until _exit
+      // As in a foreground process: a shell starts background jobs with SIGINT ignored, which the function keeps.
+      for (const int s : {SIGTERM, SIGINT, SIGHUP}) ::signal(s, SIG_DFL);
+      flexbody::format::remove_temporary_body_file_on_signal();
+      tested_signal = signal_number;
+      struct sigaction crossed {};
+      crossed.sa_handler = raise_tested_signal;
+      sigemptyset(&crossed.sa_mask);
+      ::sigaction(SIGXFSZ, &crossed, nullptr);
+      const rlimit limit{8192, 8192};  // the body file takes about 150 kB
+      ::setrlimit(RLIMIT_FSIZE, &limit);
+      try {
+        flexbody::format::write_body_file(body, dir / "body.fbh5");
+      } catch (...) {
+        ::_exit(3);
+      }
+      ::_exit(4);  // written under the limit: the test would show nothing
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "exit code " << (WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    EXPECT_EQ(WTERMSIG(status), signal_number);  // ended by the signal, as without the handler
+    std::vector<std::string> left;
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) left.push_back(entry.path().filename().string());
+    EXPECT_TRUE(left.empty()) << "left behind: " << fmt::format("{}", fmt::join(left, ", "));
+  }
 }

@@ -15,6 +15,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <unistd.h>
+
 using flexbody::test::CliRun;
 using flexbody::test::run_fbprep;
 using flexbody::test::run_fbsim;
@@ -450,4 +452,119 @@ integrator: {type: generalized-alpha, rho_inf: 0.9, step: 1.0e-4, end: 0.05}
   EXPECT_TRUE(hang["conserves_energy"].get<bool>());
   EXPECT_EQ(hang["conservation_warnings"].get<int>(), 0) << hanging.err;
   EXPECT_LT(hang["energy_growth"].get<double>(), 1e-3);
+}
+
+// Issue 13: `step: 1e-300` took no step (lround of 1e300) and reported success with the t = 0 row; `step: 1e-20`
+// would run 1e17 steps. A step count beyond kMostSteps is refused at the step's line, with the count.
+TEST(FbsimCli, StepsBeyondTheLimitAreRefused) {
+  const std::string head = "bodies:\n  bar: {file: bar.fbh5, modes: 2}\n";
+  expect_scene_error(head + "integrator: {step: 1.0e-300, end: 1}\n", 3,
+                     "integrator step 1e-300 s would take 1e+300 steps to the end time 1 s; at most 1e+09 are allowed");
+  expect_scene_error(head + "integrator:\n  end: 1\n  step: 1.0e-20\n", 5,
+                     "integrator step 1e-20 s would take 1e+20 steps to the end time 1 s; at most 1e+09 are allowed");
+  expect_scene_error(head + "integrator: {step: 0, end: 1}\n", 3, "integrator step must be positive, got 0");
+  expect_scene_error(head + "integrator: {step: .inf, end: 1}\n", 3, "integrator step must be finite, got '.inf'");
+  EXPECT_FALSE(std::filesystem::exists(bar_folder() / "bad_out"));
+}
+
+namespace {
+
+// The t column of an output file.
+std::vector<double> times_of(const std::filesystem::path& csv) {
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);  // the header
+  std::vector<double> times;
+  while (std::getline(in, line)) times.push_back(std::stod(line.substr(0, line.find(','))));
+  return times;
+}
+
+}  // namespace
+
+// Issue 13: an end time that is not a whole number of steps was rounded to one (step 3e-4, end 1e-3 ended at 9e-4).
+// The last step is now shortened so that the run ends on the end time; the other rows stay at multiples of the
+// output interval.
+TEST(FbsimCli, TheRunEndsOnTheEndTime) {
+  const auto& dir = bar_folder();
+  const std::string bodies = R"(bodies:
+  bar: {file: bar.fbh5, modes: 8}
+joints:
+  pivot: {type: revolute, body: bar, interface: root, to: ground, axis: [0, 0, 1]}
+gravity: [0, -9.81, 0]
+outputs:
+  tip: {body: bar, interface: tip, quantities: [position]}
+)";
+  write_text(dir / "short_last.yaml", bodies + "integrator: {step: 3.0e-4, end: 1.0e-3}\n");
+  const CliRun run = run_fbsim(dir, "short_last.yaml -o short_last_out --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(nlohmann::json::parse(run.out)["steps"], 4);  // 3 of 3e-4 s and one of 1e-4 s
+  const std::vector<double> t = times_of(dir / "short_last_out" / "tip.csv");
+  ASSERT_EQ(t.size(), 5u);
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(t[k], 3.0e-4 * k, 1e-18) << k;
+  EXPECT_EQ(t[4], 1.0e-3);  // exactly the end time
+
+  // Rows every 5 steps, and the end time; the shortened step does not disturb the motion: the tip's path agrees
+  // with a run whose step divides the end time, to the time discretisation error.
+  write_text(dir / "every.yaml", bodies + "integrator: {step: 1.0e-4, end: 1.05e-3, output_every: 5}\n");
+  const CliRun every = run_fbsim(dir, "every.yaml -o every_out -q");
+  ASSERT_EQ(every.exit_code, 0) << every.err;
+  const std::vector<double> rows = times_of(dir / "every_out" / "tip.csv");
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_NEAR(rows[1], 5e-4, 1e-18);
+  EXPECT_NEAR(rows[2], 1e-3, 1e-18);
+  EXPECT_EQ(rows[3], 1.05e-3);
+  write_text(dir / "even.yaml", bodies + "integrator: {step: 5.0e-5, end: 1.05e-3}\n");
+  ASSERT_EQ(run_fbsim(dir, "even.yaml -o even_out -q").exit_code, 0);
+  auto last_y = [](const std::filesystem::path& csv) {
+    std::ifstream in(csv);
+    std::string line, last;
+    while (std::getline(in, line)) last = line;
+    double time, x, y;
+    char c;
+    std::istringstream(last) >> time >> c >> x >> c >> y;
+    return y;
+  };
+  // The tip has fallen about 5e-6 m (a rigid bar's would be 8e-6 m: the bending wave from the pivot is still on its
+  // way); the two runs agree to 0.1 % of that (measured: 5.6e-9 m, O(h²) errors), 1 % asserted.
+  const double fallen = last_y(dir / "even_out" / "tip.csv") - 0.025;
+  EXPECT_LT(fallen, -2e-6);
+  EXPECT_NEAR(last_y(dir / "every_out" / "tip.csv"), last_y(dir / "even_out" / "tip.csv"), 1e-2 * std::abs(fallen));
+}
+
+// Issue 13: an output directory that is an existing file gave "filesystem error: ..." (exit code 1).
+TEST(FbsimCli, AnOutputDirectoryThatIsAFileIsRefused) {
+  const auto& dir = bar_folder();
+  std::string scene = kIssueScene;
+  scene.replace(scene.find("end: 2.0"), 8, "end: 0.001");
+  write_text(dir / "filed.yaml", scene);
+  write_text(dir / "a_file", "keep me\n");
+  const CliRun given = run_fbsim(dir, "filed.yaml -o a_file -q");
+  EXPECT_EQ(given.exit_code, 2);
+  EXPECT_EQ(given.err, "fbsim: error: -o a_file: is an existing file, not a directory; choose another output "
+                       "directory with -o\n");
+  write_text(dir / "filed_results", "keep me too\n");
+  const CliRun by_default = run_fbsim(dir, "filed.yaml -q");
+  EXPECT_EQ(by_default.exit_code, 2);
+  EXPECT_EQ(by_default.err, "fbsim: error: filed_results (the default output directory: the scene's name + _results): "
+                            "is an existing file, not a directory; choose another output directory with -o\n");
+  EXPECT_EQ(flexbody::test::slurp(dir / "a_file"), "keep me\n");
+  EXPECT_EQ(flexbody::test::slurp(dir / "filed_results"), "keep me too\n");
+  // A directory that cannot be made (its parent is a file) is one line too, naming it.
+  const CliRun below = run_fbsim(dir, "filed.yaml -o a_file/sub -q");
+  EXPECT_EQ(below.exit_code, 1);
+  EXPECT_EQ(std::count(below.err.begin(), below.err.end(), '\n'), 1) << below.err;
+  EXPECT_NE(below.err.find("a_file/sub: cannot create the output directory: Not a directory"), std::string::npos)
+      << below.err;
+}
+
+// Issue 13: a scene the user cannot read said "cannot open the scene" without why.
+TEST(FbsimCli, AnUnreadableSceneSaysWhy) {
+  if (::geteuid() == 0) GTEST_SKIP() << "runs as root, which reads a file of mode 000 anyway";
+  const auto& dir = bar_folder();
+  write_text(dir / "locked.yaml", kIssueScene);
+  std::filesystem::permissions(dir / "locked.yaml", std::filesystem::perms::none);
+  const CliRun run = run_fbsim(dir, "locked.yaml -o locked_out -q");
+  std::filesystem::permissions(dir / "locked.yaml", std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.err, "fbsim: error: locked.yaml: cannot open the scene: Permission denied\n");
 }

@@ -10,8 +10,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
+#include <cstdio>
 #include <fstream>
 #include <stdexcept>
+#include <system_error>
 #include <unordered_map>
 
 namespace flexbody::preprocess {
@@ -134,8 +137,12 @@ void check_readable(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path, ec)) throw std::runtime_error(fmt::format("{}: no such file", path.string()));
   if (std::filesystem::is_directory(path, ec))
     throw std::runtime_error(fmt::format("{}: is a directory, not a file", path.string()));
-  std::ifstream probe(path, std::ios::binary);
-  if (!probe) throw std::runtime_error(fmt::format("{}: cannot be opened for reading", path.string()));
+  errno = 0;
+  std::FILE* probe = std::fopen(path.c_str(), "rb");
+  if (probe == nullptr)
+    throw std::runtime_error(fmt::format("{}: cannot be opened for reading: {}", path.string(),
+                                         std::generic_category().message(errno)));
+  std::fclose(probe);
 }
 
 // The tetrahedra, and for every node tag the node's index in them (-1: not used by a tetrahedron).

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <set>
 #include <stdexcept>
+#include <system_error>
 
 namespace flexbody::preprocess {
 namespace {
@@ -69,7 +70,8 @@ bool is_body_spec(const std::filesystem::path& path) {
 PrepOptions read_body_spec(const std::filesystem::path& spec) {
   const std::string file = spec.string();
   const Reader r(file);
-  if (!std::ifstream(spec)) throw std::invalid_argument(fmt::format("{}: cannot open the body spec", file));
+  if (std::error_code error; std::filesystem::is_directory(spec, error) || !std::ifstream(spec))
+    throw std::invalid_argument(fmt::format("{}: cannot open the body spec: {}", file, Reader::why_unreadable(file)));
   YAML::Node loaded;
   try {
     loaded = YAML::LoadFile(file);
@@ -80,6 +82,7 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
   r.expect_map(root, "the body spec",
                {"input", "unit", "material", "mesh", "reduction", "interfaces", "load_points", "output_regions"});
   PrepOptions options;
+  options.spec = spec;
   const std::filesystem::path base = spec.parent_path();
   auto& recorded = options.recorded_options;
   recorded.emplace_back("spec", file);

@@ -5,8 +5,11 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string_view>
+#include <utility>
 
 namespace flexbody::preprocess {
 namespace {
@@ -29,6 +32,72 @@ std::uintmax_t file_bytes(const std::filesystem::path& file) {
   return error ? 0 : size;
 }
 
+// Strings come from the file, which anyone may have written: in the report each is shown with its control
+// characters escaped (C0, DEL and C1 as \xHH or \u00HH, bytes that are not UTF-8 as \xHH, a backslash doubled) and
+// cut after kShownBytes of the file's bytes; --json escapes by itself and takes the cut only.
+constexpr std::size_t kShownBytes = 200;
+constexpr std::size_t kShownOptions = 100;
+
+// The length of the valid UTF-8 sequence at text[i] and its code point; 0 when it is not one.
+std::pair<std::size_t, char32_t> utf8_at(std::string_view text, std::size_t i) {
+  const auto byte = [&text](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned char lead = byte(i);
+  const std::size_t length = lead >= 0xC2 && lead <= 0xDF ? 2 : lead >= 0xE0 && lead <= 0xEF ? 3
+                           : lead >= 0xF0 && lead <= 0xF4 ? 4 : 0;
+  if (length == 0 || i + length > text.size()) return {0, 0};
+  char32_t code = lead & (0x7F >> length);
+  for (std::size_t k = 1; k < length; ++k) {
+    if ((byte(i + k) & 0xC0) != 0x80) return {0, 0};
+    code = (code << 6) | (byte(i + k) & 0x3F);
+  }
+  const bool shortest = length == 2 || (length == 3 && code >= 0x800) || (length == 4 && code >= 0x10000);
+  if (!shortest || code > 0x10FFFF || (code >= 0xD800 && code <= 0xDFFF)) return {0, 0};
+  return {length, code};
+}
+
+// The first kShownBytes bytes of `text` (not splitting a UTF-8 sequence), then "... (N bytes)" if it is longer.
+std::size_t shown_length(std::string_view text) {
+  if (text.size() <= kShownBytes) return text.size();
+  std::size_t end = kShownBytes;
+  while (end > 0 && (static_cast<unsigned char>(text[end]) & 0xC0) == 0x80) --end;
+  return end;
+}
+std::string cut_note(std::string_view text) {
+  return text.size() > kShownBytes ? fmt::format("... ({} bytes)", text.size()) : std::string();
+}
+
+std::string printable(std::string_view text) {
+  const std::size_t end = shown_length(text);
+  std::string out;
+  for (std::size_t i = 0; i < end;) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c < 0x20 || c == 0x7F) {
+      out += fmt::format("\\x{:02x}", c);
+      ++i;
+    } else if (c == '\\') {
+      out += "\\\\";
+      ++i;
+    } else if (c < 0x80) {
+      out += static_cast<char>(c);
+      ++i;
+    } else if (const auto [length, code] = utf8_at(text, i); length == 0 || i + length > end) {
+      out += fmt::format("\\x{:02x}", c);
+      ++i;
+    } else if (code <= 0x9F) {  // C1 controls (U+0080 to U+009F), e.g. U+009B, a terminal's CSI
+      out += fmt::format("\\u{:04x}", static_cast<unsigned>(code));
+      i += length;
+    } else {
+      out.append(text.substr(i, length));
+      i += length;
+    }
+  }
+  return out + cut_note(text);
+}
+
+std::string capped(std::string_view text) {  // for --json: nlohmann escapes, only the length is cut
+  return std::string(text.substr(0, shown_length(text))) + cut_note(text);
+}
+
 nlohmann::ordered_json number_or_null(double value) {
   return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
 }
@@ -42,16 +111,18 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
   r += fmt::format("{} ({:.3g} MB): flexbody body file, format version {}{}\n", file.string(),
                    static_cast<double>(file_bytes(file)) / 1e6, body.format_version,
                    body.sealed ? ", sealed" : ", unsealed (not protected against damage: fbprep seal converts it)");
-  line("created by", fmt::format("{}, {}", p.created_by, p.created_utc));
-  line("source", fmt::format("{} (sha256 {})", p.source_file, p.source_sha256));
-  line("length unit", fmt::format("{}: {}", p.input_unit, p.unit_reason));
+  line("created by", fmt::format("{}, {}", printable(p.created_by), printable(p.created_utc)));
+  line("source", fmt::format("{} (sha256 {})", printable(p.source_file), printable(p.source_sha256)));
+  line("length unit", fmt::format("{}: {}", printable(p.input_unit), printable(p.unit_reason)));
   std::string options;
-  for (const auto& [name, value] : p.options) options += fmt::format("{}{}={}", options.empty() ? "" : ", ", name, value);
+  for (std::size_t k = 0; k < std::min(p.options.size(), kShownOptions); ++k)
+    options += fmt::format("{}{}={}", k ? ", " : "", printable(p.options[k].first), printable(p.options[k].second));
+  if (p.options.size() > kShownOptions) options += fmt::format(", ... ({} options in all)", p.options.size());
   line("options", options);
 
   const auto& m = body.material;
   r += "\nMaterial\n";
-  line(m.name, fmt::format("E = {:.4g} Pa, nu = {:.4g}, rho = {:.6g} kg/m^3", m.youngs_modulus, m.poisson_ratio,
+  line(printable(m.name), fmt::format("E = {:.4g} Pa, nu = {:.4g}, rho = {:.6g} kg/m^3", m.youngs_modulus, m.poisson_ratio,
                            m.density));
   r += "\nMass properties\n";
   line("mass", fmt::format("{:.6g} kg", body.mass.mass));
@@ -69,13 +140,20 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
                            vector3(mesh.nodes.colwise().maxCoeff().transpose()) + " m");
 
   const auto& modes = body.modes;
-  r += fmt::format("\nModes ({}, {} by {})\n", modes.count(), modes.kind, modes.eigensolver);
+  r += fmt::format("\nModes ({}, {} by {})\n", modes.count(), printable(modes.kind), printable(modes.eigensolver));
   r += fmt::format("  {:>4}  {:>16}  {:>14}\n", "mode", "frequency [Hz]", "rel. residual");
   const Eigen::Index first_static = modes.count() - modes.static_correction_modes;
   for (Eigen::Index k = 0; k < modes.count(); ++k)
     r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}{}\n", k + 1, modes.frequencies_hz(k), modes.relative_residuals(k),
                      k >= first_static ? "  static correction (Ritz value)" : "");
-  if (!modes.static_loads.empty()) line("static loads", fmt::format("{}", fmt::join(modes.static_loads, " ")));
+  if (!modes.static_loads.empty()) {
+    std::string loads;
+    for (const std::string& label : modes.static_loads) {
+      if (!loads.empty()) loads += ' ';
+      loads += printable(label);  // appended: GCC 12 warns falsely on "literal" + std::string&&
+    }
+    line("static loads", loads);
+  }
 
   const auto& fixed = modes.fixed_interface_frequencies_hz;
   if (fixed.size() > 0) {
@@ -102,12 +180,13 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
   if (!body.interfaces.empty()) {
     r += "\nInterfaces (body frame)\n";
     for (const format::Interface& i : body.interfaces)
-      line(i.name, fmt::format("{}, {} nodes, reference point {} m", i.coupling, i.nodes.size(), vector3(i.reference_point)));
+      line(printable(i.name), fmt::format("{}, {} nodes, reference point {} m", printable(i.coupling), i.nodes.size(),
+                                          vector3(i.reference_point)));
   }
   r += "\nStress recovery\n";
   if (body.recovery.empty()) line("output regions", "none");
   for (const format::RecoveryRegion& region : body.recovery)
-    line(region.name, fmt::format("{} nodes, stress modes {} x {}", region.nodes.size(), region.stress_modes.rows(),
+    line(printable(region.name), fmt::format("{} nodes, stress modes {} x {}", region.nodes.size(), region.stress_modes.rows(),
                                   region.stress_modes.cols()));
   return r;
 }
@@ -119,17 +198,17 @@ std::string body_json(const format::BodyData& body, const std::filesystem::path&
   j["file_bytes"] = file_bytes(file);
   j["format_version"] = body.format_version;
   j["sealed"] = body.sealed;
-  j["created_by"] = p.created_by;
-  j["created_utc"] = p.created_utc;
-  j["source_file"] = p.source_file;
-  j["source_sha256"] = p.source_sha256;
-  j["input_unit"] = p.input_unit;
-  j["unit_reason"] = p.unit_reason;
-  j["declared_unit"] = p.declared_unit.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(p.declared_unit);
+  j["created_by"] = capped(p.created_by);
+  j["created_utc"] = capped(p.created_utc);
+  j["source_file"] = capped(p.source_file);
+  j["source_sha256"] = capped(p.source_sha256);
+  j["input_unit"] = capped(p.input_unit);
+  j["unit_reason"] = capped(p.unit_reason);
+  j["declared_unit"] = p.declared_unit.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(capped(p.declared_unit));
   nlohmann::ordered_json options = nlohmann::ordered_json::object();
-  for (const auto& [name, value] : p.options) options[name] = value;
+  for (const auto& [name, value] : p.options) options[capped(name)] = capped(value);
   j["options"] = options;
-  j["material"] = {{"name", body.material.name},
+  j["material"] = {{"name", capped(body.material.name)},
                    {"E_pa", body.material.youngs_modulus},
                    {"nu", body.material.poisson_ratio},
                    {"rho_kgm3", body.material.density}};
@@ -143,8 +222,8 @@ std::string body_json(const format::BodyData& body, const std::filesystem::path&
   j["nodes"] = body.mesh.nodes.rows();
   j["elements"] = body.mesh.tets.rows();
   j["surface_triangles"] = body.mesh.surface_triangles.rows();
-  j["modes_kind"] = body.modes.kind;
-  j["eigensolver"] = body.modes.eigensolver;
+  j["modes_kind"] = capped(body.modes.kind);
+  j["eigensolver"] = capped(body.modes.eigensolver);
   const auto& f = body.modes.frequencies_hz;
   j["frequencies_hz"] = std::vector<double>(f.data(), f.data() + f.size());
   const auto& fixed = body.modes.fixed_interface_frequencies_hz;
@@ -163,15 +242,17 @@ std::string body_json(const format::BodyData& body, const std::filesystem::path&
       g.condition_mass_scaled_before ? number_or_null(*g.condition_mass_scaled_before) : nlohmann::ordered_json(nullptr);
   j["condition_G_scaled_after"] = number_or_null(g.condition_mass_scaled_after);
   j["k_hat_frequency_range_hz"] = {k_low, k_high};
-  j["static_loads"] = body.modes.static_loads;
+  std::vector<std::string> loads;
+  for (const std::string& label : body.modes.static_loads) loads.push_back(capped(label));
+  j["static_loads"] = loads;
   j["static_correction_modes"] = body.modes.static_correction_modes;
   nlohmann::ordered_json interfaces = nlohmann::ordered_json::array();
   for (const format::Interface& i : body.interfaces)
-    interfaces.push_back({{"name", i.name}, {"coupling", i.coupling}, {"nodes", i.nodes.size()}});
+    interfaces.push_back({{"name", capped(i.name)}, {"coupling", capped(i.coupling)}, {"nodes", i.nodes.size()}});
   j["interfaces"] = interfaces;
   nlohmann::ordered_json regions = nlohmann::ordered_json::array();
   for (const format::RecoveryRegion& region : body.recovery)
-    regions.push_back({{"name", region.name}, {"nodes", region.nodes.size()}});
+    regions.push_back({{"name", capped(region.name)}, {"nodes", region.nodes.size()}});
   j["output_regions"] = regions;
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }

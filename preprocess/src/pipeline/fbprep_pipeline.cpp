@@ -39,17 +39,30 @@ std::string utc_now() {
   return fmt::format("{:%Y-%m-%dT%H:%M:%SZ}", utc);
 }
 
-void check_output_location(const std::filesystem::path& input, const std::filesystem::path& output) {
+void check_output_location(const PrepOptions& options) {
+  const std::filesystem::path& output = options.output;
   if (output.empty()) throw std::invalid_argument("no output file given (-o FILE.fbh5)");
-  std::error_code same;
-  if (std::filesystem::equivalent(input, output, same))
-    throw std::invalid_argument(fmt::format("{}: the output would overwrite the input", output.string()));
+  // The same file by any path (a symbolic or hard link, a relative path): writing would replace it.
+  for (const auto& [input, what] : {std::pair{options.input, "the input"}, std::pair{options.spec, "the body spec"}}) {
+    std::error_code same;
+    if (!input.empty() && std::filesystem::equivalent(input, output, same))
+      throw std::invalid_argument(fmt::format("{}: the output would overwrite {} {}; choose another output (-o)",
+                                              output.string(), what, input.string()));
+  }
   const std::filesystem::path directory = output.has_parent_path() ? output.parent_path() : ".";
   std::error_code ec;
   if (!std::filesystem::is_directory(directory, ec))
     throw std::invalid_argument(fmt::format("{}: the output directory does not exist", directory.string()));
   if (std::filesystem::is_directory(output, ec))
     throw std::invalid_argument(fmt::format("{}: the output is a directory, not a file", output.string()));
+  if (std::filesystem::exists(output, ec) && !std::filesystem::is_regular_file(output, ec))
+    throw std::invalid_argument(fmt::format("{}: the output exists and is not a regular file (a device, a pipe or a "
+                                            "socket); choose another output (-o)", output.string()));
+  if (std::filesystem::exists(output, ec) && !std::filesystem::is_empty(output, ec) &&
+      !format::begins_like_body_file(output))
+    throw std::invalid_argument(fmt::format(
+        "{}: the output exists and is not a body file (it does not begin with a flexbody seal or HDF5's signature); "
+        "fbprep replaces only body files: remove it or choose another output (-o)", output.string()));
 }
 
 }  // namespace
@@ -61,7 +74,7 @@ std::string_view to_string(ReductionKind kind) {
 PrepSummary run_fbprep(const PrepOptions& options) {
   const auto start = Clock::now();
   check_material(options.material);
-  check_output_location(options.input, options.output);
+  check_output_location(options);
   // Refused before any work: a free-free basis cannot honour a rigid tie, and Craig-Bampton needs one.
   const bool any_rbe2 = std::any_of(options.interfaces.begin(), options.interfaces.end(),
                                     [](const InterfaceRequest& i) { return i.coupling == "rbe2"; });

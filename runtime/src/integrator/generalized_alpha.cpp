@@ -242,20 +242,43 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   qdd_ = x.head(n);
   lambda_ = x.tail(m);
   a_ = qdd_;
-  const double beta_prime = (1.0 - alpha_m_) / (beta_ * options.step * options.step * (1.0 - alpha_f_));
-  const double gamma_prime = gamma_ / (beta_ * options.step);
-  if (options.newton_matrix == NewtonMatrix::dense)
-    solver_ = std::make_unique<detail::DenseNewton>(system, beta_prime, gamma_prime);
+  build_solver(options.step);
+}
+
+void GeneralizedAlpha::build_solver(double h) {
+  const double beta_prime = (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_));
+  const double gamma_prime = gamma_ / (beta_ * h);
+  if (options_.newton_matrix == NewtonMatrix::dense)
+    solver_ = std::make_unique<detail::DenseNewton>(system_, beta_prime, gamma_prime);
   else
-    solver_ = std::make_unique<detail::ConstantCoreNewton>(system, beta_prime, gamma_prime);
+    solver_ = std::make_unique<detail::ConstantCoreNewton>(system_, beta_prime, gamma_prime);
+  solver_step_ = h;
+  refresh_ = true;
 }
 
 GeneralizedAlpha::~GeneralizedAlpha() = default;
 
 void GeneralizedAlpha::step() {
-  const double h = options_.step;
+  advance(options_.step, t0_ + static_cast<double>(steps_ + 1) * options_.step);
+  ++steps_;
+}
+
+void GeneralizedAlpha::step_to(double t_end) {
+  const double h = t_end - t_;
+  if (!(h > 0.0) || !(h <= options_.step * (1.0 + kStepToSlack)))
+    throw std::invalid_argument("generalized-alpha: step_to(" + std::to_string(t_end) + ") from t = " +
+                                std::to_string(t_) + " s is not a step of at most " + std::to_string(options_.step) +
+                                " s forward");
+  advance(h, t_end);
+  t0_ = t_end;  // later steps: t0 + k h from here
+  steps_ = 0;
+}
+
+void GeneralizedAlpha::advance(double h, double t1) {
   const Eigen::Index n = q_.size(), m = lambda_.size();
-  const double t1 = t0_ + static_cast<double>(steps_ + 1) * h;
+  // β' and γ' of the solver's matrix are those of the step it was built for; a step size changed beyond rounding
+  // rebuilds it (step_to), a kept one is a modified Newton matrix and gives the same solution.
+  if (std::abs(h - solver_step_) > kStepToSlack * solver_step_) build_solver(h);
   const double beta_prime = (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_));
   const double gamma_prime = gamma_ / (beta_ * h);
   // The iterate, kept as members so that their storage is reused from step to step.
@@ -417,7 +440,6 @@ void GeneralizedAlpha::step() {
   if (!fresh_this_step) extra_iterations_ += std::max(0, iterations_ - 2);  // a fresh matrix is not stale
   if (extra_iterations_ >= kExtraIterationsPerRebuild) refresh_ = true;
   t_ = t1;
-  ++steps_;
   total_iterations_ += iterations_;
 }
 

@@ -47,6 +47,18 @@ struct ReadOptions {
 /// simulator that uses HDF5 itself should not call it (its files would not be flushed at exit).
 void skip_hdf5_cleanup_at_exit();
 
+/// For a program that owns its process (fbprep): on SIGINT, SIGTERM and SIGHUP, removes the temporary file that
+/// write_body_file is writing at that moment (if any), then lets the signal end the process as it would have
+/// (default action, re-raised). Signals the process ignores (nohup) stay ignored. Without it, an interrupted write
+/// leaves `.NAME.tmp-PID-N` beside the target; SIGKILL always does. Call once, early, from the main thread; a
+/// simulator with its own signal handling should not call it.
+void remove_temporary_body_file_on_signal();
+
+/// Whether the file at `path` begins like a body file: with a flexbody seal or HDF5's signature at byte 0 (a
+/// body file, possibly damaged or unsealed, or another HDF5 file). False when it cannot be read. For programs that
+/// replace an existing file with a body file only when the file was one (fbprep -o, fbprep seal -o).
+[[nodiscard]] bool begins_like_body_file(const std::filesystem::path& path);
+
 /// Checks that `body` is complete and consistent (shapes against each other, finite numbers).
 /// Throws BodyFileError naming the first problem found.
 void validate(const BodyData& body);

@@ -10,11 +10,14 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <initializer_list>
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 
 namespace flexbody::format {
 
@@ -27,10 +30,22 @@ class YamlReader {
     try {
       return YAML::LoadFile(file_);
     } catch (const YAML::BadFile&) {
-      throw std::invalid_argument(fmt::format("{}: cannot open the {}", file_, what));
+      throw std::invalid_argument(fmt::format("{}: cannot open the {}: {}", file_, what, why_unreadable(file_)));
     } catch (const YAML::Exception& e) {
       throw std::invalid_argument(fmt::format("{}:{}: {}", file_, e.mark.line + 1, e.msg));
     }
+  }
+
+  /// Why `file` cannot be opened for reading, as the system says it ("No such file or directory", "Permission
+  /// denied", "Is a directory").
+  [[nodiscard]] static std::string why_unreadable(const std::string& file) {
+    std::error_code error;
+    if (std::filesystem::is_directory(file, error)) return std::make_error_code(std::errc::is_a_directory).message();
+    errno = 0;
+    std::FILE* probe = std::fopen(file.c_str(), "rb");
+    if (probe == nullptr) return std::generic_category().message(errno);
+    std::fclose(probe);
+    return "unreadable";
   }
 
   [[noreturn]] void fail(const YAML::Node& at, const std::string& message) const {

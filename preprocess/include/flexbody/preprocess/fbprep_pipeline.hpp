@@ -46,7 +46,10 @@ enum class ReductionKind { free_free, craig_bampton };
 
 struct PrepOptions {
   std::filesystem::path input;
+  /// The body file to write. It may not be the input or the spec (the same file by any path), and an existing
+  /// file there is replaced only if it is empty or begins like a body file (format::begins_like_body_file).
   std::filesystem::path output;
+  std::filesystem::path spec;  ///< the body spec the options were read from (read_body_spec); empty: none
   GmshImportOptions mesh;  ///< unit, mesh size, order
   Material material = parse_material("steel");
   FreeFreeOptions modes;   ///< number of modes (Craig-Bampton: fixed-interface modes), fmax, eigensolver

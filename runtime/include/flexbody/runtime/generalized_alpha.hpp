@@ -116,6 +116,16 @@ class GeneralizedAlpha {
 
   /// Advances one step of size h. Throws StepFailure (and leaves the state at the last good step).
   void step();
+  /// Advances one step that ends exactly at `t_end`, for a run that must end on its end time when that is not a
+  /// whole number of steps: 0 < t_end − time() ≤ (1 + kStepToSlack) h. A step size that differs from the one the
+  /// Newton solver was built for by more than kStepToSlack rebuilds it (a factorization of the constant core:
+  /// generalized-α itself takes a change of h between steps, its acceleration-like variable a does not depend on
+  /// h); a difference below that (t_end a whole number of steps, up to rounding) keeps it, as a modified Newton
+  /// matrix (the same solution). Later step()s take steps of h from t_end. Throws std::invalid_argument for a
+  /// t_end out of that range, and StepFailure as step() does.
+  void step_to(double t_end);
+  /// The relative difference of step sizes that step_to() treats as rounding.
+  static constexpr double kStepToSlack = 1e-9;
 
   [[nodiscard]] double time() const { return t_; }
   [[nodiscard]] const Eigen::VectorXd& coordinates() const { return q_; }
@@ -130,6 +140,8 @@ class GeneralizedAlpha {
   [[nodiscard]] const std::vector<std::string>& warnings() const { return warnings_; }
 
  private:
+  void advance(double h, double t1);  ///< one step of size h to time t1 (step, step_to)
+  void build_solver(double h);        ///< the Newton solver for steps of size h (β', γ'), to be factorized
   void check_deformation(double t, const Eigen::VectorXd& q) const;
   void check_spin(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
   [[nodiscard]] std::string last_state_diagnosis() const;
@@ -164,6 +176,7 @@ class GeneralizedAlpha {
   std::vector<std::string> warnings_;
   std::vector<char> spin_warned_;  ///< per body: its spin warning was given
   std::unique_ptr<detail::NewtonSolver> solver_;
+  double solver_step_ = 0.0;  ///< the step size solver_ was built for (its β' and γ')
   int iterations_ = 0;
   long total_iterations_ = 0, factorizations_ = 0;
   bool refresh_ = true;  ///< build the Newton matrix at the next iteration

@@ -1078,6 +1078,33 @@ def _(f, c):
         "Validity has no check tying this to the rest (upsilon = fields C, K_hat to the frequencies): a gap if accepted"
 
 
+@mutator("plausible but inconsistent")
+def _(f, c):
+    v = c.variant(["y_row fields x2", "frequencies x2", "residuals x1e6", "static load renamed", "shift x10",
+                   "condition numbers x10", "mode coefficients sign"])
+    if v == "y_row fields x2":
+        d = f["interfaces/root/y_row"][()]
+        d[4:] *= 2
+        f["interfaces/root/y_row"][...] = d
+    elif v == "frequencies x2":
+        f["reduction/frequencies_hz"][...] = f["reduction/frequencies_hz"][()] * 2
+    elif v == "residuals x1e6":
+        f["reduction/relative_residuals"][...] = f["reduction/relative_residuals"][()] * 1e6
+    elif v == "static load renamed":
+        set_attr(f["reduction"], "static_loads", fixed("tip:fz"))
+    elif v == "shift x10":
+        set_attr(f["reduction"], "shift", np.float64(f["reduction"].attrs["shift"] * 10))
+    elif v == "condition numbers x10":
+        for name in ("condition_G_after", "condition_G_before", "condition_mode_gram_before"):
+            set_attr(f["gcms"], name, np.float64(f["gcms"].attrs[name] * 10))
+    else:
+        d = f["gcms/mode_coefficients"][()]
+        d[:, 0] = -d[:, 0]
+        f["gcms/mode_coefficients"][...] = d
+    return v, MAY, "each value is plausible alone; Validity has no check tying it to the rest (a gap if accepted: " \
+        "y_row[4:] = weighted fields, frequencies to K_hat, C = fields^T M_s upsilon)"
+
+
 @mutator("nodes moved")
 def _(f, c):
     d = f["mesh/nodes"][()]
@@ -1154,7 +1181,7 @@ def semantic_mutation(base_bytes, rng, seed, index, work, path):
     cwd = os.getcwd()
     os.chdir(work)  # external names resolve relative to the case's directory, as the tools will see them
     try:
-        with h5py.File(path, "r+") as f:
+        with h5py.File(path, "r+") as f, np.errstate(all="ignore"):  # float16 overflow is meant
             description, tag, reason = fn(f, ctx)
     finally:
         os.chdir(cwd)
@@ -1482,8 +1509,14 @@ def main():
         with concurrent.futures.ProcessPoolExecutor(args.jobs, mp_context=context, initializer=init_worker,
                                                     initargs=(config,)) as pool:
             futures = [pool.submit(run_case, *t, keep=keep) for t in todo]
-            for fut in futures:
-                results.append(fut.result())
+            step, done, failing = max(100, len(todo) // 20), 0, 0
+            for fut in concurrent.futures.as_completed(futures):
+                done += 1
+                failing += bool(fut.result().get("failed"))
+                if done % step == 0 and done < len(todo):
+                    print(f"fuzz_body_files.py: {done} of {len(todo)} cases, {failing} with a forbidden outcome, "
+                          f"{time.monotonic() - started:.0f} s", file=sys.stderr, flush=True)
+            results = [fut.result() for fut in futures]
     elapsed = time.monotonic() - started
     shutil.rmtree(work, ignore_errors=True)
 

@@ -1313,6 +1313,9 @@ def init_worker(config):
             STATE["bytes"][name] = fh.read()
         STATE["meta"][name] = metadata_ranges(path, len(STATE["bytes"][name]))
         STATE["structures"][name] = checksummed_structures(STATE["bytes"][name])
+        if len(STATE["structures"][name]) < 2:  # the superblock and at least one object header whose checksum matched
+            raise SystemExit(f"fuzz_body_files.py: {path}: no version-2 HDF5 object headers with a matching lookup3 "
+                             "checksum; the checksummed family needs them")
 
 
 def run_case(family, seed, index, keep=False):

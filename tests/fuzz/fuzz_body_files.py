@@ -1242,23 +1242,26 @@ OUTCOMES = ALLOWED + FORBIDDEN
 def classify(tool, run, family, tag, max_line):
     """Returns the run's outcome (one of OUTCOMES) and a short note."""
     prefix = f"{tool}: "
-    lines = run.err.splitlines()
+    # ASAN_OPTIONS=allocator_may_return_null=1 makes ASan's malloc fail as the C library's does (libhdf5 then
+    # reports an error) and say so on a line of its own, which is not the tool's
+    lines = [l for l in run.err.splitlines() if not re.match(r"==\d+==WARNING: AddressSanitizer failed to allocate", l)]
     errors = [l for l in lines if not l.startswith("fbsim: warning: ")] if tool == "fbsim" else lines
     if run.timed_out:
         return "timeout", f"still running after {run.elapsed:.1f} s"
     if run.signal:
         name = signal.Signals(run.signal).name if run.signal in signal.Signals._value2member_map_ else str(run.signal)
         return "signal", f"killed by {name}" + (f"; stderr: {run.err.strip()[:300]}" if run.err.strip() else "")
-    if re.search(r"bad_alloc|length_error|bad_array_new_length|cannot allocate|out of memory", run.err, re.I):
-        return "bad_alloc", run.err.strip()[:300]
-    if re.search(r"Sanitizer|runtime error:|LeakSanitizer", run.err):
-        return "sanitizer", run.err.strip()[:300]
+    err = "\n".join(lines)
+    if re.search(r"bad_alloc|length_error|bad_array_new_length|cannot allocate|out of memory", err, re.I):
+        return "bad_alloc", err.strip()[:300]
+    if re.search(r"Sanitizer|runtime error:", err):
+        return "sanitizer", err.strip()[:300]
     if any(len(l.encode()) > max_line for l in lines):
         return "overlong line", f"a stderr line of {max(len(l.encode()) for l in lines)} bytes"
     if any(not l.startswith(prefix) for l in lines):  # e.g. HDF5-DIAG or "HDF5: infinite loop closing library"
         return "library noise", run.err.strip()[:300]
-    if re.search(r"[\x00-\x09\x0b-\x1f\x7f]", run.err):  # text from the file must reach the terminal cleaned
-        return "control characters", repr(re.findall(r"[\x00-\x09\x0b-\x1f\x7f]", run.err)[:5])
+    if re.search(r"[\x00-\x09\x0b-\x1f\x7f]", err):  # text from the file must reach the terminal cleaned
+        return "control characters", repr(re.findall(r"[\x00-\x09\x0b-\x1f\x7f]", err)[:5])
     if run.exit_code == 0:
         if errors:
             return "stderr on acceptance", run.err.strip()[:300]
@@ -1429,7 +1432,8 @@ def failure_list(results, limit):
         if r.get("harness_error"):
             lines.append(f"- {r['id']}: HARNESS ERROR {r['description']}")
             continue
-        bad = ", ".join(f"{tool}: {t['outcome']} ({t['note'][:160]})" if t["note"] else f"{tool}: {t['outcome']}"
+        bad = ", ".join(f"{tool}: {t['outcome']} ({' '.join(t['note'].split())[:160]})" if t["note"] else
+                        f"{tool}: {t['outcome']}"
                         for tool, t in r["tools"].items() if t["outcome"] in FORBIDDEN)
         lines.append(f"- {r['id']} [{r['kind']}; {r['tag']}] {r['description'][:160]}: {bad}")
     if len(lines) > limit:

@@ -8,6 +8,7 @@
 #include "body_checks.hpp"
 #include "body_file_seal.hpp"
 #include "file_image.hpp"
+#include "hdf5_structure.hpp"
 #include "hdf5_io.hpp"
 
 #include "flexbody/format/body_file.hpp"
@@ -302,6 +303,15 @@ BodyData read_body_file(const std::filesystem::path& path, const ReadOptions& op
   // A simulator reads only what a seal vouches for: an unsealed file (version 3, or one rewritten by another
   // program) is refused before HDF5 parses it, since libhdf5 can crash or hang on damaged bytes.
   if (seal.state == detail::SealState::absent && options.require_seal) throw BodyFileError(detail::unsealed_message(label));
+  // A sealed file's HDF5 metadata is the subset fbprep writes, checked before libhdf5 follows any address in it: a
+  // seal can be recomputed, and libhdf5 1.10 crashed on changed addresses of dense storage (issue 13).
+  if (seal.state == detail::SealState::valid && options.require_seal) {
+    const std::string problem = detail::check_hdf5_structure(bytes, detail::kSealBytes);
+    if (!problem.empty())
+      throw BodyFileError(label + ": its HDF5 structure is not what fbprep writes (" + problem +
+                          "): altered and sealed again, or written by fbprep 0.6.0, which `fbprep seal " +
+                          label + "` converts");
+  }
   const detail::QuietHdf5Errors quiet;
   BodyData body;
   body.sealed = seal.state == detail::SealState::valid;

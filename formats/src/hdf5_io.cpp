@@ -59,6 +59,13 @@ Handle file_access(const Location& context) {
   return access;
 }
 
+/// Keeps a group's links and attributes in its object header however many there are (HDF5 moves more than 8 into a
+/// fractal heap and B-tree by default): readers refuse those structures in a sealed file (hdf5_structure.hpp).
+bool keep_compact(hid_t creation) {
+  constexpr unsigned kMany = 65535;  // the largest count HDF5 accepts
+  return H5Pset_attr_phase_change(creation, kMany, kMany) >= 0 && H5Pset_link_phase_change(creation, kMany, kMany) >= 0;
+}
+
 }  // namespace
 
 std::string hdf5_error_detail() {
@@ -93,7 +100,8 @@ Location create_file(const std::filesystem::path& path, const std::string& file_
     context.fail_hdf5("cannot set up file access properties");
   }
   Handle creation(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
-  if (!creation.valid() || (user_block_bytes > 0 && H5Pset_userblock(creation.id(), user_block_bytes) < 0)) {
+  if (!creation.valid() || (user_block_bytes > 0 && H5Pset_userblock(creation.id(), user_block_bytes) < 0) ||
+      !keep_compact(creation.id())) {
     context.fail_hdf5("cannot set up file creation properties");
   }
   Handle file(H5Fcreate(path.string().c_str(), H5F_ACC_EXCL, creation.id(), access.id()), H5Fclose);
@@ -155,7 +163,9 @@ void flush_and_close(Location& file) {
 
 Location create_group(const Location& parent, std::string_view name) {
   const std::string key(name);
-  Handle group(H5Gcreate2(parent.id(), key.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+  const Handle creation(H5Pcreate(H5P_GROUP_CREATE), H5Pclose);
+  if (!creation.valid() || !keep_compact(creation.id())) parent.fail_hdf5("cannot set up group creation properties");
+  Handle group(H5Gcreate2(parent.id(), key.c_str(), H5P_DEFAULT, creation.id(), H5P_DEFAULT), H5Gclose);
   if (!group.valid()) parent.fail_hdf5("cannot create group " + parent.child(name));
   return {std::move(group), parent.file_label(), parent.child(name)};
 }

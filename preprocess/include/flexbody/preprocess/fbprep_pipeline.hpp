@@ -28,7 +28,7 @@
 namespace flexbody::preprocess {
 
 /// The fbprep version written into every body file (created_by).
-inline constexpr const char* kFbprepVersion = "0.6.0";  // the package version (CMakeLists.txt)
+inline constexpr const char* kFbprepVersion = "0.6.1";  // the package version (CMakeLists.txt)
 
 /// An output region for stress recovery: the nodes of the selected surface patch, or every node.
 struct OutputRegionRequest {

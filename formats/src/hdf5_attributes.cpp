@@ -85,6 +85,12 @@ bool has_attribute(const Location& file, const std::string& object_path, std::st
 
 void write_string_attribute(const Location& loc, std::string_view name, std::string_view value) {
   // HDF5 has no zero-size string type: "" is stored as one NUL byte, which reads back as "".
+  // An attribute lives in its object header, whose messages hold less than 64 KiB; a longer string would go to
+  // dense storage, which readers refuse in a sealed file (hdf5_structure.hpp).
+  if (value.size() > kMaxWrittenStringBytes) {
+    loc.fail(loc.child(name) + " would be a string of " + std::to_string(value.size()) + " bytes; a body file holds "
+             "strings of at most " + std::to_string(kMaxWrittenStringBytes) + " bytes");
+  }
   std::string text(value);
   if (text.empty()) text.push_back('\0');
   const Handle type(H5Tcopy(H5T_C_S1), H5Tclose);

@@ -124,6 +124,8 @@ void write_int_attribute(const Location& loc, std::string_view name, int value);
 void write_double_vector_attribute(const Location& loc, std::string_view name,
                                    std::span<const double> values);
 
+/// Longest string attribute written: it must fit one object-header message (less than 64 KiB).
+inline constexpr std::size_t kMaxWrittenStringBytes = 65000;
 /// Longest string attribute accepted (a source path or an option value is far shorter).
 inline constexpr std::size_t kMaxStringBytes = std::size_t{1} << 20;
 /// Reads a scalar string attribute: fixed-length, or variable-length where the Location allows it.

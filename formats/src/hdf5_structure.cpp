@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <exception>
 #include <set>
 #include <vector>
 
@@ -16,6 +17,9 @@ namespace {
 constexpr std::uint64_t kUndefined = ~std::uint64_t{0};
 constexpr std::size_t kMaxObjects = 100000;  // objects (and chunks) a body file may hold; kMaxLinks in hdf5_io.hpp
 constexpr std::string_view kSuperblockSignature{"\x89HDF\r\n\x1a\n", 8};
+constexpr int kMaxDepth = 8;                     // groups below the root (fbprep's files: 3)
+constexpr std::uint64_t kMaxStringType = 65535;   // a string attribute in an object header holds less
+constexpr std::uint64_t kMaxAttributeValues = 1 << 20;
 
 // The messages fbprep's files hold: NIL (padding), dataspace, link info, datatype, fill value, link, data layout,
 // group info, attribute, continuation, attribute info. A filter pipeline, an external file list, a shared message
@@ -74,10 +78,11 @@ class Walk {
       throw Refusal{"the superblock's end-of-file address " + std::to_string(end) + " is not the file's size " +
                     std::to_string(file_.size())};
     // A work list, not recursion: a crafted chain of groups or chunks cannot exhaust the stack.
-    pending_.push_back({file_.uint(base_ + 36, 8), "/"});
+    pending_.push_back({file_.uint(base_ + 36, 8), "/", 0});
     while (!pending_.empty()) {
       const Pending next = pending_.back();
       pending_.pop_back();
+      depth_ = next.depth;
       object(next.address, next.path);
     }
   }
@@ -111,6 +116,7 @@ class Walk {
     const std::uint64_t size = file_.uint(pos, width);
     pos += width;
     // The messages, then a 4-byte checksum, must lie in the file; continuation chunks join the list as found.
+    if (size > file_.size()) throw Refusal{header + " declares " + std::to_string(size) + " bytes of messages"};
     (void)locate(pos - base_, size + 4, header);
     chunk_list_.assign(1, {pos, pos + static_cast<std::size_t>(size)});
     for (std::size_t i = 0; i < chunk_list_.size(); ++i) {
@@ -133,6 +139,11 @@ class Walk {
       if (type >= sizeof kAllowedMessage || !kAllowedMessage[type])
         throw Refusal{path + " holds an HDF5 message of type " + std::to_string(type) + message_name(type) +
                       ", which fbprep never writes"};
+      // fbprep's messages are at most constant (bit 0) and not shareable (bit 2). A shared one (bit 1) makes libhdf5
+      // read the message from another object header at any address (a review looped it into a stack overflow).
+      if ((file_.uint(pos + 3, 1) & ~std::uint64_t{0x05}) != 0)
+        throw Refusal{path + " holds a message of type " + std::to_string(type) + " with flags fbprep never sets (" +
+                      std::to_string(file_.uint(pos + 3, 1)) + "; 2 would share it from another object)"};
       message(type, body, size, path);
       pos = body + size;
     }
@@ -160,6 +171,21 @@ class Walk {
         }
         return;
       }
+      case 0x01: dataspace(at, size, path); return;
+      case 0x03: (void)datatype(at, size, path); return;
+      case 0x05:  // fill value, version 3: flags only; a defined value (bit 5) is never written (libhdf5 converts it)
+        if (size != 2 || file_.uint(at, 1) != 3 || (file_.uint(at + 1, 1) & 0xE0U) != 0)
+          throw Refusal{path + " has a fill value message fbprep never writes (a defined fill value, or another form)"};
+        return;
+      case 0x08: layout(at, size, path); return;
+      case 0x0A: {  // group info, version 0: flags, [max compact, min dense], [estimated entries, name length]
+        need(2);
+        const auto info_flags = static_cast<unsigned>(file_.uint(at + 1, 1));
+        const std::size_t expected = 2 + ((info_flags & 1U) != 0 ? 4 : 0) + ((info_flags & 2U) != 0 ? 4 : 0);
+        if (file_.uint(at, 1) != 0 || (info_flags & ~3U) != 0 || size != expected)
+          throw Refusal{path + " has a malformed group info message"};
+        return;
+      }
       case 0x06: link(at, size, path); return;
       case 0x0C: attribute(at, size, path); return;
       case 0x10: {  // continuation: address and length of a chunk "OCHK", messages, checksum
@@ -174,7 +200,7 @@ class Walk {
         chunk_list_.push_back({chunk + 4, chunk + static_cast<std::size_t>(length) - 4});
         return;
       }
-      default: return;  // bounded by its chunk; libhdf5 decodes it
+      default: return;  // NIL: padding
     }
   }
 
@@ -203,27 +229,79 @@ class Walk {
       throw Refusal{path + " is " + (type == 1 ? "a soft link" : type == 64 ? "an external link" : "a user-defined link") +
                     "; a body file holds hard links only"};
     }
-    pending_.push_back({file_.uint(take(8), 8), path});
+    // fbprep's deepest object is /interfaces/NAME/rotation (depth 3); a crafted chain of thousands of groups
+    // overflowed libhdf5's stack in its link walk.
+    if (depth_ + 1 > kMaxDepth) throw Refusal{path + " lies deeper than " + std::to_string(kMaxDepth) + " groups"};
+    pending_.push_back({file_.uint(take(8), 8), path, depth_ + 1});
   }
 
-  /// Attribute message, version 3: version, flags, name size, datatype size, dataspace size, charset, then the
-  /// name, datatype, dataspace and data. A variable-length type (class 9) keeps its data in the global heap.
+  /// Attribute message, version 3: version, flags (0: neither type nor space shared), name size, datatype size,
+  /// dataspace size, charset, then the name, datatype, dataspace and data, each checked as its own message would be.
   void attribute(std::size_t at, std::size_t size, const std::string& object) {
     std::string what = "an attribute of " + object;
     if (size < 9) throw Refusal{what + " is shorter than its header"};
-    if (file_.uint(at, 1) != 3) throw Refusal{what + " has a message version other than 3"};
+    if (file_.uint(at, 1) != 3 || file_.uint(at + 1, 1) != 0 || file_.uint(at + 8, 1) > 1)
+      throw Refusal{what + " has a form fbprep never writes (version, shared parts or character set)"};
     const std::uint64_t name = file_.uint(at + 2, 2), type = file_.uint(at + 4, 2), space = file_.uint(at + 6, 2);
-    if (9 + name + type + space > size) throw Refusal{what + " declares parts longer than its message"};
-    if (type == 0) throw Refusal{what + " has no datatype"};
-    if (name > 0) what = child(object, text(at + 9, static_cast<std::size_t>(name - 1)));  // the name ends in a NUL
-    if ((file_.uint(at + 9 + name, 1) & 0x0FU) == 9)
-      throw Refusal{what + " is a variable-length string (or sequence), whose values live in the global heap; a sealed "
+    if (name == 0 || 9 + name + type + space > size) throw Refusal{what + " declares parts longer than its message"};
+    what = child(object, text(at + 9, static_cast<std::size_t>(name - 1)));  // the name ends in a NUL
+    const std::size_t type_at = at + 9 + static_cast<std::size_t>(name);
+    const std::uint64_t element = datatype(type_at, static_cast<std::size_t>(type), what);
+    const std::uint64_t points = dataspace(type_at + type, static_cast<std::size_t>(space), what);
+    if (points > kMaxAttributeValues || element * points > size - (9 + name + type + space))
+      throw Refusal{what + " declares more values than its message holds"};
+  }
+
+  /// Datatype message (also inside an attribute): version 1, fixed-point (class 0), floating-point (1) or a
+  /// fixed-length string (3) with exactly their properties. A variable-length type (class 9) keeps its values in the
+  /// global heap. Returns the size of one element.
+  std::uint64_t datatype(std::size_t at, std::size_t size, const std::string& path) {
+    if (size < 8) throw Refusal{path + " has a datatype shorter than its header"};
+    const auto version_class = static_cast<unsigned>(file_.uint(at, 1));
+    const unsigned type_class = version_class & 0x0FU;
+    const std::uint64_t element = file_.uint(at + 4, 4);
+    if (type_class == 9)
+      throw Refusal{path + " is a variable-length string (or sequence), whose values live in the global heap; a sealed "
                     "body file holds fixed-length strings only"};
+    const std::size_t properties = type_class == 0 ? 4 : type_class == 1 ? 12 : type_class == 3 ? 0 : 1000;
+    if ((version_class >> 4) != 1 || properties == 1000 || size != 8 + properties || element == 0 ||
+        element > (type_class == 3 ? kMaxStringType : 16))
+      throw Refusal{path + " has a datatype fbprep never writes (class " + std::to_string(type_class) + ", " +
+                    std::to_string(element) + " bytes)"};
+    return element;
+  }
+
+  /// Dataspace message (also inside an attribute), version 2: scalar (rank 0) or simple of rank 1 or 2, with or
+  /// without maximum dimensions. Returns the number of points (capped: the reader checks declared sizes itself).
+  std::uint64_t dataspace(std::size_t at, std::size_t size, const std::string& path) {
+    if (size < 4) throw Refusal{path + " has a dataspace shorter than its header"};
+    const std::uint64_t rank = file_.uint(at + 1, 1), flags = file_.uint(at + 2, 1), kind = file_.uint(at + 3, 1);
+    const bool well_formed = file_.uint(at, 1) == 2 && rank <= 2 && (flags & ~std::uint64_t{1}) == 0 &&
+                             ((kind == 0 && rank == 0) || (kind == 1 && rank >= 1)) &&
+                             size == 4 + 8 * rank * (1 + flags);
+    if (!well_formed) throw Refusal{path + " has a dataspace fbprep never writes"};
+    std::uint64_t points = 1;
+    for (std::uint64_t d = 0; d < rank; ++d) {
+      const std::uint64_t dim = file_.uint(at + 4 + 8 * d, 8);
+      points = dim == 0 ? 0 : (points > kMaxAttributeValues / dim ? kMaxAttributeValues + 1 : points * dim);
+    }
+    return points;
+  }
+
+  /// Data layout message, version 3, contiguous (class 1): the address and size of the values, inside the file
+  /// (or an undefined address: storage never allocated, which the reader refuses by its size). Compact, chunked and
+  /// virtual layouts are never written (a virtual one makes libhdf5 read the global heap while opening the dataset).
+  void layout(std::size_t at, std::size_t size, const std::string& path) {
+    if (size != 18 || file_.uint(at, 1) != 3 || file_.uint(at + 1, 1) != 1)
+      throw Refusal{path + " has a data layout fbprep never writes (only contiguous storage)"};
+    const std::uint64_t address = file_.uint(at + 2, 8), bytes = file_.uint(at + 10, 8);
+    if (address != kUndefined) (void)locate(address, bytes, path + "'s values");
   }
 
   struct Pending {
     std::uint64_t address;
     std::string path;
+    int depth;  ///< 0 for the root group
   };
 
   /// `length` bytes at `at` as text for a message (BodyFileError makes control characters spaces), at most 200.
@@ -253,6 +331,7 @@ class Walk {
   std::vector<Chunk> chunk_list_;   ///< the chunks of the object header being checked
   std::set<std::uint64_t> objects_, chunks_;
   std::size_t structures_ = 0;
+  int depth_ = 0;  ///< of the object header being checked
 };
 
 }  // namespace
@@ -262,6 +341,8 @@ std::string check_hdf5_structure(std::string_view bytes, std::size_t base) {
     Walk(bytes, base).run();
   } catch (const Refusal& refusal) {
     return refusal.what;
+  } catch (const std::exception& error) {  // bad_alloc on a crafted structure: refused, never escaping
+    return std::string("its structure cannot be checked (") + error.what() + ")";
   }
   return "";
 }

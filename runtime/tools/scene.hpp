@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -62,8 +63,12 @@ inline constexpr double kMostSteps = 1e9;
 
 /// The steps from 0 to `end` with step `h`: whole steps, and the last one shortened to end exactly on `end` when
 /// `end` is not a whole number of steps (a remainder below GeneralizedAlpha::kStepToSlack h is rounding, not a step).
+/// The rounding of end / h itself grows with the count (8 ε per step count), so that counts past 1e7 do not gain a
+/// spurious last step of a few ε end.
 [[nodiscard]] inline double step_count(double end, double h) {
-  return std::max(1.0, std::ceil(end / h - runtime::GeneralizedAlpha::kStepToSlack));
+  const double steps = end / h;
+  const double slack = std::max(runtime::GeneralizedAlpha::kStepToSlack, 8.0 * std::numeric_limits<double>::epsilon() * steps);
+  return std::max(1.0, std::ceil(steps - slack));
 }
 
 /// Reads and assembles a scene; body files are read relative to the scene's directory.

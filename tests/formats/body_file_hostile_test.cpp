@@ -6,6 +6,7 @@
 #include "test_body.hpp"
 
 #include "body_file_seal.hpp"
+#include "hdf5_structure.hpp"
 
 #include "flexbody/format/body_file.hpp"
 
@@ -16,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <utility>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -134,7 +136,9 @@ TEST_F(Hostile, ChunkedFilteredAndExternalDatasetsAreRefused) {
     ASSERT_GE(H5Pset_chunk(creation.get(), 2, chunk.data()), 0);
     restore_g_with(path, creation.get());
     reseal(path);
-    expect_refused(path, {"/gcms/G is stored in chunks; a body file's datasets are contiguous"});
+    expect_refused(path, {"/gcms/G has a data layout fbprep never writes (only contiguous storage)"});
+    expect_body_file_error([&] { (void)read_body_file(path, ReadOptions{.require_seal = false}); },
+                           {"/gcms/G is stored in chunks; a body file's datasets are contiguous"});
   }
   {
     const auto path = good_file("deflated.fbh5");
@@ -202,6 +206,7 @@ TEST_F(Hostile, ManyInterfacesAndOptionsStayInTheirObjectHeaders) {
   for (int k = 0; k < 16; ++k) body.provenance.options.emplace_back("option" + std::to_string(k), std::to_string(k));
   const auto path = dir() / "many.fbh5";
   write_body_file(body, path);
+  EXPECT_EQ(detail::check_hdf5_structure(read_bytes(path), detail::kSealBytes), "");  // HDF5's defaults fail this
   const BodyData read = read_body_file(path);
   EXPECT_EQ(read.interfaces.size(), 12u);
   EXPECT_EQ(read.provenance.options.size(), 20u);
@@ -228,6 +233,24 @@ TEST_F(Hostile, DenseAttributeStorageIsRefusedBeforeHdf5FollowsIt) {
   // `fbprep seal` (the seal not required) still reads it and writes it again in the compact form.
   write_body_file(read_body_file(path, ReadOptions{.require_seal = false}), path);
   EXPECT_EQ(read_body_file(path).material.name, make_body().material.name);
+}
+
+TEST_F(Hostile, FilesThatCrashedLibhdf5AreRefusedFromTheirBytes) {
+  // tests/data/hostile/README.md: sealed, with HDF5's checksums recomputed; each crashed both tools or had libhdf5
+  // follow an unchecked address until the reader checked the structure itself.
+  const std::filesystem::path data = std::filesystem::path(FLEXBODY_TEST_DATA_DIR) / "hostile";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"vds1.fbh5", "/gcms/G has a data layout fbprep never writes (only contiguous storage)"},
+      {"vlfill.fbh5", "/gcms/G is a variable-length string (or sequence)"},
+      {"sh_self.fbh5", "/gcms/G holds a message of type 3 with flags fbprep never sets"},
+      {"sh_other.fbh5", "/gcms/G holds a message of type 3 with flags fbprep never sets"},
+      {"fillsize.fbh5", "/gcms/G has a fill value message fbprep never writes"},
+      {"v2000.fbh5", "/n/n/n/n/n/n/n/n/n lies deeper than 8 groups"},
+  };
+  for (const auto& [name, problem] : cases) {
+    SCOPED_TRACE(name);
+    expect_refused(data / name, {"its HDF5 structure is not what fbprep writes (" + problem});
+  }
 }
 
 }  // namespace

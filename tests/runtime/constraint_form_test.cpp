@@ -95,3 +95,25 @@ TEST(StabilizedIndex2, ALightBodyOnAHeavyOneTakesThePositionCorrection) {
   // The joints hold: the constraint residuals are round-off of 100 m.
   EXPECT_LT(system.constraints(integrator.time(), integrator.coordinates()).cwiseAbs().maxCoeff(), 1e-11);
 }
+
+// step_to ends a run on its end time with a shortened last step. Far from t = 0 the time reached after whole steps
+// carries the rounding of t0 + k h, a few ε |t| (1.8e-12 s at 1.2e4 s, 6e-9 of a 0.3 ms step): a last step that
+// long must be accepted as a whole step (review of 1ffb6fd: a fixed slack of 1e-9 h refused it beyond ~1e7 steps).
+TEST(StepTo, AcceptsTheRoundingOfTheTimeFarFromZero) {
+  const fr::BodyModel bar = box(10.0, Eigen::Vector3d(1.0, 0.1, 0.1));
+  fr::System system;
+  (void)system.add_body("bar", bar, fr::BodyState{});
+  system.set_gravity(Eigen::Vector3d(0, 0, -9.81));
+  fr::GeneralizedAlphaOptions options;
+  options.step = 3e-4;
+  const double t0 = 1.2e4;
+  fr::GeneralizedAlpha integrator(system, options, t0);
+  for (int i = 0; i < 3; ++i) integrator.step();
+  const double t_end = integrator.time() + options.step + 2e-12;  // one or two ulps of t beyond a whole step
+  ASSERT_GT(t_end - integrator.time(), options.step * (1.0 + fr::GeneralizedAlpha::kStepToSlack));
+  integrator.step_to(t_end);
+  EXPECT_EQ(integrator.time(), t_end);
+  // Free fall from rest: τ_z = −g (t − t0)² / 2, which generalized-α integrates exactly (constant acceleration).
+  const double fall = t_end - t0;
+  EXPECT_NEAR(integrator.coordinates()(2), -0.5 * 9.81 * fall * fall, 1e-12);
+}

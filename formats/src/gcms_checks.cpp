@@ -6,6 +6,7 @@
 #include <Eigen/Cholesky>
 
 #include <limits>
+#include <numbers>
 
 namespace flexbody::format::detail {
 namespace {
@@ -169,6 +170,25 @@ void check_gcms_ranges(const BodyData& body, const std::string& context) {
                         std::to_string(3 * m + 2) + " (mode " + std::to_string(m) + ") sum to " + number(sum) +
                         ", expected 1 (M-orthonormal modes in M_s-orthonormal fields; 1e-9 and the dropped "
                         "remainders allowed)");
+  }
+  // The stored frequencies are the modes' Rayleigh quotients: ψ_mᵀ K̄ ψ_m = ω_m² with ψ_m M-normal, and ψ_m in the
+  // fields is ξ̄_f = C(f, 3m..3m+2), so c_mᵀ K̂ c_m = ω_m² (normal modes, Craig-Bampton and static corrections alike,
+  // all K̄-orthogonal Ritz vectors). It ties /reduction/frequencies_hz, K̂ and C together: a K̂ or a frequency scaled
+  // by a mistaken unit is refused. Valid files agree to 2e-9 (195 files: free-free, Craig-Bampton, static
+  // corrections, 2 to 80 modes); 1e-6 allows for round-off in larger bases and for dropped fields' remainders.
+  const Eigen::Index modes = c.cols() / 3;
+  if (gcms.stiffness.rows() == 3 * c.rows() && body.modes.frequencies_hz.size() == modes) {
+    Eigen::VectorXd shape(3 * c.rows());
+    for (Eigen::Index m = 0; m < modes; ++m) {
+      for (Eigen::Index f = 0; f < c.rows(); ++f) shape.segment<3>(3 * f) = c.row(f).segment<3>(3 * m).transpose();
+      const double quotient = shape.dot(gcms.stiffness * shape);
+      const double omega = 2.0 * std::numbers::pi * body.modes.frequencies_hz(m);
+      if (!(std::abs(quotient - omega * omega) <= 1e-6 * omega * omega))
+        fail(context, "/reduction/frequencies_hz" + index(m) + " = " + number(body.modes.frequencies_hz(m)) +
+                          " Hz, but /gcms/K_hat and /gcms/mode_coefficients give mode " + std::to_string(m) + " " +
+                          number(std::sqrt(std::max(quotient, 0.0)) / (2.0 * std::numbers::pi)) +
+                          " Hz (c_mᵀ K̂ c_m = ω²; 1e-6 allowed)");
+    }
   }
   // Positive definite, tested on the Jacobi-scaled matrix: the blocks of G carry different units
   // (kg, kg m, kg m^2, 1), and scaling makes the test independent of them (and of the part's size).

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace flexbody::format::test {
 namespace {
@@ -19,9 +20,31 @@ void expect_invalid(const BodyData& body, const std::string& message) {
 TEST(Validate, AcceptsTheSyntheticBody) { EXPECT_NO_THROW(validate(make_body())); }
 
 TEST(Validate, AcceptsRepeatedFrequencies) {
+  // K̂ changed along both modes' shapes (a 2 x 2 solve) so that both Rayleigh quotients are mode 0's.
   BodyData body = make_body();
+  const Eigen::VectorXd s0 = mode_shape(body.gcms, 0), s1 = mode_shape(body.gcms, 1);
+  const double target = std::pow(2.0 * std::numbers::pi * body.modes.frequencies_hz[0], 2);
+  Eigen::Matrix2d a;
+  a << std::pow(s0.dot(s0), 2), std::pow(s0.dot(s1), 2), std::pow(s1.dot(s0), 2), std::pow(s1.dot(s1), 2);
+  const Eigen::Vector2d q(s0.dot(body.gcms.stiffness * s0), s1.dot(body.gcms.stiffness * s1));
+  const Eigen::Vector2d weights = a.lu().solve(Eigen::Vector2d::Constant(target) - q);
+  body.gcms.stiffness += weights(0) * s0 * s0.transpose() + weights(1) * s1 * s1.transpose();
+  body.gcms.stiffness = (0.5 * (body.gcms.stiffness + body.gcms.stiffness.transpose())).eval();
+  match_frequencies_to_stiffness(body);
+  ASSERT_NEAR(body.modes.frequencies_hz[1], body.modes.frequencies_hz[0], 1e-9 * body.modes.frequencies_hz[0]);
   body.modes.frequencies_hz[1] = body.modes.frequencies_hz[0];
   EXPECT_NO_THROW(validate(body));
+}
+
+// The frequencies, K̂ and the mode coefficients are tied: ω_m² = c_mᵀ K̂ c_m (issue 13's fuzz run accepted a K̂ or a
+// frequency scaled by 2). Both are refused; the synthetic body meets the relation by construction.
+TEST(Validate, FrequenciesMustBeTheRayleighQuotientsOfTheStiffness) {
+  BodyData scaled_stiffness = make_body();
+  scaled_stiffness.gcms.stiffness *= 2.0;
+  expect_invalid(scaled_stiffness, "/reduction/frequencies_hz[0] = ");
+  BodyData scaled_frequency = make_body();
+  scaled_frequency.modes.frequencies_hz[1] *= 1.0 + 1e-5;
+  expect_invalid(scaled_frequency, "/reduction/frequencies_hz[1] = ");
 }
 
 TEST(Validate, NodeIndexOutOfRange) {
@@ -259,10 +282,11 @@ TEST(Validate, StiffnessWithANegativeEigenvalueIsRefused) {
   blocked.gcms.stiffness.block(0, 2, 2, blocked.gcms.stiffness.cols() - 2).setZero();
   blocked.gcms.stiffness.block(2, 0, blocked.gcms.stiffness.rows() - 2, 2).setZero();
   expect_invalid(blocked, "/gcms/K_hat is not positive semi-definite");
-  // A singular K̂ (a zero eigenvalue, up to rounding) is semi-definite: accepted.
+  // A singular K̂ (a zero eigenvalue, up to rounding) is semi-definite: accepted (its modes' frequencies matched).
   values(0) = 0.0;
   body.gcms.stiffness = eigen.eigenvectors() * values.asDiagonal() * eigen.eigenvectors().transpose();
   body.gcms.stiffness = 0.5 * (body.gcms.stiffness + body.gcms.stiffness.transpose()).eval();
+  match_frequencies_to_stiffness(body);
   EXPECT_NO_THROW(validate(body));
 }
 

@@ -8,10 +8,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <iterator>
 
 namespace flexbody::format::test {
@@ -67,6 +69,20 @@ void replace_dataset(const std::filesystem::path& file, const std::string& path,
 }
 
 }  // namespace
+
+Eigen::VectorXd mode_shape(const Gcms& gcms, Eigen::Index m) {
+  Eigen::VectorXd shape(3 * gcms.mode_coefficients.rows());
+  for (Eigen::Index f = 0; f < gcms.mode_coefficients.rows(); ++f)
+    shape.segment<3>(3 * f) = gcms.mode_coefficients.row(f).segment<3>(3 * m).transpose();
+  return shape;
+}
+
+void match_frequencies_to_stiffness(BodyData& body) {
+  for (Eigen::Index m = 0; m < body.modes.frequencies_hz.size(); ++m) {
+    const Eigen::VectorXd shape = mode_shape(body.gcms, m);
+    body.modes.frequencies_hz(m) = std::sqrt(shape.dot(body.gcms.stiffness * shape)) / (2.0 * std::numbers::pi);
+  }
+}
 
 BodyData make_body() {
   BodyData body;
@@ -134,6 +150,17 @@ BodyData make_body() {
   for (Eigen::Index r = 0; r < 3 * kFields; ++r)
     for (Eigen::Index c = 0; c < 3 * kFields; ++c)
       gcms.stiffness(r, c) = static_cast<double>((r + 1) * (c + 1)) / 3.0 + (r == c ? 1e6 / 7.0 : 0.0);
+  // The frequencies are the modes' Rayleigh quotients in K̂ (SCHEMA.md, "GCMS constants"): c_mᵀ K̂ c_m = ω_m². K̂
+  // is first stiffened along mode 1's shape (symmetric, still positive definite) so that they ascend.
+  std::array<Eigen::VectorXd, 2> shapes;
+  for (Eigen::Index m = 0; m < 2; ++m) {
+    shapes[m].resize(3 * kFields);
+    for (Eigen::Index f = 0; f < kFields; ++f)
+      shapes[m].segment<3>(3 * f) = gcms.mode_coefficients.row(f).segment<3>(3 * m).transpose();
+  }
+  gcms.stiffness += (3e5 / 7.0) * shapes[1] * shapes[1].transpose();
+  gcms.stiffness = (0.5 * (gcms.stiffness + gcms.stiffness.transpose())).eval();  // symmetric to the last bit
+  match_frequencies_to_stiffness(body);
   gcms.drop_tolerance = 1e-8;
   gcms.condition_mode_gram_before = std::numeric_limits<double>::infinity();  // singular: allowed
   gcms.condition_mass_before = 1e9 / 3.0;

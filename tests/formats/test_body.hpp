@@ -17,6 +17,11 @@ namespace flexbody::format::test {
 /// is distinct and not exactly representable in few digits, so a round trip must be bit-exact.
 [[nodiscard]] BodyData make_body();
 
+/// Mode m's shape in the fields, ξ̄_f = C(f, 3m..3m+2) (3 n_f).
+[[nodiscard]] Eigen::VectorXd mode_shape(const Gcms& gcms, Eigen::Index m);
+/// Sets each stored frequency to its mode's Rayleigh quotient in K̂, c_mᵀ K̂ c_m = ω_m², as the reader checks.
+void match_frequencies_to_stiffness(BodyData& body);
+
 /// `body` made `scale` times as large in every length, of the same material: lengths x s, mass x s^3,
 /// inertia x s^5, frequencies / s, and each quantity whose unit holds kg or m accordingly (the fields, kg^-1/2,
 /// x s^-3/2; K̂ x s^-2; G's rows of τ, a, ξ x s^3/2, s^5/2, 1). The unit-free figures stay as they are; the

@@ -1,0 +1,304 @@
+#include "flexbody/runtime/ffrf_dynamics.hpp"
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+
+namespace flexbody::runtime {
+namespace {
+
+using Matrix34 = Eigen::Matrix<double, 3, 4>;
+using Matrix44 = Eigen::Matrix<double, 4, 4>;
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d s;
+  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return s;
+}
+
+// axial(X)_i = ε_ijk X_jk: ∫ρ a × b = axial(∫ρ a bᵀ).
+Eigen::Vector3d axial(const Eigen::Matrix3d& x) {
+  return {x(1, 2) - x(2, 1), x(2, 0) - x(0, 2), x(0, 1) - x(1, 0)};
+}
+
+// ∂(Ḡ(p)ᵀ y)/∂p for a fixed y (4 x 4): Ḡᵀ y = [−e·y; e × y + e0 y].
+Matrix44 body_velocity_transpose_derivative(const Eigen::Vector3d& y) {
+  Matrix44 d = Matrix44::Zero();
+  d.block<1, 3>(0, 1) = -y.transpose();
+  d.block<3, 1>(1, 0) = y;
+  d.block<3, 3>(1, 1) = -skew(y);
+  return d;
+}
+
+// One body's coordinates, velocities and accelerations, split.
+struct Split {
+  Eigen::Vector3d tau_dd;
+  Eigen::Vector4d p, p_d, p_dd;
+  VectorRef eta, eta_d, eta_dd;
+};
+
+// The invariants at η (ffrf_dynamics.hpp): S, P_m, I_θθ, I_θf.
+struct Invariants {
+  Eigen::Vector3d s;
+  Eigen::Matrix3Xd p;     // 3 x 3 n: P_m = ∫ρ ψ_m ūᵀ
+  Eigen::Matrix3d i_tt;   // I_θθ
+  Eigen::Matrix3Xd i_tf;  // 3 x n
+};
+
+Invariants invariants_at(const FfrfModel& f, const VectorRef& eta) {
+  const Eigen::Index n = f.modes;
+  Invariants v;
+  v.s = f.first_moment + f.mode_first_moments * eta;
+  // Σ_n η_n J2_mn for every m at once: J2 (η ⊗ I3), then P_m = J1_mᵀ + that block.
+  Eigen::MatrixXd eta_i3 = Eigen::MatrixXd::Zero(3 * n, 3);
+  for (Eigen::Index k = 0; k < n; ++k) eta_i3.block<3, 3>(3 * k, 0).diagonal().setConstant(eta(k));
+  const Eigen::MatrixXd stacked = f.mode_products * eta_i3;  // 3n x 3
+  v.p.resize(3, 3 * n);
+  v.i_tf.resize(3, n);
+  Eigen::Matrix3d j = f.second_moment;
+  for (Eigen::Index m = 0; m < n; ++m) {
+    const Eigen::Matrix3d p_m = f.mode_second_moments.middleCols<3>(3 * m).transpose() + stacked.middleRows<3>(3 * m);
+    v.p.middleCols<3>(3 * m) = p_m;
+    j += eta(m) * (f.mode_second_moments.middleCols<3>(3 * m) + p_m);  // J = J0 + Σ η_m (J1_m + P_m)
+    v.i_tf.col(m) = -axial(p_m);                                      // ∫ρ ū × ψ_m
+  }
+  v.i_tt = j.trace() * Eigen::Matrix3d::Identity() - j;
+  return v;
+}
+
+// The body-frame quantities of one evaluation.
+struct Frame {
+  Eigen::Matrix3d a;
+  Matrix34 g_bar;
+  Eigen::Vector3d acc, alpha, omega;  // ā, ω̄̇, ω̄
+};
+
+Frame frame_of(const Eigen::Vector4d& p, const Eigen::Vector4d& p_d, const Eigen::Vector4d& p_dd,
+               const Eigen::Vector3d& tau_dd, const Eigen::Vector3d& gravity) {
+  Frame fr;
+  fr.a = euler_rotation(p);
+  fr.g_bar = euler_body_velocity_matrix(p);
+  fr.acc = fr.a.transpose() * (tau_dd - gravity);
+  fr.alpha = 2.0 * fr.g_bar * p_dd;
+  fr.omega = 2.0 * fr.g_bar * p_d;
+  return fr;
+}
+
+// F̄ = [F_τ; F_θ; F_η] (6 + n), body frame, without the elastic and damping forces.
+Eigen::VectorXd body_forces(const FfrfModel& f, const Invariants& v, const Frame& fr, const VectorRef& eta_d,
+                            const VectorRef& eta_dd) {
+  const Eigen::Index n = f.modes;
+  const Eigen::Vector3d& w = fr.omega;
+  Eigen::VectorXd out(6 + n);
+  const Eigen::Vector3d s_eta_d = f.mode_first_moments * eta_d;
+  out.head<3>() = f.mass * fr.acc + fr.alpha.cross(v.s) + w.cross(w.cross(v.s)) + 2.0 * w.cross(s_eta_d) +
+                  f.mode_first_moments * eta_dd;
+  Eigen::Vector3d coriolis = Eigen::Vector3d::Zero();  // 2 (ω̄ Σ η̇_m tr P_m − Σ η̇_m P_m ω̄)
+  for (Eigen::Index m = 0; m < n; ++m) {
+    const auto p_m = v.p.middleCols<3>(3 * m);
+    coriolis += 2.0 * eta_d(m) * (w * p_m.trace() - p_m * w);
+  }
+  out.segment<3>(3) = v.s.cross(fr.acc) + v.i_tt * fr.alpha + w.cross(v.i_tt * w) + coriolis + v.i_tf * eta_dd;
+  const double w2 = w.squaredNorm();
+  for (Eigen::Index m = 0; m < n; ++m) {
+    const auto p_m = v.p.middleCols<3>(3 * m);
+    double gyro = 0.0;  // 2 ω̄ · Σ_n η̇_n ∫ρ ψ_n × ψ_m
+    for (Eigen::Index k = 0; k < n; ++k)
+      gyro += eta_d(k) * w.dot(axial(f.mode_products.block<3, 3>(3 * k, 3 * m)));
+    out(6 + m) = f.mode_first_moments.col(m).dot(fr.acc) + v.i_tf.col(m).dot(fr.alpha) + w.dot(p_m * w) -
+                 w2 * p_m.trace() + 2.0 * gyro + f.modal_mass.row(m).dot(eta_dd);
+  }
+  return out;
+}
+
+// R = T F̄ + [0; 0; K η + D η̇], T = diag(A, 2 Ḡᵀ, I).
+Eigen::VectorXd generalized(const FfrfModel& f, const Frame& fr, const Eigen::VectorXd& body, const VectorRef& eta,
+                            const VectorRef* eta_d) {
+  const Eigen::Index n = f.modes;
+  Eigen::VectorXd r(7 + n);
+  r.head<3>() = fr.a * body.head<3>();
+  r.segment<4>(3) = 2.0 * fr.g_bar.transpose() * body.segment<3>(3);
+  r.tail(n) = body.tail(n);
+  if (n > 0) {
+    r.tail(n) += f.modal_stiffness * eta;
+    if (eta_d && f.modal_damping.size() > 0) r.tail(n) += f.modal_damping * *eta_d;
+  }
+  return r;
+}
+
+// The body-frame mass matrix M̄ = ∂F̄/∂[ā; ω̄̇; η̈] ((6 + n) square, symmetric).
+Eigen::MatrixXd body_mass(const FfrfModel& f, const Invariants& v) {
+  const Eigen::Index n = f.modes;
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(6 + n, 6 + n);
+  m.topLeftCorner<3, 3>().diagonal().setConstant(f.mass);
+  m.block<3, 3>(0, 3) = -skew(v.s);
+  m.block<3, 3>(3, 0) = skew(v.s);
+  m.block<3, 3>(3, 3) = v.i_tt;
+  m.block(0, 6, 3, n) = f.mode_first_moments;
+  m.block(3, 6, 3, n) = v.i_tf;
+  m.block(6, 0, n, 3) = f.mode_first_moments.transpose();
+  m.block(6, 3, n, 3) = v.i_tf.transpose();
+  m.bottomRightCorner(n, n) = f.modal_mass;
+  return m;
+}
+
+Eigen::Vector4d segment4(const VectorRef& x, Eigen::Index at) { return x.segment<4>(at); }
+
+}  // namespace
+
+Eigen::Matrix3d euler_rotation(const Eigen::Vector4d& p) {
+  const double e0 = p(0);
+  const Eigen::Vector3d e = p.tail<3>();
+  return (e0 * e0 - e.squaredNorm()) * Eigen::Matrix3d::Identity() + 2.0 * e * e.transpose() + 2.0 * e0 * skew(e);
+}
+
+Eigen::Vector4d euler_parameters(const Eigen::Matrix3d& a) {
+  Eigen::Quaterniond q(a);
+  q.normalize();
+  Eigen::Vector4d p(q.w(), q.x(), q.y(), q.z());
+  return p(0) < 0.0 ? Eigen::Vector4d(-p) : p;
+}
+
+Eigen::Matrix<double, 3, 4> euler_rotation_derivative(const Eigen::Vector4d& p, const Eigen::Vector3d& x) {
+  const double e0 = p(0);
+  const Eigen::Vector3d e = p.tail<3>();
+  Matrix34 d;
+  d.col(0) = 2.0 * (e0 * x + e.cross(x));
+  d.rightCols<3>() = 2.0 * (e.dot(x) * Eigen::Matrix3d::Identity() + e * x.transpose() - x * e.transpose() - e0 * skew(x));
+  return d;
+}
+
+Eigen::Matrix<double, 3, 4> euler_body_velocity_matrix(const Eigen::Vector4d& p) {
+  Matrix34 g;
+  g.col(0) = -p.tail<3>();
+  g.rightCols<3>() = -skew(p.tail<3>()) + p(0) * Eigen::Matrix3d::Identity();
+  return g;
+}
+
+Eigen::VectorXd ffrf_residual(const FfrfModel& f, const VectorRef& q, const VectorRef& v, const VectorRef& a,
+                              const Eigen::Vector3d& gravity) {
+  const Eigen::Index n = f.modes;
+  const Frame fr = frame_of(segment4(q, 3), segment4(v, 3), segment4(a, 3), a.head<3>(), gravity);
+  const Invariants inv = invariants_at(f, q.tail(n));
+  const VectorRef eta_d = v.tail(n);
+  return generalized(f, fr, body_forces(f, inv, fr, eta_d, a.tail(n)), q.tail(n), &eta_d);
+}
+
+Eigen::VectorXd ffrf_mass_product(const FfrfModel& f, const VectorRef& q, const VectorRef& x) {
+  const Eigen::Index n = f.modes;
+  const Eigen::Vector4d zero4 = Eigen::Vector4d::Zero();
+  const Frame fr = frame_of(segment4(q, 3), zero4, segment4(x, 3), x.head<3>(), Eigen::Vector3d::Zero());
+  const Invariants inv = invariants_at(f, q.tail(n));
+  const Eigen::VectorXd body = body_mass(f, inv) * (Eigen::VectorXd(6 + n) << fr.acc, fr.alpha, x.tail(n)).finished();
+  Eigen::VectorXd r(7 + n);
+  r.head<3>() = fr.a * body.head<3>();
+  r.segment<4>(3) = 2.0 * fr.g_bar.transpose() * body.segment<3>(3);
+  r.tail(n) = body.tail(n);
+  return r;
+}
+
+Eigen::VectorXd ffrf_forces(const FfrfModel& f, const VectorRef& q, const VectorRef& v, const Eigen::Vector3d& gravity) {
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(q.size());
+  return -ffrf_residual(f, q, v, zero, gravity);
+}
+
+FfrfTangent ffrf_tangent(const FfrfModel& f, const VectorRef& q, const VectorRef& v, const VectorRef& a,
+                         const Eigen::Vector3d& gravity) {
+  const Eigen::Index n = f.modes, size = 7 + n;
+  const Eigen::Vector4d p = segment4(q, 3), p_d = segment4(v, 3), p_dd = segment4(a, 3);
+  const Frame fr = frame_of(p, p_d, p_dd, a.head<3>(), gravity);
+  const Invariants inv = invariants_at(f, q.tail(n));
+  const VectorRef eta = q.tail(n), eta_d = v.tail(n), eta_dd = a.tail(n);
+  const Eigen::VectorXd body = body_forces(f, inv, fr, eta_d, eta_dd);
+  const Eigen::MatrixXd m_bar = body_mass(f, inv);
+  const Eigen::Vector3d& w = fr.omega;
+  const double w2 = w.squaredNorm();
+
+  // ∂F̄/∂ω̄ (6 + n x 3).
+  Eigen::MatrixXd d_omega(6 + n, 3);
+  const Eigen::Vector3d s_eta_d = f.mode_first_moments * eta_d;
+  d_omega.topRows<3>() = w.dot(inv.s) * Eigen::Matrix3d::Identity() + w * inv.s.transpose() -
+                         2.0 * inv.s * w.transpose() - 2.0 * skew(s_eta_d);
+  Eigen::Matrix3d p_v = Eigen::Matrix3d::Zero();
+  double t_v = 0.0;
+  for (Eigen::Index m = 0; m < n; ++m) {
+    p_v += eta_d(m) * inv.p.middleCols<3>(3 * m);
+    t_v += eta_d(m) * inv.p.middleCols<3>(3 * m).trace();
+  }
+  d_omega.middleRows<3>(3) = skew(w) * inv.i_tt - skew(inv.i_tt * w) + 2.0 * (t_v * Eigen::Matrix3d::Identity() - p_v);
+  // ∂F̄/∂η̇ (6 + n x n), and the gyroscopic block 2 ω̄ · ∫ρ ψ_n × ψ_m.
+  Eigen::MatrixXd d_eta_d(6 + n, n);
+  d_eta_d.topRows<3>() = 2.0 * skew(w) * f.mode_first_moments;
+  for (Eigen::Index m = 0; m < n; ++m) {
+    const auto p_m = inv.p.middleCols<3>(3 * m);
+    d_eta_d.block<3, 1>(3, m) = 2.0 * (w * p_m.trace() - p_m * w);
+    Eigen::Vector3d b_m = Eigen::Vector3d::Zero();
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const Eigen::Vector3d cross_km = axial(f.mode_products.block<3, 3>(3 * k, 3 * m));  // ∫ρ ψ_k × ψ_m
+      d_eta_d(6 + m, k) = 2.0 * w.dot(cross_km);
+      b_m += eta_d(k) * cross_km;
+    }
+    d_omega.row(6 + m) = w.transpose() * (p_m + p_m.transpose()) - 2.0 * p_m.trace() * w.transpose() + 2.0 * b_m.transpose();
+  }
+  // ∂F̄/∂η (6 + n x n) at fixed ā, ω̄̇, ω̄, η̇, η̈.
+  Eigen::MatrixXd d_eta(6 + n, n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Eigen::Vector3d s_k = f.mode_first_moments.col(k);
+    d_eta.block<3, 1>(0, k) = fr.alpha.cross(s_k) + w.cross(w.cross(s_k));
+    const auto p_k = inv.p.middleCols<3>(3 * k);
+    const Eigen::Matrix3d d_k = p_k + p_k.transpose();  // ∂J/∂η_k
+    Eigen::Matrix3d rate = Eigen::Matrix3d::Zero(), accel = Eigen::Matrix3d::Zero();  // Σ_m η̇_m J2_mk, Σ_m η̈_m J2_mk
+    for (Eigen::Index m = 0; m < n; ++m) {
+      const auto j2_mk = f.mode_products.block<3, 3>(3 * m, 3 * k);
+      rate += eta_d(m) * j2_mk;
+      accel += eta_dd(m) * j2_mk;
+      d_eta(6 + m, k) = -axial(j2_mk).dot(fr.alpha) + w.dot(j2_mk * w) - w2 * j2_mk.trace();
+    }
+    d_eta.block<3, 1>(3, k) = s_k.cross(fr.acc) + (d_k.trace() * Eigen::Matrix3d::Identity() - d_k) * fr.alpha -
+                              w.cross(d_k * w) + 2.0 * (w * rate.trace() - rate * w) - axial(accel);
+  }
+
+  // Generalized: R = T F̄ + [0; 0; K η + D η̇], T = diag(A, 2 Ḡᵀ, I); ā = Aᵀ(τ̈ − g), ω̄̇ = 2 Ḡ p̈, ω̄ = 2 Ḡ ṗ.
+  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(size, 6 + n);
+  t.topLeftCorner<3, 3>() = fr.a;
+  t.block<4, 3>(3, 3) = 2.0 * fr.g_bar.transpose();
+  t.bottomRightCorner(n, n).setIdentity();
+  Eigen::MatrixXd t_inv = Eigen::MatrixXd::Zero(6 + n, size);  // ∂[ā; ω̄̇; η̈]/∂[τ̈; p̈; η̈] = Tᵀ
+  t_inv = t.transpose();
+  FfrfTangent out;
+  out.mass = t * m_bar * t_inv;
+  out.mass = 0.5 * (out.mass + out.mass.transpose()).eval();
+  // ∂R/∂p: through A and Ḡ in T, and through ā, ω̄̇ and ω̄ in F̄.
+  // ∂ā/∂p = ∂(A(p)ᵀ y)/∂p with y = τ̈ − g: Aᵀ(p) = A(p*), p* = (e0, −e).
+  const Eigen::Vector4d conj(p(0), -p(1), -p(2), -p(3));
+  Matrix34 d_acc = euler_rotation_derivative(conj, a.head<3>() - gravity);
+  d_acc.rightCols<3>() *= -1.0;
+  const Matrix34 d_alpha = -2.0 * euler_body_velocity_matrix(p_dd), d_w = -2.0 * euler_body_velocity_matrix(p_d);
+  const Eigen::MatrixXd body_dp = m_bar.leftCols<3>() * d_acc + m_bar.middleCols<3>(3) * d_alpha + d_omega * d_w;
+  out.stiffness = Eigen::MatrixXd::Zero(size, size);
+  out.stiffness.block<3, 4>(0, 3) = euler_rotation_derivative(p, body.head<3>());
+  out.stiffness.block<4, 4>(3, 3) = 2.0 * body_velocity_transpose_derivative(body.segment<3>(3));
+  out.stiffness.middleCols<4>(3) += t * body_dp;
+  out.stiffness.rightCols(n) = t * d_eta;
+  out.stiffness.bottomRightCorner(n, n) += f.modal_stiffness;
+  out.damping = Eigen::MatrixXd::Zero(size, size);
+  out.damping.middleCols<4>(3) = t * (d_omega * (2.0 * fr.g_bar));
+  out.damping.rightCols(n) = t * d_eta_d;
+  if (f.modal_damping.size() > 0) out.damping.bottomRightCorner(n, n) += f.modal_damping;
+  return out;
+}
+
+double ffrf_kinetic_energy(const FfrfModel& f, const VectorRef& q, const VectorRef& v) {
+  return 0.5 * v.dot(ffrf_mass_product(f, q, v));
+}
+
+double ffrf_elastic_energy(const FfrfModel& f, const VectorRef& q) {
+  const auto eta = q.tail(f.modes);
+  return 0.5 * eta.dot(f.modal_stiffness * eta);
+}
+
+Eigen::Vector3d ffrf_first_moment(const FfrfModel& f, const VectorRef& q) {
+  return f.first_moment + f.mode_first_moments * q.tail(f.modes);
+}
+
+}  // namespace flexbody::runtime

@@ -171,7 +171,7 @@ int main(int argc, char** argv) {
                   padded.multiply(rhs.data(), product.data());
                   return product(0);
                 }));
-    std::printf("  mass product (G x I3) qdd               %8.1f\n", per_call(4000, [&] { return system.mass_product(v)(0); }));
+    std::printf("  mass product (G x I3) qdd               %8.1f\n", per_call(4000, [&] { return system.mass_product(q, v)(0); }));
     std::printf("  all applied and elastic forces           %8.1f\n", per_call(4000, [&] { return system.forces(0.0, q, v)(0); }));
     std::printf("  elastic tangent without the xi-xi block  %8.1f  (a matrix rebuild)\n", per_call(500, [&] {
                   return fr::elastic_tangent(model.stiffness, a, state.xi, false).aa(0, 0);

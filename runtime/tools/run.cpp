@@ -1,5 +1,6 @@
 #include "run.hpp"
 
+#include "flexbody/runtime/ffrf_dynamics.hpp"
 #include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/paraview_series.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
@@ -71,8 +72,9 @@ Eigen::VectorXd values_of(const Scene& scene, const Sensor& s, const runtime::Ge
   for (const std::string& q : s.quantities) {
     if (q == "position")
       push(runtime::marker_position(s.marker, system.body_coordinates(integrator.coordinates(), s.marker.body)));
-    if (q == "velocity")  // ṙ = (yᵀ ⊗ I3) q̇_b: the position is linear in q
-      push(runtime::marker_position_jacobian(s.marker) * system.body_coordinates(integrator.velocities(), s.marker.body));
+    if (q == "velocity")  // ṙ = ∂r/∂q_b q̇_b
+      push(runtime::marker_position_jacobian(s.marker, system.body_coordinates(integrator.coordinates(), s.marker.body)) *
+           system.body_coordinates(integrator.velocities(), s.marker.body));
     if (q == "orientation") {  // A (I + [θ̄]×) with θ̄ = R ξ̄: the marker frame (to first order in θ̄)
       const Eigen::VectorXd q_b = system.body_coordinates(integrator.coordinates(), s.marker.body);
       Eigen::Matrix3d frame;
@@ -84,14 +86,24 @@ Eigen::VectorXd values_of(const Scene& scene, const Sensor& s, const runtime::Ge
       const runtime::BodyModel& model = system.model(s.body);
       const auto& region = model.recovery[s.region];
       const Eigen::VectorXd q_b = system.body_coordinates(integrator.coordinates(), s.body);
-      const Eigen::VectorXd xi_bar = runtime::body_frame_coordinates(runtime::orientation_of(q_b), q_b.tail(q_b.size() - 12));
+      // A floating-frame body: ξ̄ = Σ η_m c_m, and in an interface frame the modes' rigid part moves the nodes too.
+      const Eigen::VectorXd xi_bar = model.floating()
+                                         ? runtime::ffrf_field_coordinates(*model.floating_frame, q_b)
+                                         : runtime::body_frame_coordinates(runtime::orientation_of(q_b), q_b.tail(q_b.size() - 12));
       if (q == "stress") {
         push(region.stress_modes * xi_bar);
       } else {
         const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> fields_xi(xi_bar.data(), 3, model.field_count());
         Eigen::VectorXd u(3 * region.nodes.size());
-        for (Eigen::Index j = 0; j < region.nodes.size(); ++j)
+        for (Eigen::Index j = 0; j < region.nodes.size(); ++j) {
           u.segment<3>(3 * j) = fields_xi * runtime::field_row(model, region.nodes(j)).transpose();
+          if (model.floating())
+            for (Eigen::Index m = 0; m < model.modes; ++m) {
+              const auto w = model.floating_frame->shapes.middleCols<3>(3 * m);
+              u.segment<3>(3 * j) += q_b(7 + m) * (w.row(0).transpose() + w.middleRows<3>(1).transpose() *
+                                                                              model.nodes.row(region.nodes(j)).transpose());
+            }
+        }
         push(u);
       }
     }
@@ -103,6 +115,10 @@ Eigen::VectorXd values_of(const Scene& scene, const Sensor& s, const runtime::Ge
     if (q == "modal_coordinates") {
       const runtime::BodyModel& model = system.model(s.body);
       const Eigen::VectorXd q_b = system.body_coordinates(integrator.coordinates(), s.body);
+      if (model.floating()) {  // η itself
+        push(q_b.tail(model.modes));
+        continue;
+      }
       const Eigen::Matrix3d a = runtime::orientation_of(q_b);
       Eigen::VectorXd eta = Eigen::VectorXd::Zero(model.modes);
       for (Eigen::Index m = 0; m < model.modes; ++m)
@@ -121,9 +137,9 @@ Eigen::VectorXd monitor_values(const Scene& scene, const runtime::GeneralizedAlp
   const Eigen::VectorXd phi = system.constraints(integrator.time(), integrator.coordinates());
   double orthogonality = 0.0, tisserand = 0.0;
   for (int b = 0; b < system.body_count(); ++b) {
-    const Eigen::Matrix3d a = runtime::orientation_of(system.body_coordinates(integrator.coordinates(), b));
+    const Eigen::Matrix3d a = system.orientation(b, integrator.coordinates());
     orthogonality = std::max(orthogonality, (a.transpose() * a - Eigen::Matrix3d::Identity()).norm());
-    if (!system.model(b).rigid())
+    if (!system.model(b).rigid() && !system.model(b).floating())
       tisserand = std::max(tisserand, phi.segment<3>(system.reference_row(b) + 6).cwiseAbs().maxCoeff());
   }
   const Eigen::Index first_joint_row = system.joint_row(0);
@@ -147,7 +163,9 @@ AngularMomentum angular_momentum(const runtime::System& system, const Eigen::Vec
   double mass = 0.0, terms = 0.0;
   for (int b = 0; b < system.body_count(); ++b) {
     const runtime::BodyModel& model = system.model(b);
-    const Eigen::VectorXd q_b = system.body_coordinates(q, b), v_b = system.body_coordinates(v, b);
+    // In GCMS coordinates (a floating-frame body's equivalent ones): the nodal sums through G.
+    const Eigen::VectorXd q_b = runtime::gcms_coordinates(model, system.body_coordinates(q, b));
+    const Eigen::VectorXd v_b = runtime::gcms_velocities(model, system.body_coordinates(q, b), system.body_coordinates(v, b));
     const Eigen::VectorXd w = runtime::mass_times(model, v_b);
     for (Eigen::Index k = 0; k < q_b.size() / 3; ++k) {
       about_origin += q_b.segment<3>(3 * k).cross(w.segment<3>(3 * k));
@@ -196,7 +214,9 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
   auto draw = [&] {  // each series once per time, also when called again after one of them failed
     for (std::size_t k = 0; k < series.size(); ++k)
       if (series[k].last_time() != integrator.time())
-        series[k].write(integrator.time(), scene.system.body_coordinates(integrator.coordinates(), scene.paraview[k].body));
+        series[k].write(integrator.time(),
+                        runtime::gcms_coordinates(scene.system.model(scene.paraview[k].body),
+                                                  scene.system.body_coordinates(integrator.coordinates(), scene.paraview[k].body)));
   };
   const runtime::System& system = scene.system;
   const runtime::Energies e0 = system.energies(integrator.coordinates(), integrator.velocities());

@@ -301,4 +301,69 @@ Eigen::Vector3d ffrf_first_moment(const FfrfModel& f, const VectorRef& q) {
   return f.first_moment + f.mode_first_moments * q.tail(f.modes);
 }
 
+Eigen::VectorXd ffrf_field_coordinates(const FfrfModel& f, const VectorRef& q) {
+  const Eigen::Index n_f = f.shapes.rows() - 4;
+  Eigen::VectorXd xi_bar(3 * n_f);
+  Eigen::Map<Eigen::Matrix3Xd> blocks(xi_bar.data(), 3, n_f);  // column f: ξ̄_f = Σ_m η_m W_m(4 + f, :)ᵀ
+  blocks.setZero();
+  for (Eigen::Index m = 0; m < f.modes; ++m)
+    blocks += q(7 + m) * f.shapes.block(4, 3 * m, n_f, 3).transpose();
+  return xi_bar;
+}
+
+namespace {
+
+// The rigid part of the modes at η: s = Σ η_m W_m(0, :)ᵀ and B = Σ η_m W_m(1:4, :)ᵀ.
+void rigid_part(const FfrfModel& f, const VectorRef& eta, Eigen::Vector3d& s, Eigen::Matrix3d& b) {
+  s.setZero();
+  b.setZero();
+  for (Eigen::Index m = 0; m < f.modes; ++m) {
+    s += eta(m) * f.shapes.block<1, 3>(0, 3 * m).transpose();
+    b += eta(m) * f.shapes.block<3, 3>(1, 3 * m).transpose();
+  }
+}
+
+}  // namespace
+
+Eigen::VectorXd gcms_coordinates(const BodyModel& model, const VectorRef& q) {
+  if (!model.floating()) return q;
+  const FfrfModel& f = *model.floating_frame;
+  const Eigen::Index n_f = model.field_count();
+  const Eigen::Matrix3d a = euler_rotation(q.segment<4>(3));
+  Eigen::Vector3d s;
+  Eigen::Matrix3d b;
+  rigid_part(f, q.tail(f.modes), s, b);
+  Eigen::VectorXd g(12 + 3 * n_f);
+  g.head<3>() = q.head<3>() + a * s;
+  const Eigen::Matrix3d a_g = a * (Eigen::Matrix3d::Identity() + b);
+  g.segment<9>(3) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(a_g.data());
+  const Eigen::VectorXd xi_bar = ffrf_field_coordinates(f, q);
+  for (Eigen::Index k = 0; k < n_f; ++k) g.segment<3>(12 + 3 * k) = a * xi_bar.segment<3>(3 * k);
+  return g;
+}
+
+Eigen::VectorXd gcms_velocities(const BodyModel& model, const VectorRef& q, const VectorRef& v) {
+  if (!model.floating()) return v;
+  const FfrfModel& f = *model.floating_frame;
+  const Eigen::Index n_f = model.field_count();
+  const Eigen::Vector4d p = q.segment<4>(3), p_d = v.segment<4>(3);
+  const Eigen::Matrix3d a = euler_rotation(p);
+  Eigen::Matrix3d a_d;  // Ȧ, column j: ∂(A e_j)/∂p ṗ
+  for (int j = 0; j < 3; ++j) a_d.col(j) = euler_rotation_derivative(p, Eigen::Vector3d::Unit(j)) * p_d;
+  Eigen::Vector3d s, s_d;
+  Eigen::Matrix3d b, b_d;
+  rigid_part(f, q.tail(f.modes), s, b);
+  rigid_part(f, v.tail(f.modes), s_d, b_d);  // linear in η
+  Eigen::VectorXd g(12 + 3 * n_f);
+  g.head<3>() = v.head<3>() + a_d * s + a * s_d;
+  const Eigen::Matrix3d a_g_d = a_d * (Eigen::Matrix3d::Identity() + b) + a * b_d;
+  g.segment<9>(3) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(a_g_d.data());
+  Eigen::VectorXd eta_d_as_q = q;
+  eta_d_as_q.tail(f.modes) = v.tail(f.modes);
+  const Eigen::VectorXd xi_bar = ffrf_field_coordinates(f, q), xi_bar_d = ffrf_field_coordinates(f, eta_d_as_q);
+  for (Eigen::Index k = 0; k < n_f; ++k)
+    g.segment<3>(12 + 3 * k) = a_d * xi_bar.segment<3>(3 * k) + a * xi_bar_d.segment<3>(3 * k);
+  return g;
+}
+
 }  // namespace flexbody::runtime

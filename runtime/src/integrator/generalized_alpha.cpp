@@ -32,6 +32,18 @@ Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen
 // which is no state to go on from either.)
 bool all_finite(const Eigen::VectorXd& x) { return std::isfinite(x.sum()); }
 
+// ∫|u|² dm of body b's elastic displacement [kg m²]: ξ̄ᵀ (G_ff ⊗ I3) ξ̄ (and |ξ̄| = |ξ| for orthogonal A, so without
+// rotating), or ηᵀ M_ff η for a floating-frame body.
+double elastic_mass_norm_squared(const System& system, int b, const Eigen::VectorXd& q) {
+  const BodyModel& model = system.model(b);
+  const Eigen::Index o = system.offset(b), n = model.coordinate_count();
+  if (model.floating()) {
+    const auto eta = q.segment(o + 7, n - 7);
+    return eta.dot(model.floating_frame->modal_mass * eta);
+  }
+  return field_mass_norm_squared(model, q.segment(o + 12, n - 12));
+}
+
 // Round-off floor of Newton's corrections, relative to |q_i| + scale_i: a constraint row's residual is a sum of a few
 // products of coordinates, so its rounding is a few ε |q|, and so is the correction it asks for. Measured: the
 // corrections of a flexible pendulum stagnate at 1-2 ε (|q_i| + scale_i); 8 ε stops there without a false stop.
@@ -48,6 +60,23 @@ void append_scales(const BodyModel& model, Eigen::VectorXd& scales, Eigen::Index
   const double trace = model.g_border(1, 1) + model.g_border(2, 2) + model.g_border(3, 3);
   const double r = std::sqrt(std::max(trace, 0.0) / model.mass);
   scales.segment(offset, 3).setConstant(r);
+  if (model.floating()) {
+    // Euler parameters: δp turns the body by 2 |δp|, moving a point at r by 2 r |δp|: scale ½. A modal coordinate:
+    // the amplitude whose largest nodal displacement is r (each node's displacement in the mode, W_mᵀ Y(i, :)ᵀ).
+    const FfrfModel& f = *model.floating_frame;
+    scales.segment(offset + 3, 4).setConstant(0.5);
+    for (Eigen::Index m = 0; m < f.modes; ++m) {
+      double largest = 0.0;
+      const auto w = f.shapes.middleCols<3>(3 * m);
+      for (Eigen::Index i = 0; i < model.nodes.rows(); ++i) {
+        const Eigen::Vector3d u = w.row(0).transpose() + w.middleRows<3>(1).transpose() * model.nodes.row(i).transpose() +
+                                  w.bottomRows(model.field_count()).transpose() * model.fields.row(i).transpose();
+        largest = std::max(largest, u.norm());
+      }
+      scales(offset + 7 + m) = largest > 0.0 ? r / largest : r * std::sqrt(model.mass / f.modal_mass(m, m));
+    }
+    return;
+  }
   scales.segment(offset + 3, 9).setConstant(1.0);
   for (Eigen::Index f = 0; f < model.field_count(); ++f) {
     double scale = r;
@@ -66,8 +95,7 @@ void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) con
   for (int b = 0; b < system_.body_count(); ++b) {
     const BodyModel& model = system_.model(b);
     if (model.rigid()) continue;
-    // ∫|ū|² dm = ξ̄ᵀ (G_ff ⊗ I3) ξ̄, and |ξ̄| = |ξ| for orthogonal A: the RMS displacement without rotating.
-    const double squared = field_mass_norm_squared(model, q.segment(system_.offset(b) + 12, model.coordinate_count() - 12));
+    const double squared = elastic_mass_norm_squared(system_, b, q);
     const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
     const double size = body_sizes_[static_cast<std::size_t>(b)];
     if (rms > options_.deformation_limit * size) {
@@ -86,9 +114,7 @@ void GeneralizedAlpha::check_spin(double t, const Eigen::VectorXd& q, const Eige
   for (int b = 0; b < system_.body_count(); ++b) {
     const BodyModel& model = system_.model(b);
     if (model.rigid() || !(model.lowest_frequency_hz > 0.0)) continue;
-    const Eigen::Index o = system_.offset(b);
-    const Eigen::Matrix3d w = orientation_of(v.segment(o, 12)) * orientation_of(q.segment(o, 12)).transpose();  // [ω]×
-    const double spin = Eigen::Vector3d(w(2, 1) - w(1, 2), w(0, 2) - w(2, 0), w(1, 0) - w(0, 1)).norm() / 2;
+    const double spin = system_.angular_velocity(b, q, v).norm();
     const double ratio = spin / (2.0 * std::numbers::pi * model.lowest_frequency_hz);
     std::ostringstream what;
     what << "t = " << t << " s: body '" << system_.body_name(b) << "' spins at " << spin << " rad/s = " << ratio
@@ -115,15 +141,12 @@ std::string GeneralizedAlpha::last_state_diagnosis() const {
   int fastest = -1, most_deformed = -1;
   double largest_turn = 0.0, largest_share = 0.0, rms_of_most = 0.0;
   for (int b = 0; b < system_.body_count(); ++b) {
-    const Eigen::Index o = system_.offset(b);
-    const Eigen::Matrix3d a = orientation_of(q_.segment(o, 12)), a_dot = orientation_of(v_.segment(o, 12));
-    const Eigen::Matrix3d w = a_dot * a.transpose();  // [ω]×
-    const double turn = Eigen::Vector3d(w(2, 1) - w(1, 2), w(0, 2) - w(2, 0), w(1, 0) - w(0, 1)).norm() / 2 * h;
+    const double turn = system_.angular_velocity(b, q_, v_).norm() * h;
     if (!(turn <= largest_turn)) largest_turn = turn, fastest = b;  // a non-finite rate is the one to report
     const BodyModel& model = system_.model(b);
     const double size = body_sizes_[static_cast<std::size_t>(b)];
     if (model.rigid() || !(size > 0.0)) continue;
-    const double squared = field_mass_norm_squared(model, q_.segment(o + 12, model.coordinate_count() - 12));
+    const double squared = elastic_mass_norm_squared(system_, b, q_);
     const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
     if (!(rms / size < largest_share)) largest_share = rms / size, most_deformed = b, rms_of_most = rms;
   }
@@ -190,7 +213,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
       throw std::invalid_argument("initial state violates " + system.constraint_name(k) + " by " + std::to_string(phi(k)));
   // [M Φ_qᵀ; Φ_q 0], sparse: M is block diagonal and the full-order body's blocks have the mesh's sparsity.
   const Eigen::MatrixXd jac = system.constraint_jacobian(t_, q_);
-  const Eigen::SparseMatrix<double> mass = system.sparse_mass_matrix();
+  const Eigen::SparseMatrix<double> mass = system.sparse_mass_matrix(q_);
   std::vector<Eigen::Triplet<double>> entries;
   entries.reserve(static_cast<std::size_t>(mass.nonZeros()));
   for (Eigen::Index k = 0; k < mass.outerSize(); ++k)
@@ -342,7 +365,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
       const bool refresh = refresh_ || !options_.reuse_newton_matrix;
       if (refresh) {
         jacobian = system_.constraint_jacobian(t1, q);
-        solver_->factor(q, v, mu, jacobian);
+        solver_->factor(q, v, qdd, mu, jacobian);
         if (stabilized) {  // Φ_q W Φ_qᵀ
           projected_.compute(jacobian * squared_scales_.asDiagonal() * jacobian.transpose());
           if (projected_.info() != Eigen::Success)
@@ -370,7 +393,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
         work_.nu += work_.nu_step;
         q += position_step;
       }
-      const Eigen::VectorXd inertia = system_.mass_product(qdd);
+      const Eigen::VectorXd inertia = system_.mass_product(q, qdd);
       residual = (inertia - system_.forces(t1, q, v)) * (1.0 / beta_prime) +  // a product: a division per entry costs
                  system_.constraint_jacobian_transpose_product(t1, q, mu);   // more than the rest of this line
       solver_->solve(q, residual, stabilized ? velocity_rows : phi, dx);

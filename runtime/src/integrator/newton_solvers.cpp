@@ -18,6 +18,9 @@ Eigen::MatrixXd rotate(const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) {
   return y;
 }
 
+// The coordinates a body's ξ block eliminates: 3 n_f for a GCMS body, none for a floating-frame one.
+Eigen::Index xi_count(const BodyModel& model) { return model.floating() ? 0 : 3 * model.field_count(); }
+
 // J_b of a spring for body b: −P_1 if its first marker is on b, plus P_2 if its second is (3 x n_b; empty if the
 // spring does not touch b).
 Eigen::MatrixXd spring_jacobian(const SpringTangent& t, int body, Eigen::Index columns) {
@@ -32,13 +35,19 @@ Eigen::MatrixXd spring_jacobian(const SpringTangent& t, int body, Eigen::Index c
 }  // namespace
 
 DenseNewton::DenseNewton(const System& system, double beta_prime, double gamma_prime)
-    : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime), mass_(system.mass_matrix()) {}
+    : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime) {}
 
-void DenseNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
-                         const Eigen::MatrixXd& jacobian) {
+void DenseNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
+                         const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
   const Eigen::Index n = q.size(), m = jacobian.rows();
   Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
-  kkt.topLeftCorner(n, n) = mass_ + (system_.stiffness(q) + system_.constraint_hessian(q, beta_prime_ * mu)) / beta_prime_;
+  kkt.topLeftCorner(n, n) = system_.mass_matrix(q) + (system_.stiffness(q) + system_.constraint_hessian(q, beta_prime_ * mu)) / beta_prime_;
+  for (int b = 0; b < system_.body_count(); ++b) {  // a floating-frame body: (∂R/∂q + γ' ∂R/∂q̇)/β'
+    if (!system_.model(b).floating()) continue;
+    const FfrfTangent t = system_.floating_frame_tangent(b, q, v, qdd);
+    const Eigen::Index o = system_.offset(b), n_b = t.stiffness.rows();
+    kkt.block(o, o, n_b, n_b) += (t.stiffness + gamma_prime_ * t.damping) / beta_prime_;
+  }
   for (const SpringTangent& t : system_.spring_tangents(q, v)) {  // Jᵀ (K + γ' C) J / β', every block
     const Eigen::Matrix3d k = (t.stiffness + gamma_prime_ * t.damping) / beta_prime_;
     for (int b = 0; b < system_.body_count(); ++b) {
@@ -52,7 +61,7 @@ void DenseNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, con
   }
   for (int b = 0; b < system_.body_count(); ++b) {  // the damping's ξξ block Â D̂ Âᵀ, times γ'
     const BodyModel& model = system_.model(b);
-    if (model.damping.size() == 0) continue;
+    if (model.damping.size() == 0 || model.floating()) continue;
     const Eigen::Index o = system_.offset(b) + 12, n_f = model.field_count();
     const Eigen::Matrix3d a = orientation_of(system_.body_coordinates(q, b));
     for (Eigen::Index f = 0; f < n_f; ++f)
@@ -75,7 +84,7 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
     : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime) {
   for (int b = 0; b < system.body_count(); ++b) {
     const BodyModel& model = system.model(b);
-    const Eigen::Index n_f = model.field_count();
+    const Eigen::Index n_f = model.floating() ? 0 : model.field_count();
     const std::string not_definite = "body '" + system.body_name(b) + "': the constant Newton core G_ff x I3 + "
                                      "(K_hat + gamma' D_hat)/beta' is not positive definite";
     inverses_.emplace_back();
@@ -110,8 +119,14 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
     inverses_.back() = PaddedMatrix(factor.solve(Eigen::MatrixXd::Identity(3 * n_f, 3 * n_f)));
   }
   eliminated_.resize(static_cast<std::size_t>(system.body_count()));
+  for (int b = 0; b < system.body_count(); ++b) {
+    const BodyModel& model = system.model(b);
+    kept_offset_.push_back(kept_total_);
+    kept_.push_back(model.floating() ? model.coordinate_count() : 12);
+    kept_total_ += kept_.back();
+  }
   Eigen::Index largest = 0;
-  for (int b = 0; b < system.body_count(); ++b) largest = std::max(largest, 3 * system.model(b).field_count());
+  for (int b = 0; b < system.body_count(); ++b) largest = std::max(largest, xi_count(system.model(b)));
   rotated_.resize(largest);
   core_y_.resize(largest);
 }
@@ -139,10 +154,10 @@ void ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const do
   Eigen::Map<Eigen::Matrix3Xd>(y, 3, n_f).noalias() = a * core_y;
 }
 
-void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
-                                const Eigen::MatrixXd& jacobian) {
+void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
+                                const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
   const int n_b = system_.body_count();
-  const Eigen::Index m = jacobian.rows(), n_r = 12 * n_b;
+  const Eigen::Index m = jacobian.rows(), n_r = kept_total_;
   // The springs' tangents: their rigid-rigid blocks (every pair of bodies) and, within a body, the rigid-ξ coupling
   // enter; their ξξ blocks cannot (the core is the body's constant).
   const std::vector<SpringTangent> springs = system_.spring_tangents(q, v);
@@ -152,10 +167,27 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
   auto spring_k = [&](std::size_t s) -> Eigen::Matrix3d {
     return (springs[s].stiffness + gamma_prime_ * springs[s].damping) / beta_prime_;
   };
-  // The reduced matrix in [Δq_r (12 per body); Δμ] after eliminating every body's ξ.
+  // The reduced matrix in [Δq_r (12 per GCMS body, all of a floating-frame body); Δμ] after eliminating every GCMS
+  // body's ξ.
   Eigen::MatrixXd reduced = Eigen::MatrixXd::Zero(n_r + m, n_r + m);
   for (int b = 0; b < n_b; ++b) {
     const BodyModel& model = system_.model(b);
+    const Eigen::Index r_b = kept_offset_[static_cast<std::size_t>(b)];
+    if (model.floating()) {  // S_b = M(q) + (∂R/∂q + γ' ∂R/∂q̇ + 2 λ_p I_pp)/β', and its springs
+      const Eigen::Index o = system_.offset(b), size = model.coordinate_count();
+      const FfrfTangent t = system_.floating_frame_tangent(b, q, v, qdd);
+      Eigen::MatrixXd s_b = t.mass + (t.stiffness + gamma_prime_ * t.damping) / beta_prime_;
+      s_b.block<4, 4>(3, 3).diagonal().array() += 2.0 * mu(system_.reference_row(b));  // (2 λ/β') I, λ = β' μ
+      for (std::size_t s = 0; s < springs.size(); ++s) {
+        const Eigen::MatrixXd& j_b = spring_j[s][static_cast<std::size_t>(b)];
+        if (j_b.size() > 0) s_b += j_b.transpose() * spring_k(s) * j_b;
+      }
+      reduced.block(r_b, r_b, size, size) = s_b;
+      reduced.block(r_b, n_r, size, m) = jacobian.middleCols(o, size).transpose();
+      reduced.block(n_r, r_b, m, size) = jacobian.middleCols(o, size);
+      eliminated_[static_cast<std::size_t>(b)].rows.clear();
+      continue;
+    }
     const Eigen::Index o = system_.offset(b), n_xi = 3 * model.field_count(), n_f = model.field_count();
     const Eigen::VectorXd q_b = q.segment(o, 12 + n_xi);
     const Eigen::Matrix3d a = orientation_of(q_b);
@@ -183,9 +215,9 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
       s_rr += j_b.leftCols<12>().transpose() * kj.leftCols<12>();
       if (n_xi > 0) s_rf += j_b.leftCols<12>().transpose() * kj.rightCols(n_xi);
     }
-    reduced.block(12 * b, 12 * b, 12, 12) = s_rr;
-    reduced.block(12 * b, n_r, 12, m) = jacobian.middleCols(o, 12).transpose();
-    reduced.block(n_r, 12 * b, m, 12) = jacobian.middleCols(o, 12);
+    reduced.block(r_b, r_b, 12, 12) = s_rr;
+    reduced.block(r_b, n_r, 12, m) = jacobian.middleCols(o, 12).transpose();
+    reduced.block(n_r, r_b, m, 12) = jacobian.middleCols(o, 12);
     Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
     e.rows.clear();
     if (n_xi == 0) continue;
@@ -200,12 +232,12 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
     e.y = core_solve(b, a, e.coupling.transpose());
     e.coupling_kernel = PaddedMatrix(e.coupling);
     e.y_kernel = PaddedMatrix(e.y);
-    reduced.block(12 * b, 12 * b, 12, 12) -= s_rf * e.y.leftCols(12);
+    reduced.block(r_b, r_b, 12, 12) -= s_rf * e.y.leftCols(12);
     const Eigen::MatrixXd s_rf_y = s_rf * e.y.rightCols(k_rows), j_y = j_f * e.y.leftCols(12);
     const Eigen::MatrixXd j_yj = j_f * e.y.rightCols(k_rows);
     for (Eigen::Index i = 0; i < k_rows; ++i) {
-      reduced.col(n_r + e.rows[i]).segment(12 * b, 12) -= s_rf_y.col(i);
-      reduced.row(n_r + e.rows[i]).segment(12 * b, 12) -= j_y.row(i);
+      reduced.col(n_r + e.rows[i]).segment(r_b, 12) -= s_rf_y.col(i);
+      reduced.row(n_r + e.rows[i]).segment(r_b, 12) -= j_y.row(i);
       for (Eigen::Index l = 0; l < k_rows; ++l) reduced(n_r + e.rows[i], n_r + e.rows[l]) -= j_yj(i, l);
     }
   }
@@ -214,8 +246,10 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
       for (int c = 0; c < n_b; ++c) {
         const Eigen::MatrixXd& j_b = spring_j[s][static_cast<std::size_t>(b)];
         const Eigen::MatrixXd& j_c = spring_j[s][static_cast<std::size_t>(c)];
+        const Eigen::Index k_b = kept_[static_cast<std::size_t>(b)], k_c = kept_[static_cast<std::size_t>(c)];
         if (b != c && j_b.size() > 0 && j_c.size() > 0)
-          reduced.block(12 * b, 12 * c, 12, 12) += j_b.leftCols<12>().transpose() * spring_k(s) * j_c.leftCols<12>();
+          reduced.block(kept_offset_[static_cast<std::size_t>(b)], kept_offset_[static_cast<std::size_t>(c)], k_b, k_c) +=
+              j_b.leftCols(k_b).transpose() * spring_k(s) * j_c.leftCols(k_c);
       }
   // Its inverse explicitly, like C⁻¹: a solve is then one product with a (12 n_b + m)-square matrix, where Eigen's
   // blocked triangular solves took 0.4 µs each at 21 rows (7 % of a 20-mode step, two per iteration). The matrix
@@ -230,12 +264,13 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
 void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
                                Eigen::VectorXd& dx) {
   const int n_b = system_.body_count();
-  const Eigen::Index m = phi.size(), n_r = 12 * n_b;
+  const Eigen::Index m = phi.size(), n_r = kept_total_;
   rhs_.resize(n_r + m);
   rhs_.tail(m) = -phi;
   for (int b = 0; b < n_b; ++b) {
-    const Eigen::Index o = system_.offset(b), n_xi = 3 * system_.model(b).field_count();
-    rhs_.segment(12 * b, 12) = -residual.segment(o, 12);
+    const Eigen::Index o = system_.offset(b), n_xi = xi_count(system_.model(b));
+    const Eigen::Index r_b = kept_offset_[static_cast<std::size_t>(b)], k_b = kept_[static_cast<std::size_t>(b)];
+    rhs_.segment(r_b, k_b) = -residual.segment(o, k_b);
     if (n_xi == 0) continue;
     Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
     // S_ff⁻¹ r_f at the current A (the core is exact for any A; only the coupling blocks are from the factorization).
@@ -243,7 +278,7 @@ void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& 
     core_solve(b, orientation_of(q.segment(o, 12)), residual.data() + o + 12, e.residual_solution.data());
     coupled_.resize(e.coupling.rows());
     e.coupling_kernel.multiply(e.residual_solution.data(), coupled_.data());  // [S_rf; J_f] S_ff⁻¹ r_f
-    rhs_.segment(12 * b, 12) += coupled_.head<12>();
+    rhs_.segment(r_b, 12) += coupled_.head<12>();
     for (std::size_t i = 0; i < e.rows.size(); ++i) rhs_(n_r + e.rows[i]) += coupled_(12 + static_cast<Eigen::Index>(i));
   }
   reduced_solution_.resize(rhs_.size());
@@ -253,13 +288,14 @@ void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& 
   dx.resize(q.size() + m);
   dx.tail(m) = x.tail(m);
   for (int b = 0; b < n_b; ++b) {
-    const Eigen::Index o = system_.offset(b), n_xi = 3 * system_.model(b).field_count();
-    dx.segment(o, 12) = x.segment(12 * b, 12);
+    const Eigen::Index o = system_.offset(b), n_xi = xi_count(system_.model(b));
+    const Eigen::Index r_b = kept_offset_[static_cast<std::size_t>(b)], k_b = kept_[static_cast<std::size_t>(b)];
+    dx.segment(o, k_b) = x.segment(r_b, k_b);
     if (n_xi == 0) continue;
     const Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
     const auto k_rows = static_cast<Eigen::Index>(e.rows.size());
     unknowns_.resize(12 + k_rows);  // [Δq_r; Δμ of the rows that touch ξ]
-    unknowns_ << x.segment(12 * b, 12), x.tail(m)(e.rows);
+    unknowns_ << x.segment(r_b, 12), x.tail(m)(e.rows);
     e.y_kernel.multiply(unknowns_.data(), dx.data() + o + 12);
     dx.segment(o + 12, n_xi) = -(dx.segment(o + 12, n_xi) + e.residual_solution);
   }

@@ -8,7 +8,8 @@
 // each flexible body is Â C Âᵀ with C = G_ff ⊗ I3 + (K̂ + γ' D̂)/β' constant for a fixed step (A orthogonal), so C is
 // factorized once and every ξ block is eliminated by two triangular solves per right-hand side, leaving a small
 // dense system in the 12 rigid coordinates per body and the constraint rows. Of the damping tangent C_t only the
-// ξξ block Â D̂ Âᵀ enters (its coupling to ȧ only changes the convergence rate).
+// ξξ block Â D̂ Âᵀ enters (its coupling to ȧ only changes the convergence rate). A floating-frame body keeps all of
+// its 7 + n_m coordinates in that dense system, with its exact tangent M(q) + (∂R/∂q + γ' ∂R/∂q̇)/β'.
 
 #include "flexbody/runtime/system.hpp"
 
@@ -28,9 +29,10 @@ namespace flexbody::runtime::detail {
 class NewtonSolver {
  public:
   virtual ~NewtonSolver() = default;
-  /// Builds and factorizes the Newton matrix at (q, q̇, μ) with the constraint Jacobian J (μ = λ/β', scaled).
-  virtual void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
-                      const Eigen::MatrixXd& jacobian) = 0;
+  /// Builds and factorizes the Newton matrix at (q, q̇, q̈, μ) with the constraint Jacobian J (μ = λ/β', scaled).
+  /// q̈ enters through the floating-frame bodies, whose mass matrix depends on q.
+  virtual void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a,
+                      const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) = 0;
   /// dx = [Δq; Δμ] for the scaled residual r and Φ with the last factorization (which may be from an earlier
   /// iterate: a modified Newton iteration; the constant core is always applied at the current A). Not const:
   /// the solvers keep their work vectors, so that an iteration allocates nothing here once sizes are set. dx must
@@ -42,7 +44,7 @@ class NewtonSolver {
 class DenseNewton final : public NewtonSolver {
  public:
   DenseNewton(const System& system, double beta_prime, double gamma_prime);
-  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
+  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a, const Eigen::VectorXd& mu,
               const Eigen::MatrixXd& jacobian) override;
   void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
              Eigen::VectorXd& dx) override;
@@ -50,14 +52,13 @@ class DenseNewton final : public NewtonSolver {
  private:
   const System& system_;
   double beta_prime_, gamma_prime_;
-  Eigen::MatrixXd mass_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
 };
 
 class ConstantCoreNewton final : public NewtonSolver {
  public:
   ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime);
-  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
+  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a, const Eigen::VectorXd& mu,
               const Eigen::MatrixXd& jacobian) override;
   void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
              Eigen::VectorXd& dx) override;
@@ -82,6 +83,10 @@ class ConstantCoreNewton final : public NewtonSolver {
   /// The sparse factor of C for the full-order body (null for the others).
   std::vector<std::unique_ptr<Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>>> sparse_cores_;
   std::vector<Eliminated> eliminated_;
+  /// Per body, where its kept coordinates start in the reduced matrix and how many there are: τ and a (12) of a
+  /// GCMS body, all 7 + n_m of a floating-frame body (whose block is dense and small: nothing to eliminate).
+  std::vector<Eigen::Index> kept_offset_, kept_;
+  Eigen::Index kept_total_ = 0;
   PaddedMatrix reduced_inverse_;  ///< of the matrix in [Δq_r; Δμ] left after eliminating every body's ξ
   Eigen::VectorXd rotated_, core_y_, rhs_, coupled_, reduced_solution_, unknowns_;  ///< work vectors of solve()
 };

@@ -19,12 +19,10 @@ Direction direction(const Marker& m, const VectorRef& q, const Eigen::Vector3d& 
 }
 
 // The frame of a marker's body: A for a body, identity for ground (directions are fixed in it at assembly).
-Eigen::Matrix3d frame_of(const Marker& m, const VectorRef& q) {
-  return m.body == kGround ? Eigen::Matrix3d::Identity() : orientation_of(q);
-}
+Eigen::Matrix3d frame_of(const Marker& m, const VectorRef& q) { return marker_body_orientation(m, q); }
 
-Eigen::MatrixXd position_jacobian(const Marker& m) {
-  return m.body == kGround ? Eigen::MatrixXd(3, 0) : marker_position_jacobian(m);
+Eigen::MatrixXd position_jacobian(const Marker& m, const VectorRef& q) {
+  return m.body == kGround ? Eigen::MatrixXd(3, 0) : marker_position_jacobian(m, q);
 }
 
 // Appends rows to an evaluation.
@@ -112,7 +110,7 @@ JointEvaluation evaluate_joint(const Joint& j, double t, const VectorRef& q1, co
   out.jacobian_second = Eigen::MatrixXd::Zero(n_rows, j.second.body == kGround ? 0 : q2.size());
   Rows rows{out};
   const Eigen::Vector3d gap = marker_position(j.first, q1) - marker_position(j.second, q2);
-  const Eigen::MatrixXd jr1 = position_jacobian(j.first), jr2 = position_jacobian(j.second);
+  const Eigen::MatrixXd jr1 = position_jacobian(j.first, q1), jr2 = position_jacobian(j.second, q2);
   if (j.type != JointType::prismatic)
     for (int k = 0; k < 3; ++k) rows.add(gap(k), jr1.row(k), -jr2.row(k));
   switch (j.type) {

@@ -1,9 +1,11 @@
 #include "flexbody/runtime/marker.hpp"
 
+#include "flexbody/runtime/ffrf_dynamics.hpp"
 #include "flexbody/runtime/gcms_elastic.hpp"
 
 #include <Eigen/Geometry>
 
+#include <cmath>
 #include <stdexcept>
 
 namespace flexbody::runtime {
@@ -16,16 +18,50 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 }
 
 void check_coordinates(const Marker& m, const VectorRef& q_b) {
-  if (q_b.size() != 3 * m.y.size())
+  const Eigen::Index expected = m.floating ? 7 + m.modal_displacement.cols() : 3 * m.y.size();
+  if (q_b.size() != expected)
     throw std::invalid_argument("marker " + m.name + ": " + std::to_string(q_b.size()) + " body coordinates, expected " +
-                                std::to_string(3 * m.y.size()));
+                                std::to_string(expected));
+}
+
+// A marker made from its GCMS row y and rotation R, given its floating-frame form when the body has one: mode m
+// moves it by Ψ_c(:, m) = W_mᵀ y and turns it by Θ_c(:, m) = R c_m + (the mode's rigid rotation).
+Marker finished(const BodyModel& model, Marker m) {
+  if (!model.floating()) return m;
+  const FfrfModel& f = *model.floating_frame;
+  if (std::abs(m.y(0) - 1.0) > 1e-12)
+    throw std::invalid_argument("marker " + m.name + ": its weights sum to " + std::to_string(m.y(0)) + ", not 1");
+  const Eigen::Index n_f = model.field_count();
+  m.floating = true;
+  m.modal_displacement.resize(3, f.modes);
+  m.modal_rotation.resize(3, f.modes);
+  for (Eigen::Index k = 0; k < f.modes; ++k) {
+    m.modal_displacement.col(k) = f.shapes.middleCols<3>(3 * k).transpose() * m.y;
+    Eigen::VectorXd c(3 * n_f);
+    for (Eigen::Index g = 0; g < n_f; ++g) c.segment<3>(3 * g) = f.shapes.block<1, 3>(4 + g, 3 * k).transpose();
+    m.modal_rotation.col(k) = m.rotation * c + f.rigid_rotations.col(k);
+  }
+  return m;
+}
+
+Eigen::Vector4d euler_of(const VectorRef& q_b) { return q_b.segment<4>(3); }
+
+Marker make_marker(int body, std::string name, Eigen::VectorXd y, Eigen::MatrixXd rotation,
+                   const Eigen::Vector3d& ground_point = Eigen::Vector3d::Zero()) {
+  Marker m;
+  m.body = body;
+  m.name = std::move(name);
+  m.y = std::move(y);
+  m.rotation = std::move(rotation);
+  m.ground_point = ground_point;
+  return m;
 }
 
 }  // namespace
 
 Marker interface_marker(const BodyModel& model, int body, const std::string& body_name, const std::string& name) {
   for (const format::Interface& i : model.interfaces)
-    if (i.name == name) return {body, body_name + "/" + name, i.y_row, i.rotation, Eigen::Vector3d::Zero()};
+    if (i.name == name) return finished(model, make_marker(body, body_name + "/" + name, i.y_row, i.rotation));
   std::string known;
   for (const format::Interface& i : model.interfaces) known += (known.empty() ? "" : ", ") + i.name;
   throw std::invalid_argument(model.source + ": no interface '" + name + "' (interfaces: " +
@@ -33,36 +69,56 @@ Marker interface_marker(const BodyModel& model, int body, const std::string& bod
 }
 
 Marker point_marker(const BodyModel& model, int body, const std::string& body_name, const Eigen::Vector3d& point) {
-  Marker m{body, body_name + "/point", Eigen::VectorXd::Zero(4 + model.field_count()),
-           Eigen::MatrixXd::Zero(3, 3 * model.field_count()), Eigen::Vector3d::Zero()};
+  Marker m = make_marker(body, body_name + "/point", Eigen::VectorXd::Zero(4 + model.field_count()),
+                         Eigen::MatrixXd::Zero(3, 3 * model.field_count()));
   m.y(0) = 1.0;
   m.y.segment<3>(1) = point;
-  return m;
+  return finished(model, m);
 }
 
 Marker node_marker(const BodyModel& model, int body, const std::string& body_name, Eigen::Index node) {
   if (node < 0 || node >= model.nodes.rows())
     throw std::invalid_argument(model.source + ": node " + std::to_string(node) + " does not exist (the mesh has " +
                                 std::to_string(model.nodes.rows()) + " nodes)");
-  Marker m = point_marker(model, body, body_name, model.nodes.row(node).transpose());
-  m.name = body_name + "/node " + std::to_string(node);
+  Marker m = make_marker(body, body_name + "/node " + std::to_string(node), Eigen::VectorXd::Zero(4 + model.field_count()),
+                         Eigen::MatrixXd::Zero(3, 3 * model.field_count()));
+  m.y(0) = 1.0;
+  m.y.segment<3>(1) = model.nodes.row(node).transpose();
   m.y.tail(model.field_count()) = field_row(model, node).transpose();
-  return m;
+  return finished(model, m);
 }
 
 Marker ground_marker(const Eigen::Vector3d& point) {
-  return {kGround, "ground", Eigen::VectorXd(), Eigen::MatrixXd(), point};
+  return make_marker(kGround, "ground", Eigen::VectorXd(), Eigen::MatrixXd(), point);
+}
+
+Eigen::Matrix3d marker_body_orientation(const Marker& m, const VectorRef& q_b) {
+  if (m.body == kGround) return Eigen::Matrix3d::Identity();
+  check_coordinates(m, q_b);
+  return m.floating ? euler_rotation(euler_of(q_b)) : orientation_of(q_b);
 }
 
 Eigen::Vector3d marker_position(const Marker& m, const VectorRef& q_b) {
   if (m.body == kGround) return m.ground_point;
   check_coordinates(m, q_b);
+  if (m.floating)  // τ + A(p) (X̄_c + Ψ_c η)
+    return q_b.head<3>() + euler_rotation(euler_of(q_b)) * (m.y.segment<3>(1) + m.modal_displacement * q_b.tail(q_b.size() - 7));
   Eigen::Vector3d r = Eigen::Vector3d::Zero();
   for (Eigen::Index k = 0; k < m.y.size(); ++k) r += m.y(k) * q_b.segment<3>(3 * k);
   return r;
 }
 
-Eigen::MatrixXd marker_position_jacobian(const Marker& m) {
+Eigen::MatrixXd marker_position_jacobian(const Marker& m, const VectorRef& q_b) {
+  if (m.floating) {
+    check_coordinates(m, q_b);
+    const Eigen::Index n = q_b.size() - 7;
+    const Eigen::Vector4d p = euler_of(q_b);
+    Eigen::MatrixXd jac(3, q_b.size());
+    jac.leftCols<3>().setIdentity();
+    jac.middleCols<4>(3) = euler_rotation_derivative(p, m.y.segment<3>(1) + m.modal_displacement * q_b.tail(n));
+    jac.rightCols(n) = euler_rotation(p) * m.modal_displacement;
+    return jac;
+  }
   Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(3, 3 * m.y.size());
   for (Eigen::Index k = 0; k < m.y.size(); ++k) jac.block<3, 3>(0, 3 * k).diagonal().setConstant(m.y(k));
   return jac;
@@ -71,6 +127,8 @@ Eigen::MatrixXd marker_position_jacobian(const Marker& m) {
 Eigen::Vector3d marker_direction(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d) {
   if (m.body == kGround) return d;
   check_coordinates(m, q_b);
+  if (m.floating)  // A(p) (d − [d]× Θ_c η)
+    return euler_rotation(euler_of(q_b)) * (d - skew(d) * (m.modal_rotation * q_b.tail(q_b.size() - 7)));
   const Eigen::Matrix3d a = orientation_of(q_b);
   const auto xi = q_b.tail(q_b.size() - 12);
   if (xi.size() == 0) return a * d;
@@ -80,6 +138,15 @@ Eigen::Vector3d marker_direction(const Marker& m, const VectorRef& q_b, const Ei
 Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d) {
   if (m.body == kGround) return Eigen::MatrixXd(3, 0);
   check_coordinates(m, q_b);
+  if (m.floating) {
+    const Eigen::Index n = q_b.size() - 7;
+    const Eigen::Vector4d p = euler_of(q_b);
+    const Eigen::Matrix3d dx = skew(d);
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(3, q_b.size());
+    jac.middleCols<4>(3) = euler_rotation_derivative(p, d - dx * (m.modal_rotation * q_b.tail(n)));
+    jac.rightCols(n) = -euler_rotation(p) * dx * m.modal_rotation;
+    return jac;
+  }
   const Eigen::Index n = q_b.size(), n_xi = n - 12;
   const Eigen::Matrix3d a = orientation_of(q_b);
   const auto xi = q_b.tail(n_xi);

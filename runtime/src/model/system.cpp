@@ -20,9 +20,21 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return s;
 }
 
-// Adds (y ⊗ I3) F to the body's block of f.
-void add_marker_force(Eigen::Ref<Eigen::VectorXd> f_b, const Marker& m, const Eigen::Vector3d& force) {
+// Adds ∂r/∂q_bᵀ F to the body's block of f: (y ⊗ I3) F on a GCMS body.
+void add_marker_force(Eigen::Ref<Eigen::VectorXd> f_b, const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& force) {
+  if (m.floating) {
+    f_b += marker_position_jacobian(m, q_b).transpose() * force;
+    return;
+  }
   for (Eigen::Index k = 0; k < m.y.size(); ++k) f_b.segment<3>(3 * k) += m.y(k) * force;
+}
+
+// E(p) = [−e, [e]× + e0 I] (3 x 4): ω = 2 E(p) ṗ is the global angular velocity, and ṗ = ½ E(p)ᵀ ω for unit p.
+Eigen::Matrix<double, 3, 4> euler_global_velocity_matrix(const Eigen::Vector4d& p) {
+  Eigen::Matrix<double, 3, 4> e;
+  e.col(0) = -p.tail<3>();
+  e.rightCols<3>() = skew(p.tail<3>()) + p(0) * Eigen::Matrix3d::Identity();
+  return e;
 }
 
 }  // namespace
@@ -35,6 +47,9 @@ void System::check_marker(const Marker& m, const std::string& what) const {
   if (m.y.size() != 4 + model.field_count() || m.rotation.cols() != 3 * model.field_count())
     throw std::invalid_argument(what + ": marker " + m.name + " was made for another number of modes of body '" +
                                 bodies_[static_cast<std::size_t>(m.body)].name + "'");
+  if (m.floating != model.floating() || (m.floating && m.modal_displacement.cols() != model.modes))
+    throw std::invalid_argument(what + ": marker " + m.name + " was made for another formulation of body '" +
+                                bodies_[static_cast<std::size_t>(m.body)].name + "'");
 }
 
 int System::add_body(const std::string& name, BodyModel model, const BodyState& initial) {
@@ -42,6 +57,18 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
     if (b.name == name) throw std::invalid_argument("body '" + name + "' is defined twice");
   const Eigen::Index n_xi = 3 * model.field_count();
   BodyState state = initial;
+  if (model.floating()) {
+    const Eigen::Index n_m = model.floating_frame->modes;
+    if (n_m != model.modes)
+      throw std::invalid_argument("body '" + name + "': its floating frame has " + std::to_string(n_m) + " modes, the body " +
+                                  std::to_string(model.modes));
+    if (state.eta.size() == 0) state.eta = Eigen::VectorXd::Zero(n_m);
+    if (state.eta_dot.size() == 0) state.eta_dot = Eigen::VectorXd::Zero(n_m);
+    if (state.eta.size() != n_m || state.eta_dot.size() != n_m)
+      throw std::invalid_argument("body '" + name + "': eta and eta_dot need n_m = " + std::to_string(n_m) + " entries");
+    if (state.xi.size() > 0 || state.xi_dot.size() > 0)
+      throw std::invalid_argument("body '" + name + "': a floating-frame body starts from eta, not from xi");
+  }
   if (state.xi.size() == 0) state.xi = Eigen::VectorXd::Zero(n_xi);
   if (state.xi_dot.size() == 0) state.xi_dot = Eigen::VectorXd::Zero(n_xi);
   if (state.xi.size() != n_xi || state.xi_dot.size() != n_xi)
@@ -64,9 +91,9 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
   if ((state.orientation.transpose() * state.orientation - Eigen::Matrix3d::Identity()).norm() > 1e-12 ||
       state.orientation.determinant() < 0.0)
     throw std::invalid_argument("body '" + name + "': the initial orientation is not a rotation (A^T A = I, det A = 1)");
-  const Eigen::Index rows = model.rigid() ? 6 : (model.needs_translational_tisserand() ? 12 : 9);
+  const Eigen::Index rows = model.floating() ? 1 : model.rigid() ? 6 : (model.needs_translational_tisserand() ? 12 : 9);
   std::shared_ptr<const detail::PaddedMatrix> stiffness;
-  if (!model.sparse && !model.rigid()) stiffness = std::make_shared<const detail::PaddedMatrix>(model.stiffness);
+  if (!model.sparse && !model.rigid() && !model.floating()) stiffness = std::make_shared<const detail::PaddedMatrix>(model.stiffness);
   bodies_.push_back({name, std::move(model), state, coordinates_, rows, std::move(stiffness)});
   coordinates_ += bodies_.back().model.coordinate_count();
   return static_cast<int>(bodies_.size()) - 1;
@@ -124,6 +151,11 @@ Eigen::VectorXd System::initial_coordinates() const {
   Eigen::VectorXd q(coordinates_);
   for (const Body& b : bodies_) {
     q.segment<3>(b.offset) = b.initial.position;
+    if (b.model.floating()) {
+      q.segment<4>(b.offset + 3) = euler_parameters(b.initial.orientation);
+      q.segment(b.offset + 7, b.model.modes) = b.initial.eta;
+      continue;
+    }
     q.segment<9>(b.offset + 3) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(b.initial.orientation.data());
     q.segment(b.offset + 12, b.initial.xi.size()) = b.initial.xi;
   }
@@ -134,6 +166,12 @@ Eigen::VectorXd System::initial_velocities() const {
   Eigen::VectorXd v(coordinates_);
   for (const Body& b : bodies_) {
     v.segment<3>(b.offset) = b.initial.velocity;
+    if (b.model.floating()) {
+      const Eigen::Vector4d p = euler_parameters(b.initial.orientation);
+      v.segment<4>(b.offset + 3) = 0.5 * euler_global_velocity_matrix(p).transpose() * b.initial.angular_velocity;
+      v.segment(b.offset + 7, b.model.modes) = b.initial.eta_dot;
+      continue;
+    }
     const Eigen::Matrix3d a_dot = skew(b.initial.angular_velocity) * b.initial.orientation;
     v.segment<9>(b.offset + 3) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(a_dot.data());
     v.segment(b.offset + 12, b.initial.xi_dot.size()) = b.initial.xi_dot;
@@ -153,9 +191,16 @@ Eigen::VectorXd System::body_coordinates(const Eigen::VectorXd& q, int body) con
   return q.segment(b.offset, b.model.coordinate_count());
 }
 
-Eigen::MatrixXd System::mass_matrix() const {
+Eigen::MatrixXd System::mass_matrix(const Eigen::VectorXd& q) const {
   Eigen::MatrixXd m = Eigen::MatrixXd::Zero(coordinates_, coordinates_);
   for (const Body& b : bodies_) {
+    if (b.model.floating()) {
+      const Eigen::Index n = b.model.coordinate_count();
+      const VectorRef q_b = q.segment(b.offset, n);
+      for (Eigen::Index c = 0; c < n; ++c)  // M_b(q) column by column: M_b e_c
+        m.block(b.offset, b.offset + c, n, 1) = ffrf_mass_product(*b.model.floating_frame, q_b, Eigen::VectorXd::Unit(n, c));
+      continue;
+    }
     const Eigen::Index columns = 4 + b.model.field_count();
     Eigen::MatrixXd g = b.model.sparse ? Eigen::MatrixXd::Zero(columns, columns) : b.model.mass_matrix;
     if (b.model.sparse) {  // G = [border; border_fᵀ M_s]
@@ -169,7 +214,7 @@ Eigen::MatrixXd System::mass_matrix() const {
   return m;
 }
 
-Eigen::SparseMatrix<double> System::sparse_mass_matrix() const {
+Eigen::SparseMatrix<double> System::sparse_mass_matrix(const Eigen::VectorXd& q) const {
   std::vector<Eigen::Triplet<double>> entries;
   auto add = [&entries](Eigen::Index offset, Eigen::Index r, Eigen::Index c, double value) {
     if (value != 0.0)
@@ -177,6 +222,16 @@ Eigen::SparseMatrix<double> System::sparse_mass_matrix() const {
   };
   for (const Body& b : bodies_) {
     const BodyModel& model = b.model;
+    if (model.floating()) {  // M_b(q), dense (7 + n_m square)
+      const Eigen::Index n = model.coordinate_count();
+      const VectorRef q_b = q.segment(b.offset, n);
+      for (Eigen::Index c = 0; c < n; ++c) {
+        const Eigen::VectorXd column = ffrf_mass_product(*model.floating_frame, q_b, Eigen::VectorXd::Unit(n, c));
+        for (Eigen::Index r = 0; r < n; ++r)
+          if (column(r) != 0.0) entries.emplace_back(b.offset + r, b.offset + c, column(r));
+      }
+      continue;
+    }
     const Eigen::Index columns = 4 + model.field_count();
     if (!model.sparse) {
       for (Eigen::Index r = 0; r < columns; ++r)
@@ -197,11 +252,13 @@ Eigen::SparseMatrix<double> System::sparse_mass_matrix() const {
   return m;
 }
 
-Eigen::VectorXd System::mass_product(const Eigen::VectorXd& x) const {
+Eigen::VectorXd System::mass_product(const Eigen::VectorXd& q, const Eigen::VectorXd& x) const {
   Eigen::VectorXd y(coordinates_);
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
-    y.segment(b.offset, n) = mass_times(b.model, x.segment(b.offset, n));
+    y.segment(b.offset, n) = b.model.floating()
+                                 ? ffrf_mass_product(*b.model.floating_frame, q.segment(b.offset, n), x.segment(b.offset, n))
+                                 : mass_times(b.model, x.segment(b.offset, n));
   }
   return y;
 }
@@ -211,6 +268,10 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
     auto f_b = f.segment(b.offset, n);
+    if (b.model.floating()) {  // gravity, the quadratic velocity vector, elastic and damping forces
+      f_b = ffrf_forces(*b.model.floating_frame, q.segment(b.offset, n), v.segment(b.offset, n), gravity_);
+      continue;
+    }
     for (Eigen::Index k = 0; k < n / 3; ++k) f_b.segment<3>(3 * k) += b.model.g_border(0, k) * gravity_;  // (G[:, 0] ⊗ I3) g
     if (!b.model.rigid()) {
       const auto q_b = q.segment(b.offset, n);
@@ -234,12 +295,20 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
   }
   for (const PointForce& p : forces_) {
     const Body& b = bodies_.at(static_cast<std::size_t>(p.marker.body));
-    add_marker_force(f.segment(b.offset, b.model.coordinate_count()), p.marker, p.force(t));
+    const Eigen::Index n = b.model.coordinate_count();
+    add_marker_force(f.segment(b.offset, n), p.marker, q.segment(b.offset, n), p.force(t));
   }
   for (const PointTorque& p : torques_) {
     const Body& b = bodies_.at(static_cast<std::size_t>(p.marker.body));
     const Eigen::Index n = b.model.coordinate_count();
     const Eigen::Vector3d torque = p.torque(t);
+    if (b.model.floating()) {  // δφ = A (2 Ḡ δp + Θ_c δη): Q_p = 2 Ḡᵀ Aᵀ T, Q_η = Θ_cᵀ Aᵀ T
+      const Eigen::Vector4d e = q.segment<4>(b.offset + 3);
+      const Eigen::Vector3d body_torque = euler_rotation(e).transpose() * torque;
+      f.segment<4>(b.offset + 3) += 2.0 * euler_body_velocity_matrix(e).transpose() * body_torque;
+      f.segment(b.offset + 7, n - 7) += p.marker.modal_rotation.transpose() * body_torque;
+      continue;
+    }
     const Eigen::Matrix3d a = orientation_of(q.segment(b.offset, n));
     const Eigen::Matrix3d q_a = 0.5 * skew(torque) * a;  // tr(Q_Aᵀ [δθ]× A) = T·δθ for orthogonal A
     f.segment<9>(b.offset + 3) += Eigen::Map<const Eigen::Matrix<double, 9, 1>>(q_a.data());
@@ -257,21 +326,41 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
     const double length = d.norm();
     if (!(length > 0.0)) continue;  // coincident markers: no direction, no force
     const Eigen::Vector3d e = d / length;
-    const Eigen::Vector3d rate = (s.second.body == kGround ? Eigen::Vector3d::Zero() : Eigen::Vector3d(marker_position_jacobian(s.second) * v2)) -
-                                 (s.first.body == kGround ? Eigen::Vector3d::Zero() : Eigen::Vector3d(marker_position_jacobian(s.first) * v1));
+    const Eigen::Vector3d rate = (s.second.body == kGround ? Eigen::Vector3d::Zero() : Eigen::Vector3d(marker_position_jacobian(s.second, q2) * v2)) -
+                                 (s.first.body == kGround ? Eigen::Vector3d::Zero() : Eigen::Vector3d(marker_position_jacobian(s.first, q1) * v1));
     const double tension = s.stiffness * (length - s.rest_length) + s.damping * e.dot(rate);
     if (s.first.body != kGround)
-      add_marker_force(f.segment(offset(s.first.body), model(s.first.body).coordinate_count()), s.first, tension * e);
+      add_marker_force(f.segment(offset(s.first.body), model(s.first.body).coordinate_count()), s.first, q1, tension * e);
     if (s.second.body != kGround)
-      add_marker_force(f.segment(offset(s.second.body), model(s.second.body).coordinate_count()), s.second, -tension * e);
+      add_marker_force(f.segment(offset(s.second.body), model(s.second.body).coordinate_count()), s.second, q2, -tension * e);
   }
   return f;
+}
+
+FfrfTangent System::floating_frame_tangent(int body, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                           const Eigen::VectorXd& a) const {
+  const Body& b = bodies_.at(static_cast<std::size_t>(body));
+  if (!b.model.floating()) throw std::invalid_argument("body '" + b.name + "' has no floating frame");
+  const Eigen::Index n = b.model.coordinate_count();
+  return ffrf_tangent(*b.model.floating_frame, q.segment(b.offset, n), v.segment(b.offset, n), a.segment(b.offset, n), gravity_);
+}
+
+Eigen::Matrix3d System::orientation(int body, const Eigen::VectorXd& q) const {
+  const Body& b = bodies_.at(static_cast<std::size_t>(body));
+  return b.model.floating() ? euler_rotation(q.segment<4>(b.offset + 3)) : orientation_of(q.segment(b.offset, 12));
+}
+
+Eigen::Vector3d System::angular_velocity(int body, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
+  const Body& b = bodies_.at(static_cast<std::size_t>(body));
+  if (b.model.floating()) return 2.0 * euler_global_velocity_matrix(q.segment<4>(b.offset + 3)) * v.segment<4>(b.offset + 3);
+  const Eigen::Matrix3d w = orientation_of(v.segment(b.offset, 12)) * orientation_of(q.segment(b.offset, 12)).transpose();
+  return 0.5 * Eigen::Vector3d(w(2, 1) - w(1, 2), w(0, 2) - w(2, 0), w(1, 0) - w(0, 1));
 }
 
 Eigen::MatrixXd System::stiffness(const Eigen::VectorXd& q) const {
   Eigen::MatrixXd k = Eigen::MatrixXd::Zero(coordinates_, coordinates_);
   for (const Body& b : bodies_) {
-    if (b.model.rigid()) continue;
+    if (b.model.rigid() || b.model.floating()) continue;
     const Eigen::Index n = b.model.coordinate_count(), n_xi = n - 12;
     const auto q_b = q.segment(b.offset, n);
     const ElasticTangent t = body_elastic_tangent(b.model, orientation_of(q_b), q_b.tail(n_xi), true);
@@ -293,8 +382,8 @@ std::vector<SpringTangent> System::spring_tangents(const Eigen::VectorXd& q, con
     SpringTangent t;
     t.first = s.first.body;
     t.second = s.second.body;
-    if (t.first != kGround) t.p_first = marker_position_jacobian(s.first);
-    if (t.second != kGround) t.p_second = marker_position_jacobian(s.second);
+    if (t.first != kGround) t.p_first = marker_position_jacobian(s.first, q1);
+    if (t.second != kGround) t.p_second = marker_position_jacobian(s.second, q2);
     const Eigen::Vector3d e = d / length;
     Eigen::Vector3d rate = Eigen::Vector3d::Zero();
     if (t.second != kGround) rate += t.p_second * body_view(v, s.second.body);
@@ -313,6 +402,10 @@ Eigen::Index System::reference_residuals(const Eigen::VectorXd& q, Eigen::Vector
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
     const auto q_b = q.segment(b.offset, n);
+    if (b.model.floating()) {  // pᵀp − 1
+      phi(row++) = q_b.segment<4>(3).squaredNorm() - 1.0;
+      continue;
+    }
     const Eigen::Matrix<double, 9, 1> ref = reference_residual(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12));
     phi.segment(row, std::min<Eigen::Index>(9, reference_rows(b))) = ref.head(std::min<Eigen::Index>(9, reference_rows(b)));
     if (reference_rows(b) == 12) {  // Eq. 77: Σ_f G[0, 4 + f] ξ_f
@@ -330,6 +423,10 @@ Eigen::Index System::reference_rates(const Eigen::VectorXd& q, const Eigen::Vect
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count(), rows = std::min<Eigen::Index>(9, reference_rows(b));
     const auto q_b = q.segment(b.offset, n), v_b = v.segment(b.offset, n);
+    if (b.model.floating()) {  // 2 pᵀṗ
+      rate(row++) = 2.0 * q_b.segment<4>(3).dot(v_b.segment<4>(3));
+      continue;
+    }
     rate.segment(row, rows) = reference_jacobian_product(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12),
                                                          orientation_of(v_b), v_b.tail(n - 12))
                                   .head(rows);
@@ -382,6 +479,10 @@ Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) 
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
     const auto q_b = q.segment(b.offset, n);
+    if (b.model.floating()) {
+      jac.block<1, 4>(row++, b.offset + 3) = 2.0 * q_b.segment<4>(3).transpose();
+      continue;
+    }
     const Eigen::MatrixXd ref = reference_jacobian(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12));
     jac.block(row, b.offset + 3, std::min<Eigen::Index>(9, reference_rows(b)), n - 3) =
         ref.topRows(std::min<Eigen::Index>(9, reference_rows(b)));
@@ -408,6 +509,10 @@ Eigen::VectorXd System::constraint_jacobian_transpose_product(double t, const Ei
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count(), rows = std::min<Eigen::Index>(9, reference_rows(b));
     const auto q_b = q.segment(b.offset, n);
+    if (b.model.floating()) {
+      out.segment<4>(b.offset + 3) = 2.0 * mu(row++) * q_b.segment<4>(3);
+      continue;
+    }
     Eigen::Matrix<double, 9, 1> mu_b = Eigen::Matrix<double, 9, 1>::Zero();
     mu_b.head(rows) = mu.segment(row, rows);
     out.segment(b.offset + 3, n - 3) = reference_jacobian_transpose_product(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12), mu_b);
@@ -461,6 +566,10 @@ Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
     const auto q_b = q.segment(b.offset, n);
+    if (b.model.floating()) {  // ∂²(pᵀp)/∂p² = 2 I
+      h.block<4, 4>(b.offset + 3, b.offset + 3).diagonal().setConstant(2.0 * lambda(row++));
+      continue;
+    }
     Eigen::Matrix<double, 9, 1> l = Eigen::Matrix<double, 9, 1>::Zero();
     l.head(std::min<Eigen::Index>(9, reference_rows(b))) = lambda.segment(row, std::min<Eigen::Index>(9, reference_rows(b)));
     h.block(b.offset + 3, b.offset + 3, n - 3, n - 3) =
@@ -490,6 +599,11 @@ Eigen::Index System::first_redundant_constraint(double t, const Eigen::VectorXd&
 
 std::string System::constraint_name(Eigen::Index row) const {
   for (const Body& b : bodies_) {
+    if (b.model.floating()) {
+      if (row < 1) return "body '" + b.name + "': normalisation of the Euler parameters";
+      row -= 1;
+      continue;
+    }
     if (row < 6) return "body '" + b.name + "': orthogonality of A (Eq. 79)";
     if (row < 9 && row < reference_rows(b)) return "body '" + b.name + "': rotational Tisserand condition (Eq. 78)";
     if (row < reference_rows(b)) return "body '" + b.name + "': translational Tisserand condition (Eq. 77)";
@@ -525,8 +639,12 @@ JointReaction System::joint_reaction(std::size_t joint, double t, const Eigen::V
   JointReaction r;
   r.force = generalized.head<3>();
   Eigen::Vector3d about_tau = Eigen::Vector3d::Zero();
-  for (Eigen::Index k = 1; k < q1.size() / 3; ++k)  // the columns a_j of A, then the fields ξ_f: 3-blocks after τ
-    about_tau += q1.segment<3>(3 * k).cross(generalized.segment<3>(3 * k));
+  if (model(j.first.body).floating()) {  // δp = ½ E(p)ᵀ δθ, η unchanged by a rigid rotation
+    about_tau = 0.5 * euler_global_velocity_matrix(q1.segment<4>(3)) * generalized.segment<4>(3);
+  } else {
+    for (Eigen::Index k = 1; k < q1.size() / 3; ++k)  // the columns a_j of A, then the fields ξ_f: 3-blocks after τ
+      about_tau += q1.segment<3>(3 * k).cross(generalized.segment<3>(3 * k));
+  }
   r.moment = about_tau - (marker_position(j.first, q1) - q1.head<3>()).cross(r.force);
   return r;
 }
@@ -537,6 +655,13 @@ Energies System::energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) co
     const Eigen::Index n = b.model.coordinate_count();
     const auto q_b = q.segment(b.offset, n);
     const auto v_b = v.segment(b.offset, n);
+    if (b.model.floating()) {  // gravity: −g · (m τ + A S(η)), the deformed centre of mass
+      const FfrfModel& ff = *b.model.floating_frame;
+      e.kinetic += ffrf_kinetic_energy(ff, q_b, v_b);
+      e.elastic += ffrf_elastic_energy(ff, q_b);
+      e.gravity -= gravity_.dot(ff.mass * q_b.head<3>() + euler_rotation(q_b.segment<4>(3)) * ffrf_first_moment(ff, q_b));
+      continue;
+    }
     e.kinetic += 0.5 * v_b.dot(mass_times(b.model, v_b));  // T = ½ v_bᵀ (G ⊗ I3) v_b
     for (Eigen::Index k = 0; k < n / 3; ++k) e.gravity -= b.model.g_border(0, k) * gravity_.dot(q_b.segment<3>(3 * k));
     if (!b.model.rigid()) e.elastic += body_elastic_forces(b.model, orientation_of(q_b), q_b.tail(n - 12)).energy;

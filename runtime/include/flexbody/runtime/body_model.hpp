@@ -21,6 +21,8 @@
 
 namespace flexbody::runtime {
 
+struct FfrfModel;
+
 /// The field blocks of the full-order reference body (full_order.hpp), kept sparse: G_ff = M_s and K̂ = K̄ have
 /// the mesh's sparsity, while G's first four rows (the rigid rows and their coupling to the fields) are dense.
 struct SparseFieldBlocks {
@@ -62,6 +64,10 @@ struct BodyModel {
   /// Set for the full-order reference body only: its G and K̂ live here, sparse, and `mass_matrix`,
   /// `stiffness` and `fields` (Ῡ' = I) are empty. Use the accessors below rather than the dense members.
   std::shared_ptr<const SparseFieldBlocks> sparse;
+  /// Set when the body moves in floating-frame coordinates [τ; p; η] (ffrf_model.hpp) instead of the improved
+  /// GCMS's [τ; a; ξ]: the same modes, markers and outputs, another formulation. The GCMS members stay (markers,
+  /// stresses and pictures are made from them).
+  std::shared_ptr<const FfrfModel> floating_frame;
 
   /// G[0, 4:] (n_f): zero when every field is M-orthogonal to translations (every body file); otherwise (the
   /// full-order reference, full_order.hpp) the translational Tisserand rows Σ_f G[0, 4 + f] ξ_f = 0 (Eq. 77) are
@@ -78,8 +84,10 @@ struct BodyModel {
   [[nodiscard]] Eigen::Index field_count() const { return sparse ? sparse->mass.rows() : stiffness.rows() / 3; }
   /// G(r, c) for one of G's first four rows (r < 4), dense or sparse body alike.
   [[nodiscard]] double g_border(int r, Eigen::Index c) const { return sparse ? sparse->border(r, c) : mass_matrix(r, c); }
-  [[nodiscard]] Eigen::Index coordinate_count() const { return 12 + 3 * field_count(); }
+  /// 12 + 3 n_f ([τ; a; ξ]), or 7 + n_m for a floating-frame body ([τ; p; η]).
+  [[nodiscard]] Eigen::Index coordinate_count() const { return floating_frame ? 7 + modes : 12 + 3 * field_count(); }
   [[nodiscard]] bool rigid() const { return field_count() == 0; }
+  [[nodiscard]] bool floating() const { return floating_frame != nullptr; }
 };
 
 /// The body of `file` with its first `modes` modes (nullopt: all; 0: rigid, from the mass properties in G).

@@ -58,4 +58,16 @@ struct FfrfTangent {
 /// S(η) = ∫ρ ū [kg m], body frame: the centre of mass of the deformed body is τ + A S / m.
 [[nodiscard]] Eigen::Vector3d ffrf_first_moment(const FfrfModel& model, const VectorRef& q_b);
 
+/// The body-frame field coordinates ξ̄ = Σ_m η_m c_m (3 n_f) of a floating-frame body: what stresses are recovered
+/// from (the rigid part of an interface frame's modes has no strain).
+[[nodiscard]] Eigen::VectorXd ffrf_field_coordinates(const FfrfModel& model, const VectorRef& q_b);
+
+/// Improved-GCMS coordinates [τ_g; a_g; ξ] (12 + 3 n_f) that put every node where the body's coordinates do,
+/// r_i = τ_g + A_g X̄_i + Σ_f Ῡ'_if ξ_f: τ_g = τ + A Σ η_m W_m(0, :)ᵀ, A_g = A (I + Σ η_m W_m(1:4, :)ᵀ) and
+/// ξ_f = A ξ̄_f. For a GCMS body, q_b itself. Outputs written for GCMS coordinates (pictures, momenta) read these. In
+/// the mean-axis frame A_g = A; in an interface frame A_g carries the frame's small rotation off the mean axes.
+[[nodiscard]] Eigen::VectorXd gcms_coordinates(const BodyModel& model, const VectorRef& q_b);
+/// Their rates, d/dt of gcms_coordinates along (q_b, v_b).
+[[nodiscard]] Eigen::VectorXd gcms_velocities(const BodyModel& model, const VectorRef& q_b, const VectorRef& v_b);
+
 }  // namespace flexbody::runtime

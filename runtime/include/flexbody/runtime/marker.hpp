@@ -3,6 +3,10 @@
 // section 4). A marker's position is a row of Y: r = (yᵀ ⊗ I3) q_b = τ + A X̄_c + Σ_f y_f ξ_f, linear in q with a
 // constant Jacobian. Its frame is A (I + [θ̄]×) with the small rotation θ̄ = R ξ̄ of its node set (ξ̄ = Âᵀ ξ), so a
 // body-fixed direction d at the marker points along A (d + θ̄ × d) = A (d − [d]× R ξ̄).
+//
+// On a floating-frame body (ffrf_model.hpp, coordinates [τ; p; η]) the same marker is r = τ + A(p) (X̄_c + Ψ_c η)
+// and θ̄ = Θ_c η, with Ψ_c and Θ_c its displacement and rotation per unit modal coordinate: nonlinear in q, so its
+// Jacobians take the coordinates.
 
 #include "flexbody/runtime/body_model.hpp"
 
@@ -20,6 +24,9 @@ struct Marker {
   Eigen::VectorXd y;                    ///< 4 + n_f: the marker's row of Y
   Eigen::MatrixXd rotation;             ///< 3 x 3 n_f (R); zero columns for a point on a rigid body or a node
   Eigen::Vector3d ground_point = Eigen::Vector3d::Zero();  ///< the position of a ground marker [m]
+  /// On a floating-frame body: Ψ_c and Θ_c (3 x n_m each, body frame) [kg^-1/2, kg^-1/2 m^-1]; empty otherwise.
+  Eigen::Matrix3Xd modal_displacement, modal_rotation;
+  bool floating = false;  ///< the marker's body moves in floating-frame coordinates
 };
 
 /// A body file's interface (rbe2/rbe3) of body `body` in a System. Throws std::invalid_argument naming the
@@ -36,15 +43,19 @@ struct Marker {
 
 /// The marker's position for the body coordinates q_b (12 + 3 n_f); a ground marker ignores q_b.
 [[nodiscard]] Eigen::Vector3d marker_position(const Marker& m, const VectorRef& q_b);
-/// ∂r/∂q_b = yᵀ ⊗ I3 (3 x (12 + 3 n_f)), constant.
-[[nodiscard]] Eigen::MatrixXd marker_position_jacobian(const Marker& m);
+/// ∂r/∂q_b (3 x BodyModel::coordinate_count()): yᵀ ⊗ I3 on a GCMS body (constant; q_b unused), [I, ∂(A ū_c)/∂p,
+/// A Ψ_c] on a floating-frame body.
+[[nodiscard]] Eigen::MatrixXd marker_position_jacobian(const Marker& m, const VectorRef& q_b);
 /// A body-fixed direction d (body frame) at the marker, in the global frame: A (d − [d]× R ξ̄).
 [[nodiscard]] Eigen::Vector3d marker_direction(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d);
 /// Its Jacobian (3 x (12 + 3 n_f)); zero columns for τ.
 [[nodiscard]] Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const VectorRef& q_b,
                                                         const Eigen::Vector3d& d);
 
-/// A = mat(a) of body coordinates q_b.
+/// The orientation A of the marker's body (identity for ground): mat(a), or A(p) on a floating-frame body.
+[[nodiscard]] Eigen::Matrix3d marker_body_orientation(const Marker& m, const VectorRef& q_b);
+
+/// A = mat(a) of GCMS body coordinates q_b.
 [[nodiscard]] inline Eigen::Matrix3d orientation_of(const VectorRef& q_b) {
   return Eigen::Map<const Eigen::Matrix3d>(q_b.data() + 3);
 }

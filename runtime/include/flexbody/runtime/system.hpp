@@ -7,8 +7,13 @@
 // Coordinates are stacked body by body, q_b = [τ; a; ξ] (12 + 3 n_f). Constraint rows: per body its reference
 // conditions (6 orthogonality rows; 3 rotational Tisserand rows if it is flexible; 3 translational Tisserand rows
 // if its fields are not M-orthogonal to translations, as in the full-order reference), then every joint's rows.
+//
+// A body may instead move in floating-frame coordinates q_b = [τ; p; η] (7 + n_m, ffrf_dynamics.hpp): its mass
+// matrix M_b(q) then depends on q, its quadratic velocity vector is among the forces, and its one reference row is
+// the Euler parameters' normalisation pᵀp = 1. The mass-matrix functions take q for that reason.
 
 #include "flexbody/runtime/body_model.hpp"
+#include "flexbody/runtime/ffrf_dynamics.hpp"
 #include "flexbody/runtime/joint.hpp"
 #include "flexbody/runtime/marker.hpp"
 
@@ -35,6 +40,7 @@ struct BodyState {
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();          ///< τ̇ [m/s]
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< ω [rad/s], global: Ȧ = [ω]× A
   Eigen::VectorXd xi_dot;                                      ///< 3 n_f
+  Eigen::VectorXd eta, eta_dot;  ///< a floating-frame body's modal coordinates and their rates (n_m); empty: zero
 };
 
 /// A force [N] in the global frame at a marker, as a function of time.
@@ -111,18 +117,28 @@ class System {
   /// The coordinates of one body (a copy); empty for kGround.
   [[nodiscard]] Eigen::VectorXd body_coordinates(const Eigen::VectorXd& q, int body) const;
 
-  /// M = diag(G_b ⊗ I3), dense (for the dense reference Newton solve and tests).
-  [[nodiscard]] Eigen::MatrixXd mass_matrix() const;
+  /// M(q) = diag(M_b): G_b ⊗ I3 for a GCMS body (constant), M_b(q) for a floating-frame one; dense (for the dense
+  /// reference Newton solve and tests).
+  [[nodiscard]] Eigen::MatrixXd mass_matrix(const Eigen::VectorXd& q) const;
   /// The same, sparse: what the consistent initial accelerations factorize with the constraint Jacobian.
-  [[nodiscard]] Eigen::SparseMatrix<double> sparse_mass_matrix() const;
-  /// M x without forming M: per body (G ⊗ I3) x_b = vec(X_b G) with X_b the 3 x (4 + n_f) blocks of x_b, a third of
-  /// the dense product's work.
-  [[nodiscard]] Eigen::VectorXd mass_product(const Eigen::VectorXd& x) const;
-  /// Q − ∂U/∂q − ∂R/∂q̇: gravity (G[:, 0] ⊗ g), point forces ((y ⊗ I3) F), torques, spring-dampers, minus the
-  /// elastic forces (Eqs. 86-87) and the bodies' structural damping (damping.hpp).
+  [[nodiscard]] Eigen::SparseMatrix<double> sparse_mass_matrix(const Eigen::VectorXd& q) const;
+  /// M(q) x without forming M: per GCMS body (G ⊗ I3) x_b = vec(X_b G) with X_b the 3 x (4 + n_f) blocks of x_b, a
+  /// third of the dense product's work.
+  [[nodiscard]] Eigen::VectorXd mass_product(const Eigen::VectorXd& q, const Eigen::VectorXd& x) const;
+  /// Q − ∂U/∂q − ∂R/∂q̇: gravity (G[:, 0] ⊗ g), point forces (∂r/∂qᵀ F), torques, spring-dampers, minus the
+  /// elastic forces (Eqs. 86-87) and the bodies' structural damping (damping.hpp); for a floating-frame body also
+  /// its quadratic velocity vector.
   [[nodiscard]] Eigen::VectorXd forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
-  /// ∂²U/∂q², dense (the applied forces here do not depend on q; the springs' tangents are spring_tangents()).
+  /// ∂²U/∂q² of the GCMS bodies, dense (the applied forces here do not depend on q; the springs' tangents are
+  /// spring_tangents(); floating-frame bodies have floating_frame_tangent()).
   [[nodiscard]] Eigen::MatrixXd stiffness(const Eigen::VectorXd& q) const;
+  /// A floating-frame body's exact tangents (ffrf_dynamics.hpp) at the system's q, q̇ and q̈, for the Newton matrix.
+  [[nodiscard]] FfrfTangent floating_frame_tangent(int body, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                                   const Eigen::VectorXd& a) const;
+  /// A body's orientation A at q (mat(a), or A(p) of a floating-frame body).
+  [[nodiscard]] Eigen::Matrix3d orientation(int body, const Eigen::VectorXd& q) const;
+  /// Its angular velocity ω [rad/s] in the global frame.
+  [[nodiscard]] Eigen::Vector3d angular_velocity(int body, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
   /// The spring-dampers' tangents at (q, q̇), one per spring with a defined direction (coincident markers have none).
   [[nodiscard]] std::vector<SpringTangent> spring_tangents(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
   [[nodiscard]] Eigen::VectorXd constraints(double t, const Eigen::VectorXd& q) const;
@@ -146,12 +162,14 @@ class System {
   /// the rows are independent. A dependent row makes [M Φ_qᵀ; Φ_q 0] singular: its joint repeats what earlier
   /// constraints already impose (two revolute joints on one axis, a fixed joint plus a spherical one, ...).
   [[nodiscard]] Eigen::Index first_redundant_constraint(double t, const Eigen::VectorXd& q) const;
-  /// What constraint row k is: "body 'bar': orthogonality", "body 'bar': Tisserand", "joint 'pivot'".
+  /// What constraint row k is: "body 'bar': orthogonality", "body 'bar': Tisserand", "joint 'pivot'", "body 'bar':
+  /// normalisation of the Euler parameters".
   [[nodiscard]] std::string constraint_name(Eigen::Index row) const;
   /// The reaction of joint j on its first marker's body for multipliers λ (all rows, as the integrator holds them):
   /// the joint's generalized force Q = −Φ_qᵀλ on that body, reduced to the marker's point. The force is Q_τ; the
   /// moment about τ is Σ_j a_j × Q_a_j + Σ_f ξ_f × Q_ξ_f (the virtual work of a rigid rotation δθ of the whole
-  /// deformed body, δa_j = δθ × a_j and δξ_f = δθ × ξ_f), moved to the marker's point p by −(p − τ) × F. Any joint
+  /// deformed body, δa_j = δθ × a_j and δξ_f = δθ × ξ_f; on a floating-frame body δp = ½ E(p)ᵀ δθ with η unchanged,
+  /// so the moment is ½ E(p) Q_p), moved to the marker's point p by −(p − τ) × F. Any joint
   /// type (for a prismatic joint too). For a joint between two markers of the same body it is the first marker's
   /// share (the wrench transmitted through the joint), not the net, which is zero. Throws std::invalid_argument if
   /// the first marker is on ground.
@@ -160,7 +178,7 @@ class System {
   /// The first constraint row of joint j (its rows follow in the order of joint.hpp).
   [[nodiscard]] Eigen::Index joint_row(std::size_t joint) const;
   /// The first constraint row of body b's reference conditions (6 orthogonality, then 3 rotational Tisserand if
-  /// flexible, then 3 translational Tisserand if needed).
+  /// flexible, then 3 translational Tisserand if needed; 1 normalisation row for a floating-frame body).
   [[nodiscard]] Eigen::Index reference_row(int body) const;
   [[nodiscard]] Energies energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
 
@@ -176,7 +194,7 @@ class System {
     BodyModel model;
     BodyState initial;
     Eigen::Index offset = 0;
-    Eigen::Index reference_rows = 0;  ///< 6 (rigid), 9, or 12 with the translational Tisserand rows
+    Eigen::Index reference_rows = 0;  ///< 6 (rigid), 9, or 12 with the translational Tisserand rows; 1 (floating)
     /// K̂ as the runtime's product kernel reads it fastest (null for rigid and full-order bodies).
     std::shared_ptr<const detail::PaddedMatrix> stiffness;
   };

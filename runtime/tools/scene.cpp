@@ -3,6 +3,7 @@
 #include "flexbody/format/body_file.hpp"
 #include "flexbody/format/yaml_reader.hpp"
 #include "flexbody/runtime/damping.hpp"
+#include "flexbody/runtime/ffrf_model.hpp"
 #include "flexbody/runtime/paraview_series.hpp"
 
 #include <Eigen/Geometry>
@@ -80,7 +81,8 @@ Scene read_scene(const std::filesystem::path& file) {
     const std::string where = fmt::format("body '{}'", name);
     if (bodies.count(name)) r.fail(it->first, fmt::format("{} is defined twice", where));
     const YAML::Node b = it->second;
-    r.expect_map(b, where, {"file", "modes", "position", "rotation", "velocity", "angular_velocity", "damping"});
+    r.expect_map(b, where, {"file", "modes", "formulation", "frame", "position", "rotation", "velocity", "angular_velocity",
+                            "damping"});
     const std::string path_text = r.text(r.required(b, "file", where), where + " file");
     const std::filesystem::path path =
         std::filesystem::path(path_text).is_absolute() ? std::filesystem::path(path_text) : base / path_text;
@@ -128,6 +130,36 @@ Scene read_scene(const std::filesystem::path& file) {
       } catch (const std::invalid_argument& e) {  // a ratio outside [0, 1], a negative alpha or beta
         r.fail(damping, fmt::format("{} damping: {}", where, e.what()));
       }
+    }
+    // formulation: gcms (default) | ffrf; frame (ffrf only): mean-axis (default) | {interface: NAME}.
+    bool floating = false;
+    if (const YAML::Node f = b["formulation"]) {
+      const std::string text = r.text(f, where + " formulation");
+      if (text != "gcms" && text != "ffrf")
+        r.fail(f, fmt::format("{} formulation '{}' is unknown; use gcms (the improved GCMS, the default) or ffrf (the "
+                              "floating frame of reference formulation with the same modes)", where, text));
+      floating = text == "ffrf";
+    }
+    if (const YAML::Node frame = b["frame"]) {
+      if (!floating) r.fail(frame, fmt::format("{}: frame belongs to formulation ffrf (the improved GCMS's frame is always "
+                                               "the mean-axis one)", where));
+      runtime::FloatingFrame kind = runtime::FloatingFrame::mean_axis;
+      std::string interface;
+      if (frame.IsMap()) {
+        r.expect_map(frame, where + " frame", {"interface"});
+        kind = runtime::FloatingFrame::interface;
+        interface = r.text(r.required(frame, "interface", where + " frame"), where + " frame interface");
+      } else if (const std::string text = r.text(frame, where + " frame"); text != "mean-axis") {
+        r.fail(frame, fmt::format("{} frame '{}' is unknown; use mean-axis or {{interface: NAME}}", where, text));
+      }
+      try {
+        model.floating_frame = std::make_shared<const runtime::FfrfModel>(runtime::make_ffrf_model(model, kind, interface));
+      } catch (const std::invalid_argument& e) {
+        r.fail(frame, fmt::format("{} frame: {}", where, e.what()));
+      }
+    } else if (floating) {
+      model.floating_frame =
+          std::make_shared<const runtime::FfrfModel>(runtime::make_ffrf_model(model, runtime::FloatingFrame::mean_axis));
     }
     Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
     if (const YAML::Node rot = b["rotation"]) {

@@ -1,5 +1,7 @@
 #include "flexbody/runtime/full_order.hpp"
 
+#include <cmath>
+#include <memory>
 #include <stdexcept>
 
 namespace flexbody::runtime {
@@ -35,6 +37,16 @@ BodyModel full_order_model(const Eigen::SparseMatrix<double>& stiffness, const E
   model.tisserand = blocks->border.block(1, 4, 3, n_n);
   model.nodes = nodes;
   model.mode_coefficients.resize(n_n, 0);
+  model.sparse = std::move(blocks);
+  return model;
+}
+
+BodyModel damp_full_order(BodyModel model, double beta) {
+  if (!model.sparse) throw std::invalid_argument(model.source + ": damp_full_order needs the full-order body");
+  if (!(beta >= 0.0) || !std::isfinite(beta))
+    throw std::invalid_argument(model.source + ": stiffness-proportional damping needs beta >= 0");
+  auto blocks = std::make_shared<SparseFieldBlocks>(*model.sparse);
+  blocks->stiffness_damping = beta;
   model.sparse = std::move(blocks);
   return model;
 }

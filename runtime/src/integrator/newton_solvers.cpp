@@ -61,12 +61,15 @@ void DenseNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, con
   }
   for (int b = 0; b < system_.body_count(); ++b) {  // the damping's ξξ block Â D̂ Âᵀ, times γ'
     const BodyModel& model = system_.model(b);
-    if (model.damping.size() == 0 || model.floating()) continue;
+    const bool sparse_damping = model.sparse && model.sparse->stiffness_damping > 0.0;
+    if ((model.damping.size() == 0 && !sparse_damping) || model.floating()) continue;
     const Eigen::Index o = system_.offset(b) + 12, n_f = model.field_count();
     const Eigen::Matrix3d a = orientation_of(system_.body_coordinates(q, b));
+    const Eigen::MatrixXd d = sparse_damping ? Eigen::MatrixXd(model.sparse->stiffness_damping * model.sparse->stiffness)
+                                             : model.damping;
     for (Eigen::Index f = 0; f < n_f; ++f)
       for (Eigen::Index g = 0; g < n_f; ++g)
-        kkt.block<3, 3>(o + 3 * f, o + 3 * g) += gamma_prime_ / beta_prime_ * a * model.damping.block<3, 3>(3 * f, 3 * g) * a.transpose();
+        kkt.block<3, 3>(o + 3 * f, o + 3 * g) += gamma_prime_ / beta_prime_ * a * d.block<3, 3>(3 * f, 3 * g) * a.transpose();
   }
   kkt.topRightCorner(n, m) = jacobian.transpose();
   kkt.bottomLeftCorner(m, n) = jacobian;
@@ -97,7 +100,7 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
           for (int d = 0; d < 3; ++d) entries.emplace_back(3 * it.row() + d, 3 * it.col() + d, it.value());
       Eigen::SparseMatrix<double> core(3 * n_f, 3 * n_f);
       core.setFromTriplets(entries.begin(), entries.end());
-      core += model.sparse->stiffness / beta_prime;
+      core += (1.0 + gamma_prime * model.sparse->stiffness_damping) / beta_prime * model.sparse->stiffness;  // K̄ + γ' β K̄
       auto factor = std::make_unique<Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>>(core);
       if (factor->info() != Eigen::Success) throw std::runtime_error(not_definite);
       sparse_cores_.back() = std::move(factor);

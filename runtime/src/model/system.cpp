@@ -279,7 +279,8 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
                                                 : body_elastic_forces(b.model, orientation_of(q_b), q_b.tail(n - 12));
       f_b.segment<9>(3) -= elastic.grad_a;   // Eq. 86
       f_b.tail(n - 12) -= elastic.grad_xi;   // Eq. 87
-      if (b.model.damping.size() > 0) {      // R = ½ ξ̄̇ᵀ D̂ ξ̄̇, ξ̄̇_f = Ȧᵀ ξ_f + Aᵀ ξ̇_f
+      const bool sparse_damping = b.model.sparse && b.model.sparse->stiffness_damping > 0.0;
+      if (b.model.damping.size() > 0 || sparse_damping) {  // R = ½ ξ̄̇ᵀ D̂ ξ̄̇, ξ̄̇_f = Ȧᵀ ξ_f + Aᵀ ξ̇_f
         const auto v_b = v.segment(b.offset, n);
         const auto xi = q_b.tail(n - 12);
         const auto xi_dot = v_b.tail(n - 12);
@@ -287,7 +288,9 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
         Eigen::VectorXd rate(n - 12);
         for (Eigen::Index i = 0; i < (n - 12) / 3; ++i)
           rate.segment<3>(3 * i) = a_dot.transpose() * xi.segment<3>(3 * i) + a.transpose() * xi_dot.segment<3>(3 * i);
-        const Eigen::VectorXd damping_force = b.model.damping * rate;
+        const Eigen::VectorXd damping_force = sparse_damping ? Eigen::VectorXd(b.model.sparse->stiffness_damping *
+                                                                               (b.model.sparse->stiffness * rate))
+                                                             : Eigen::VectorXd(b.model.damping * rate);
         f_b.segment<9>(3) -= body_frame_coordinates_derivative(xi).transpose() * damping_force;
         for (Eigen::Index i = 0; i < (n - 12) / 3; ++i) f_b.segment<3>(12 + 3 * i) -= a * damping_force.segment<3>(3 * i);
       }

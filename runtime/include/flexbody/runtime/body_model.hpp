@@ -29,6 +29,9 @@ struct SparseFieldBlocks {
   Eigen::SparseMatrix<double> mass;             ///< G_ff = M_s (n_f square, symmetric)
   Eigen::SparseMatrix<double> stiffness;        ///< K̂ = K̄ (3 n_f square, symmetric, node-interleaved)
   Eigen::Matrix<double, 4, Eigen::Dynamic> border;  ///< G[0:4, :] (4 x (4 + n_f))
+  /// β [s] of stiffness-proportional (Rayleigh) damping of the deformation, D̂ = β K̄ on the body-frame nodal
+  /// velocities (damping.hpp); 0: undamped. Set by damp_full_order (full_order.hpp).
+  double stiffness_damping = 0.0;
 };
 
 /// One body's constant blocks. The GCMS fields are an M_s-orthonormal basis of the modes' fields built in mode

@@ -4,7 +4,8 @@
 // body's modes leave out. Sparse: K̄ and M_s keep the mesh's sparsity (BodyModel::sparse), its constant Newton
 // core M_s ⊗ I3 + K̄/β' is factorized once by Eigen's sparse Cholesky, and each iteration costs products with the
 // mesh's matrices. Its fields are not M-orthogonal to the rigid motions, so the body also carries the
-// translational Tisserand rows (Eq. 77). Damping is not available for it.
+// translational Tisserand rows (Eq. 77). Its damping can only be stiffness-proportional (damp_full_order), which
+// keeps the core sparse.
 
 #include "flexbody/runtime/body_model.hpp"
 
@@ -19,5 +20,11 @@ namespace flexbody::runtime {
 [[nodiscard]] BodyModel full_order_model(const Eigen::SparseMatrix<double>& stiffness,
                                          const Eigen::SparseMatrix<double>& scalar_mass,
                                          const format::RowMatrixX3d& nodes, const std::string& source = "full order");
+
+/// The full-order body with stiffness-proportional damping D̂ = β K̄ [β in s] of its deformation: mode m of the mesh
+/// gets the ratio β ω_m / 2, as a reduced body with rayleigh_damping(model, 0, β) does for its modes, so that a
+/// damped reduced body and its reference damp alike. Throws std::invalid_argument for a model that is not full-order
+/// or a negative or non-finite β.
+[[nodiscard]] BodyModel damp_full_order(BodyModel model, double beta);
 
 }  // namespace flexbody::runtime

@@ -159,7 +159,16 @@ def main():
     fig.savefig(os.path.join(args.out, "work_precision.png"), dpi=130)
     plt.close(fig)
 
-    stamp = "{} on {}, commit {}".format(datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), machine(), commit(root))
+    # The stamp of the runs: written when they run, read back by --replot (a replot measures nothing).
+    stamp_file = os.path.join(args.out, "work_precision_stamp.txt")
+    if args.replot and os.path.exists(stamp_file):
+        with open(stamp_file) as f:
+            stamp = f.read().strip()
+    else:
+        stamp = "{} on {}, commit {}".format(datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), machine(), commit(root))
+        if not args.replot:
+            with open(stamp_file, "w") as f:
+                f.write(stamp + "\n")
     lines = ["# Work-precision of the improved GCMS and the FFRF (bench/work_precision.py)", "", f"Measured {stamp}.", ""]
     for scene, rows in results.items():
         reference = next(r for r in rows if r["formulation"] == "full_order")

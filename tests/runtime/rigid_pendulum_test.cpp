@@ -1,12 +1,14 @@
 // A rigid bar pendulum (the same a = vec(A) code path as a flexible body, n_f = 0) released from horizontal:
 // its period is the exact large-amplitude period of the physical pendulum, T = 4 √(I_p / (m g d)) K(sin(θ0/2)),
 // and with ρ∞ = 1 (no numerical damping) its energy is conserved.
+#include "flexbody/runtime/ffrf_model.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <vector>
 
@@ -355,5 +357,47 @@ TEST(RigidBody, StiffSpringsConvergeWithTheirTangentInTheNewtonMatrix) {
       finals.push_back(integrator.coordinates());
     }
     EXPECT_LT((finals[0] - finals[1]).cwiseAbs().maxCoeff(), 1e-8);  // the same solution to the Newton tolerance
+  }
+}
+
+// The same bar in floating-frame coordinates [τ; p] (ffrf_model.hpp with no modes): a torque and a joint reaction
+// reach it through the Euler parameters (Q_p = 2 Ḡᵀ Aᵀ T; the moment ½ E(p) Q_p), with the results of the GCMS bar.
+TEST(FloatingFrameRigidBody, TorqueAndJointReactionActAsNewtonSays) {
+  fr::BodyModel model = rigid_bar();
+  model.mode_coefficients.resize(0, 0);
+  model.floating_frame = std::make_shared<const fr::FfrfModel>(fr::make_ffrf_model(model, fr::FloatingFrame::mean_axis));
+  {
+    fr::System system;
+    const int bar = system.add_body("bar", model, fr::BodyState{});
+    system.add_torque({fr::point_marker(model, bar, "bar", Eigen::Vector3d::Zero()), [](double) { return Eigen::Vector3d(0, 0, 2.0); }});
+    fr::GeneralizedAlphaOptions options;
+    options.step = 1e-3;
+    fr::GeneralizedAlpha integrator(system, options);
+    for (int i = 0; i < 100; ++i) integrator.step();
+    const double izz = kMass * (kLength * kLength + kWidth * kWidth) / 12.0;
+    // ω̇ = T / I_zz, integrated exactly (a uniform angular acceleration); the tolerance as for the GCMS bar.
+    const Eigen::Vector3d omega = system.angular_velocity(bar, integrator.coordinates(), integrator.velocities());
+    EXPECT_NEAR(omega.z(), 2.0 / izz * 0.1, 1e-6 * 2.0 / izz * 0.1);
+    EXPECT_LT(omega.head<2>().norm(), 1e-12);
+  }
+  {
+    fr::System system;
+    fr::BodyState state;
+    state.position = Eigen::Vector3d(kLength / 2, 0, 0);
+    const int bar = system.add_body("bar", model, state);
+    const fr::Marker end = fr::point_marker(system.model(bar), bar, "bar", Eigen::Vector3d(-kLength / 2, 0, 0));
+    system.add_joint(fr::make_joint("clamp", fr::JointType::fixed, end, fr::ground_marker(Eigen::Vector3d::Zero()),
+                                    Eigen::Vector3d::UnitZ(), system.initial_coordinates(), Eigen::VectorXd()));
+    system.set_gravity(Eigen::Vector3d(0, -kGravity, 0));
+    fr::GeneralizedAlphaOptions options;
+    options.step = 1e-3;
+    fr::GeneralizedAlpha integrator(system, options);
+    const double weight = kMass * kGravity;
+    for (int k = 0; k < 2; ++k) {  // statics: F = −m g, M = m g L/2 about the end (round-off only)
+      const fr::JointReaction r = system.joint_reaction(0, integrator.time(), integrator.coordinates(), integrator.multipliers());
+      EXPECT_LT((r.force - Eigen::Vector3d(0, weight, 0)).norm(), 1e-12 * weight);
+      EXPECT_LT((r.moment - Eigen::Vector3d(0, 0, weight * kLength / 2)).norm(), 1e-12 * weight * kLength);
+      integrator.step();
+    }
   }
 }

@@ -4,6 +4,7 @@
 #include "flexbody/format/yaml_reader.hpp"
 #include "flexbody/runtime/damping.hpp"
 #include "flexbody/runtime/ffrf_model.hpp"
+#include "flexbody/runtime/full_order.hpp"
 #include "flexbody/runtime/paraview_series.hpp"
 
 #include <Eigen/Geometry>
@@ -92,19 +93,38 @@ Scene read_scene(const std::filesystem::path& file) {
     } catch (const std::exception& e) {
       r.fail(b["file"], e.what());
     }
+    // modes: all (default) | rigid | a count | full (the unreduced improved ACF of the file's mesh: the reference).
     std::optional<Eigen::Index> modes;
+    bool full = false;
     if (const YAML::Node m = b["modes"]) {
       const std::string text = r.text(m, where + " modes");
       if (text == "rigid") modes = 0;
+      else if (text == "full") full = true;
       else if (text != "all") modes = r.count(m, where + " modes");
     }
     runtime::BodyModel model;
     try {
-      model = runtime::make_body_model(data, modes, path.filename().string());
+      model = full ? runtime::full_order_model(data, path.filename().string())
+                   : runtime::make_body_model(data, modes, path.filename().string());
     } catch (const std::invalid_argument& e) {
       r.fail(b["modes"], e.what());
     }
-    if (const YAML::Node damping = b["damping"]) {  // modal: ζ (all modes) or [ζ_1, ...]; rayleigh: {alpha, beta}
+    if (full && b["formulation"] && r.text(b["formulation"], where + " formulation") == "ffrf")
+      r.fail(b["formulation"], fmt::format("{}: formulation ffrf moves modes in a floating frame; modes: full is the unreduced "
+                                           "improved ACF (use a number of modes, or formulation gcms)", where));
+    if (full && b["damping"]) {  // D̂ = β K̄ keeps the full-order body's Newton core sparse (full_order.hpp)
+      const YAML::Node damping = b["damping"];
+      const YAML::Node rayleigh = damping.IsMap() ? damping["rayleigh"] : YAML::Node();
+      if (!rayleigh || damping.size() != 1 || !rayleigh.IsMap() || rayleigh.size() != 1 || !rayleigh["beta"])
+        r.fail(damping, fmt::format("{} damping: modes: full takes stiffness-proportional damping only, "
+                                    "{{rayleigh: {{beta: β}}}} (β in s), which keeps its Newton matrix sparse", where));
+      try {
+        model = runtime::damp_full_order(std::move(model), r.number(r.required(rayleigh, "beta", where + " damping rayleigh"),
+                                                                    where + " damping beta"));
+      } catch (const std::invalid_argument& e) {
+        r.fail(rayleigh, fmt::format("{} damping: {}", where, e.what()));
+      }
+    } else if (const YAML::Node damping = b["damping"]) {  // modal: ζ (all modes) or [ζ_1, ...]; rayleigh: {alpha, beta}
       r.expect_map(damping, where + " damping", {"modal", "rayleigh"});
       std::optional<Eigen::VectorXd> ratios;
       if (const YAML::Node modal = damping["modal"]) {
@@ -407,6 +427,10 @@ Scene read_scene(const std::filesystem::path& file) {
           std::string known;
           for (const auto& g : regions) known += (known.empty() ? "" : ", ") + g.name;
           while (s.region < regions.size() && regions[s.region].name != name) ++s.region;
+          if (scene.system.model(body.index).sparse)
+            r.fail(region, fmt::format("{}: body '{}' is modes: full, which has no output regions (their stresses are "
+                                       "recovered from the body file's modes); follow its nodes with node markers",
+                                       where, scene.system.body_name(body.index)));
           if (s.region == regions.size())
             r.fail(region, fmt::format("{}: the body file has no output region '{}' (regions: {})", where, name,
                                        known.empty() ? "none; name output_regions in its body spec" : known));
@@ -418,6 +442,9 @@ Scene read_scene(const std::filesystem::path& file) {
         } else {
           s.kind = Sensor::Kind::modal;
           allowed = {"modal_coordinates"};
+          if (scene.system.model(body.index).sparse)
+            r.fail(o, fmt::format("{}: body '{}' is modes: full, which has no modal coordinates; follow its nodes with "
+                                  "node markers", where, scene.system.body_name(body.index)));
         }
       }
       for (std::size_t k = 0; k < quantities.size(); ++k) {
@@ -449,12 +476,19 @@ Scene read_scene(const std::filesystem::path& file) {
     for (const auto& [body, node] : chosen) {
       if (std::any_of(scene.paraview.begin(), scene.paraview.end(), [b = body](const SurfaceSeries& s) { return s.body == b; }))
         r.fail(node, fmt::format("paraview: body '{}' is named twice", scene.system.body_name(body)));
+      // A full-order body has no stress modes: by default its series shows displacements only.
+      const bool full = scene.system.model(body).sparse != nullptr;
+      if (full && stresses && paraview["stresses"])
+        r.fail(paraview["stresses"], fmt::format("paraview: body '{}' is modes: full, whose stresses fbsim does not recover "
+                                                 "(they come from the body file's modes); set stresses: false",
+                                                 scene.system.body_name(body)));
+      const bool body_stresses = stresses && !full;
       try {  // the checks of the series itself (surface stresses recovered?), before anything runs
-        const runtime::ParaViewSeries check({}, scene.system.body_name(body), scene.system.model(body), stresses);
+        const runtime::ParaViewSeries check({}, scene.system.body_name(body), scene.system.model(body), body_stresses);
       } catch (const std::invalid_argument& e) {
         r.fail(node, fmt::format("paraview: body '{}': {}", scene.system.body_name(body), e.what()));
       }
-      scene.paraview.push_back({body, stresses});
+      scene.paraview.push_back({body, body_stresses});
     }
     const long steps = static_cast<long>(step_count(scene.end_time, scene.integrator.step));
     scene.paraview_every = static_cast<int>(std::max(1L, (steps + 99) / 100));

@@ -62,8 +62,13 @@ double field_mass_norm_squared(const BodyModel& model, const Eigen::Ref<const Ei
 
 Eigen::RowVectorXd field_row(const BodyModel& model, Eigen::Index node) {
   if (!model.sparse) return model.fields.row(node);
-  Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(model.field_count());  // Ῡ' = I: node i is field i
-  row(node) = 1.0;
+  Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(model.field_count());
+  if (model.sparse->fields.rows() == 0) {  // Ῡ' = I: node i is field i
+    row(node) = 1.0;
+    return row;
+  }
+  for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(model.sparse->fields, node); it; ++it)
+    row(it.col()) = it.value();
   return row;
 }
 

@@ -1,9 +1,9 @@
 #include "flexbody/runtime/generalized_alpha.hpp"
 
 #include "newton_solvers.hpp"
+#include "saddle_point.hpp"
 
 #include <Eigen/SparseCore>
-#include <Eigen/SparseLU>
 
 #include <algorithm>
 #include <cmath>
@@ -54,7 +54,7 @@ constexpr double kStagnationFloors = 1000.0;
 // The length scale of each of one body's coordinates (GeneralizedAlphaOptions::tolerance): the radius of gyration
 // r = √(tr J / m) for τ, 1 for vec(A) (δa moves a point at distance r by r δa, as δτ = r δa would), and for a field
 // coordinate the amplitude whose largest nodal displacement is r: r / max_i |Ῡ'(i, f)|. The full-order body's fields
-// are the nodal displacements themselves (Ῡ' = I); a model built without its fields takes the RMS displacement,
+// are the nodal displacements themselves (Ῡ' = I) or its rbe2 sets' affine fields, scaled to at most 1; a model built without its fields takes the RMS displacement,
 // r √(m / G_ff(f, f)).
 void append_scales(const BodyModel& model, Eigen::VectorXd& scales, Eigen::Index offset) {
   const double trace = model.g_border(1, 1) + model.g_border(2, 2) + model.g_border(3, 3);
@@ -224,17 +224,21 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
         entries.emplace_back(n + i, j, jac(i, j));
         entries.emplace_back(j, n + i, jac(i, j));
       }
-  Eigen::SparseMatrix<double> kkt(n + m, n + m);
+  Eigen::SparseMatrix<double> kkt(n + m, n + m);  // for the residuals of the solves
   kkt.setFromTriplets(entries.begin(), entries.end());
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
-  lu.compute(kkt);
+  std::vector<bool> mesh_sized(static_cast<std::size_t>(n), false);  // the full-order bodies' fields (saddle_point.hpp)
+  for (int b = 0; b < system.body_count(); ++b)
+    if (system.model(b).sparse)
+      for (Eigen::Index k = 12; k < system.model(b).coordinate_count(); ++k)
+        mesh_sized[static_cast<std::size_t>(system.offset(b) + k)] = true;
+  const detail::SaddlePointSolver saddle(mass, jac, mesh_sized);
   auto refuse = [&] {
     const Eigen::Index redundant = system.first_redundant_constraint(t_, q_);
     throw std::invalid_argument(redundant >= 0 ? system.constraint_name(redundant) + " is redundant: it repeats what "
                                                      "the constraints before it already impose"
                                                : std::string("initial accelerations: the matrix [M J^T; J 0] is singular"));
   };
-  if (lu.info() != Eigen::Success) refuse();
+  if (!saddle.ok()) refuse();
   // A solve is good when its residual is round-off of the terms that cancel in it, ‖|K| |x|‖ + ‖b‖, not of ‖b‖ alone
   // (issue 12: a 100 m beam spinning at 0.1 rad/s cancels terms of 3e8 to a right-hand side of 3e-2).
   auto solved = [&kkt](const Eigen::VectorXd& x, const Eigen::VectorXd& b) {
@@ -254,14 +258,14 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
     if ((violation > 1e-12 * terms).any()) {
       Eigen::VectorXd rhs(n + m);
       rhs << mass * v_, -phi_t;
-      const Eigen::VectorXd projected = lu.solve(rhs);
+      const Eigen::VectorXd projected = saddle.solve(rhs);
       if (!solved(projected, rhs)) refuse();
       v_ = projected.head(n);
     }
   }
   Eigen::VectorXd rhs(n + m);
   rhs << system.forces(t_, q_, v_), -constraint_curvature(system, t_, q_, v_);
-  const Eigen::VectorXd x = lu.solve(rhs);
+  const Eigen::VectorXd x = saddle.solve(rhs);
   if (!solved(x, rhs)) refuse();
   qdd_ = x.head(n);
   lambda_ = x.tail(m);

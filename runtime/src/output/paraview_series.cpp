@@ -55,11 +55,24 @@ ParaViewSeries::ParaViewSeries(std::filesystem::path directory, std::string name
   node_index_ = Eigen::Map<const Eigen::VectorXi>(used.data(), n_s);
   std::vector<Eigen::Index> local(static_cast<std::size_t>(model.nodes.rows()), -1);
   nodes_.resize(n_s, 3);
-  fields_.resize(n_s, model.field_count());
+  field_count_ = model.field_count();
+  if (!model.sparse) fields_.resize(n_s, field_count_);
+  std::vector<Eigen::Triplet<double>> sparse_rows;  // a full-order body's: Ῡ' = I (node i is field i) or T's rows
   for (Eigen::Index j = 0; j < n_s; ++j) {
     local[static_cast<std::size_t>(node_index_(j))] = j;
     nodes_.row(j) = model.nodes.row(node_index_(j));
-    fields_.row(j) = field_row(model, node_index_(j));
+    if (!model.sparse) {
+      fields_.row(j) = field_row(model, node_index_(j));
+    } else if (model.sparse->fields.rows() == 0) {
+      sparse_rows.emplace_back(j, node_index_(j), 1.0);
+    } else {
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(model.sparse->fields, node_index_(j)); it; ++it)
+        sparse_rows.emplace_back(j, it.col(), it.value());
+    }
+  }
+  if (model.sparse) {
+    sparse_fields_.resize(n_s, field_count_);
+    sparse_fields_.setFromTriplets(sparse_rows.begin(), sparse_rows.end());
   }
   triangles_.reserve(static_cast<std::size_t>(model.surface_triangles.size()));
   for (Eigen::Index t = 0; t < model.surface_triangles.rows(); ++t)
@@ -85,7 +98,7 @@ ParaViewSeries::ParaViewSeries(std::filesystem::path directory, std::string name
 }
 
 void ParaViewSeries::write(double t, const Eigen::VectorXd& q_b) {
-  const Eigen::Index n_s = nodes_.rows(), n_f = fields_.cols();
+  const Eigen::Index n_s = nodes_.rows(), n_f = field_count_;
   if (q_b.size() != 12 + 3 * n_f)
     throw std::invalid_argument(name_ + ": " + std::to_string(q_b.size()) + " body coordinates for a body of " +
                                 std::to_string(12 + 3 * n_f));
@@ -96,7 +109,13 @@ void ParaViewSeries::write(double t, const Eigen::VectorXd& q_b) {
 
   std::vector<double> points(static_cast<std::size_t>(3 * n_s)), displacement(static_cast<std::size_t>(3 * n_s));
   for (Eigen::Index j = 0; j < n_s; ++j) {
-    const Eigen::Vector3d u = xi * fields_.row(j).transpose();  // Σ_f Ῡ'_f(i) ξ_f, world axes
+    Eigen::Vector3d u = Eigen::Vector3d::Zero();  // Σ_f Ῡ'_f(i) ξ_f, world axes
+    if (sparse_fields_.rows() == 0) {
+      u.noalias() = xi * fields_.row(j).transpose();
+    } else {
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(sparse_fields_, j); it; ++it)
+        u += it.value() * xi.col(it.col());
+    }
     const Eigen::Vector3d r = tau + a * nodes_.row(j).transpose() + u;
     for (int k = 0; k < 3; ++k) {
       points[static_cast<std::size_t>(3 * j + k)] = r(k);

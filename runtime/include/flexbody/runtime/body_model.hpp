@@ -29,6 +29,9 @@ struct SparseFieldBlocks {
   Eigen::SparseMatrix<double> mass;             ///< G_ff = M_s (n_f square, symmetric)
   Eigen::SparseMatrix<double> stiffness;        ///< K̂ = K̄ (3 n_f square, symmetric, node-interleaved)
   Eigen::Matrix<double, 4, Eigen::Dynamic> border;  ///< G[0:4, :] (4 x (4 + n_f))
+  /// Ῡ' = T (n_n x n_f) when nodes share fields (the rbe2 node sets of full_order_model(BodyData)); empty: Ῡ' = I,
+  /// field i is node i.
+  Eigen::SparseMatrix<double, Eigen::RowMajor> fields;
   /// β [s] of stiffness-proportional (Rayleigh) damping of the deformation, D̂ = β K̄ on the body-frame nodal
   /// velocities (damping.hpp); 0: undamped. Set by damp_full_order (full_order.hpp).
   double stiffness_damping = 0.0;
@@ -65,7 +68,7 @@ struct BodyModel {
   format::RowMatrixX3d nodes;                     ///< X̄ (body frame) [m]
   format::RowMatrixX3i surface_triangles;         ///< the mesh's boundary, for pictures (paraview_series.hpp)
   /// Set for the full-order reference body only: its G and K̂ live here, sparse, and `mass_matrix`,
-  /// `stiffness` and `fields` (Ῡ' = I) are empty. Use the accessors below rather than the dense members.
+  /// `stiffness` and `fields` (Ῡ' = I or the sparse T) are empty. Use the accessors below rather than the dense members.
   std::shared_ptr<const SparseFieldBlocks> sparse;
   /// Set when the body moves in floating-frame coordinates [τ; p; η] (ffrf_model.hpp) instead of the improved
   /// GCMS's [τ; a; ξ]: the same modes, markers and outputs, another formulation. The GCMS members stay (markers,

@@ -6,6 +6,7 @@
 #include "flexbody/runtime/body_model.hpp"
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
 #include <filesystem>
 #include <limits>
@@ -45,7 +46,10 @@ class ParaViewSeries {
   std::string name_;
   Eigen::VectorXi node_index_;                         ///< the surface's body nodes, ascending
   Eigen::Matrix<double, Eigen::Dynamic, 3> nodes_;     ///< X̄ of those nodes
-  Eigen::MatrixXd fields_;                             ///< Ῡ' rows of those nodes (n_s x n_f)
+  Eigen::MatrixXd fields_;                             ///< Ῡ' rows of those nodes (n_s x n_f); empty if sparse
+  /// The same for the full-order body (full_order.hpp), whose Ῡ' has a few entries per row (n_s x n_f).
+  Eigen::SparseMatrix<double, Eigen::RowMajor> sparse_fields_;
+  Eigen::Index field_count_ = 0;
   Eigen::MatrixXd stress_modes_;                       ///< S rows of those nodes (6 n_s x 3 n_f), or empty
   std::vector<std::int64_t> triangles_;                ///< surface triangles in surface-node numbering
   std::vector<std::pair<double, std::string>> frames_;

@@ -1,8 +1,8 @@
-#include "flexbody/preprocess/tet4_element.hpp"
+#include "flexbody/format/tet4_element.hpp"
 
 #include <Eigen/Dense>
 
-namespace flexbody::preprocess {
+namespace flexbody::format {
 
 Tet4Geometry tet4_geometry(const Eigen::Matrix<double, 4, 3>& corners) {
   // x = x0 + J xi with J = [x1 - x0, x2 - x0, x3 - x0]; N_a = xi_a (a = 1..3), N_0 = 1 - sum xi.
@@ -37,4 +37,4 @@ double tet4_mass_entry(double density, double volume, int a, int b, MassScheme s
   return 0.0;
 }
 
-}  // namespace flexbody::preprocess
+}  // namespace flexbody::format

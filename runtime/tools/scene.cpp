@@ -178,8 +178,12 @@ Scene read_scene(const std::filesystem::path& file) {
         r.fail(frame, fmt::format("{} frame: {}", where, e.what()));
       }
     } else if (floating) {
-      model.floating_frame =
-          std::make_shared<const runtime::FfrfModel>(runtime::make_ffrf_model(model, runtime::FloatingFrame::mean_axis));
+      try {
+        model.floating_frame =
+            std::make_shared<const runtime::FfrfModel>(runtime::make_ffrf_model(model, runtime::FloatingFrame::mean_axis));
+      } catch (const std::invalid_argument& e) {
+        r.fail(b["formulation"], fmt::format("{} formulation: {}", where, e.what()));
+      }
     }
     Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
     if (const YAML::Node rot = b["rotation"]) {

@@ -208,9 +208,10 @@ TEST(FfrfSystem, EnergyAndNormalisationHoldOverTenThousandSteps) {
     worst_energy = std::max(worst_energy, std::abs(e.total() - e0));
     worst_norm = std::max(worst_norm, std::abs(integrator.coordinates().segment<4>(3).squaredNorm() - 1.0));
   }
-  // Measured: 3.3e-9 of the energy (the GCMS test allows 1e-6 of its own), |pᵀp − 1| ≤ 1.2e-15: the normalisation is
+  // Measured: 3.3e-9 of the energy, asserted with a margin of 30 (the GCMS test allows 1e-6 of its own); a dropped
+  // Coriolis or gyroscopic term drifts by orders more over 10,000 steps. |pᵀp − 1| ≤ 1.2e-15: the normalisation is
   // a constraint row, met to round-off by the stabilised index-2 step.
-  EXPECT_LT(worst_energy, 1e-6 * e0);
+  EXPECT_LT(worst_energy, 1e-7 * e0);
   EXPECT_LT(worst_norm, 1e-12);
 }
 

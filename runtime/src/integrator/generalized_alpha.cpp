@@ -68,7 +68,8 @@ void append_scales(const BodyModel& model, Eigen::VectorXd& scales, Eigen::Index
     for (Eigen::Index m = 0; m < f.modes; ++m) {
       double largest = 0.0;
       const auto w = f.shapes.middleCols<3>(3 * m);
-      for (Eigen::Index i = 0; i < model.nodes.rows(); ++i) {
+      const bool has_fields = model.fields.cols() == model.field_count() && model.fields.rows() == model.nodes.rows();
+      for (Eigen::Index i = 0; has_fields && i < model.nodes.rows(); ++i) {
         const Eigen::Vector3d u = w.row(0).transpose() + w.middleRows<3>(1).transpose() * model.nodes.row(i).transpose() +
                                   w.bottomRows(model.field_count()).transpose() * model.fields.row(i).transpose();
         largest = std::max(largest, u.norm());

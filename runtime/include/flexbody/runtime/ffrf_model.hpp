@@ -57,7 +57,7 @@ struct FfrfModel {
 
 /// The FFRF of a (GCMS) body model with its modes, in the given frame (`interface`: the name of one of the body
 /// file's interfaces, for FloatingFrame::interface). Throws std::invalid_argument naming the body for an unknown
-/// interface or a model without modes (a rigid body needs no floating frame of its own: use the GCMS body).
+/// interface or a full-order model. A model without modes gives a rigid body in Euler parameters.
 [[nodiscard]] FfrfModel make_ffrf_model(const BodyModel& model, FloatingFrame frame, const std::string& interface = {});
 
 }  // namespace flexbody::runtime

@@ -37,32 +37,29 @@ struct Split {
   VectorRef eta, eta_d, eta_dd;
 };
 
-// The invariants at η (ffrf_dynamics.hpp): S, P_m, I_θθ, I_θf.
-struct Invariants {
-  Eigen::Vector3d s;
-  Eigen::Matrix3Xd p;     // 3 x 3 n: P_m = ∫ρ ψ_m ūᵀ
-  Eigen::Matrix3d i_tt;   // I_θθ
-  Eigen::Matrix3Xd i_tf;  // 3 x n
-};
+using Invariants = FfrfWorkspace;
 
-Invariants invariants_at(const FfrfModel& f, const VectorRef& eta) {
+// The invariants at η (ffrf_dynamics.hpp) into v: S, P_m, I_θθ, I_θf; no allocation once v is sized for n modes.
+void invariants_into(const FfrfModel& f, const VectorRef& eta, Invariants& v) {
   const Eigen::Index n = f.modes;
-  Invariants v;
+  v.resize(n);
   v.s = f.first_moment + f.mode_first_moments * eta;
-  // Σ_n η_n J2_mn for every m at once: J2 (η ⊗ I3), then P_m = J1_mᵀ + that block.
-  Eigen::MatrixXd eta_i3 = Eigen::MatrixXd::Zero(3 * n, 3);
-  for (Eigen::Index k = 0; k < n; ++k) eta_i3.block<3, 3>(3 * k, 0).diagonal().setConstant(eta(k));
-  const Eigen::MatrixXd stacked = f.mode_products * eta_i3;  // 3n x 3
-  v.p.resize(3, 3 * n);
-  v.i_tf.resize(3, n);
+  // Σ_k η_k J2_mk for every m at once (3n x 3), then P_m = J1_mᵀ + its block m.
+  v.stacked.setZero();
+  for (Eigen::Index k = 0; k < n; ++k) v.stacked.noalias() += eta(k) * f.mode_products.middleCols<3>(3 * k);
   Eigen::Matrix3d j = f.second_moment;
   for (Eigen::Index m = 0; m < n; ++m) {
-    const Eigen::Matrix3d p_m = f.mode_second_moments.middleCols<3>(3 * m).transpose() + stacked.middleRows<3>(3 * m);
+    const Eigen::Matrix3d p_m = f.mode_second_moments.middleCols<3>(3 * m).transpose() + v.stacked.middleRows<3>(3 * m);
     v.p.middleCols<3>(3 * m) = p_m;
     j += eta(m) * (f.mode_second_moments.middleCols<3>(3 * m) + p_m);  // J = J0 + Σ η_m (J1_m + P_m)
     v.i_tf.col(m) = -axial(p_m);                                      // ∫ρ ū × ψ_m
   }
   v.i_tt = j.trace() * Eigen::Matrix3d::Identity() - j;
+}
+
+Invariants invariants_at(const FfrfModel& f, const VectorRef& eta) {
+  Invariants v;
+  invariants_into(f, eta, v);
   return v;
 }
 
@@ -84,12 +81,12 @@ Frame frame_of(const Eigen::Vector4d& p, const Eigen::Vector4d& p_d, const Eigen
   return fr;
 }
 
-// F̄ = [F_τ; F_θ; F_η] (6 + n), body frame, without the elastic and damping forces.
-Eigen::VectorXd body_forces(const FfrfModel& f, const Invariants& v, const Frame& fr, const VectorRef& eta_d,
-                            const VectorRef& eta_dd) {
+// F̄ = [F_τ; F_θ; F_η] (6 + n), body frame, without the elastic and damping forces, into out (sized 6 + n); uses
+// v.gyro as scratch.
+void body_forces_into(const FfrfModel& f, Invariants& v, const Frame& fr, const VectorRef& eta_d, const VectorRef& eta_dd,
+                      Eigen::Ref<Eigen::VectorXd> out) {
   const Eigen::Index n = f.modes;
   const Eigen::Vector3d& w = fr.omega;
-  Eigen::VectorXd out(6 + n);
   const Eigen::Vector3d s_eta_d = f.mode_first_moments * eta_d;
   out.head<3>() = f.mass * fr.acc + fr.alpha.cross(v.s) + w.cross(w.cross(v.s)) + 2.0 * w.cross(s_eta_d) +
                   f.mode_first_moments * eta_dd;
@@ -99,31 +96,35 @@ Eigen::VectorXd body_forces(const FfrfModel& f, const Invariants& v, const Frame
     coriolis += 2.0 * eta_d(m) * (w * p_m.trace() - p_m * w);
   }
   out.segment<3>(3) = v.s.cross(fr.acc) + v.i_tt * fr.alpha + w.cross(v.i_tt * w) + coriolis + v.i_tf * eta_dd;
+  // b_m = Σ_k η̇_k ∫ρ ψ_k × ψ_m (3 x n), for the gyroscopic term 2 ω̄ · b_m.
+  v.gyro.setZero();
+  for (Eigen::Index k = 0; k < n; ++k) v.gyro.noalias() += eta_d(k) * f.mode_cross.middleRows<3>(3 * k);
   const double w2 = w.squaredNorm();
   for (Eigen::Index m = 0; m < n; ++m) {
     const auto p_m = v.p.middleCols<3>(3 * m);
-    double gyro = 0.0;  // 2 ω̄ · Σ_n η̇_n ∫ρ ψ_n × ψ_m
-    for (Eigen::Index k = 0; k < n; ++k)
-      gyro += eta_d(k) * w.dot(axial(f.mode_products.block<3, 3>(3 * k, 3 * m)));
     out(6 + m) = f.mode_first_moments.col(m).dot(fr.acc) + v.i_tf.col(m).dot(fr.alpha) + w.dot(p_m * w) -
-                 w2 * p_m.trace() + 2.0 * gyro + f.modal_mass.row(m).dot(eta_dd);
+                 w2 * p_m.trace() + 2.0 * w.dot(v.gyro.col(m)) + f.modal_mass.row(m).dot(eta_dd);
   }
+}
+
+Eigen::VectorXd body_forces(const FfrfModel& f, Invariants& v, const Frame& fr, const VectorRef& eta_d,
+                            const VectorRef& eta_dd) {
+  Eigen::VectorXd out(6 + f.modes);
+  body_forces_into(f, v, fr, eta_d, eta_dd, out);
   return out;
 }
 
-// R = T F̄ + [0; 0; K η + D η̇], T = diag(A, 2 Ḡᵀ, I).
-Eigen::VectorXd generalized(const FfrfModel& f, const Frame& fr, const Eigen::VectorXd& body, const VectorRef& eta,
-                            const VectorRef* eta_d) {
+// R = T F̄ + [0; 0; K η + D η̇] into r (7 + n), T = diag(A, 2 Ḡᵀ, I).
+void generalized_into(const FfrfModel& f, const Frame& fr, const Eigen::VectorXd& body, const VectorRef& eta,
+                      const VectorRef* eta_d, Eigen::Ref<Eigen::VectorXd> r) {
   const Eigen::Index n = f.modes;
-  Eigen::VectorXd r(7 + n);
   r.head<3>() = fr.a * body.head<3>();
   r.segment<4>(3) = 2.0 * fr.g_bar.transpose() * body.segment<3>(3);
   r.tail(n) = body.tail(n);
   if (n > 0) {
-    r.tail(n) += f.modal_stiffness * eta;
-    if (eta_d && f.modal_damping.size() > 0) r.tail(n) += f.modal_damping * *eta_d;
+    r.tail(n).noalias() += f.modal_stiffness * eta;
+    if (eta_d && f.modal_damping.size() > 0) r.tail(n).noalias() += f.modal_damping * *eta_d;
   }
-  return r;
 }
 
 // The body-frame mass matrix M̄ = ∂F̄/∂[ā; ω̄̇; η̈] ((6 + n) square, symmetric).
@@ -175,26 +176,55 @@ Eigen::Matrix<double, 3, 4> euler_body_velocity_matrix(const Eigen::Vector4d& p)
   return g;
 }
 
-Eigen::VectorXd ffrf_residual(const FfrfModel& f, const VectorRef& q, const VectorRef& v, const VectorRef& a,
-                              const Eigen::Vector3d& gravity) {
-  const Eigen::Index n = f.modes;
-  const Frame fr = frame_of(segment4(q, 3), segment4(v, 3), segment4(a, 3), a.head<3>(), gravity);
-  const Invariants inv = invariants_at(f, q.tail(n));
-  const VectorRef eta_d = v.tail(n);
-  return generalized(f, fr, body_forces(f, inv, fr, eta_d, a.tail(n)), q.tail(n), &eta_d);
+void FfrfWorkspace::resize(Eigen::Index n) {
+  if (body.size() == 6 + n) return;
+  stacked.resize(3 * n, 3);
+  p.resize(3, 3 * n);
+  i_tf.resize(3, n);
+  gyro.resize(3, n);
+  body.resize(6 + n);
 }
 
-Eigen::VectorXd ffrf_mass_product(const FfrfModel& f, const VectorRef& q, const VectorRef& x) {
+void ffrf_residual(const FfrfModel& f, const VectorRef& q, const VectorRef& v, const VectorRef& a,
+                   const Eigen::Vector3d& gravity, FfrfWorkspace& work, Eigen::Ref<Eigen::VectorXd> out) {
+  const Eigen::Index n = f.modes;
+  const Frame fr = frame_of(segment4(q, 3), segment4(v, 3), segment4(a, 3), a.head<3>(), gravity);
+  invariants_into(f, q.tail(n), work);
+  const VectorRef eta_d = v.tail(n);
+  body_forces_into(f, work, fr, eta_d, a.tail(n), work.body);
+  generalized_into(f, fr, work.body, q.tail(n), &eta_d, out);
+}
+
+Eigen::VectorXd ffrf_residual(const FfrfModel& f, const VectorRef& q, const VectorRef& v, const VectorRef& a,
+                              const Eigen::Vector3d& gravity) {
+  FfrfWorkspace work;
+  Eigen::VectorXd out(7 + f.modes);
+  ffrf_residual(f, q, v, a, gravity, work, out);
+  return out;
+}
+
+void ffrf_mass_product(const FfrfModel& f, const VectorRef& q, const VectorRef& x, FfrfWorkspace& work,
+                       Eigen::Ref<Eigen::VectorXd> out) {
+  // M(q) x = T M̄ Tᵀ x: the residual's acceleration terms, F̄ at ω̄ = 0 and η̇ = 0 without gravity.
   const Eigen::Index n = f.modes;
   const Eigen::Vector4d zero4 = Eigen::Vector4d::Zero();
   const Frame fr = frame_of(segment4(q, 3), zero4, segment4(x, 3), x.head<3>(), Eigen::Vector3d::Zero());
-  const Invariants inv = invariants_at(f, q.tail(n));
-  const Eigen::VectorXd body = body_mass(f, inv) * (Eigen::VectorXd(6 + n) << fr.acc, fr.alpha, x.tail(n)).finished();
-  Eigen::VectorXd r(7 + n);
-  r.head<3>() = fr.a * body.head<3>();
-  r.segment<4>(3) = 2.0 * fr.g_bar.transpose() * body.segment<3>(3);
-  r.tail(n) = body.tail(n);
-  return r;
+  invariants_into(f, q.tail(n), work);
+  const auto eta_dd = x.tail(n);
+  work.body.head<3>() = f.mass * fr.acc + fr.alpha.cross(work.s) + f.mode_first_moments * eta_dd;
+  work.body.segment<3>(3) = work.s.cross(fr.acc) + work.i_tt * fr.alpha + work.i_tf * eta_dd;
+  for (Eigen::Index m = 0; m < n; ++m)
+    work.body(6 + m) = f.mode_first_moments.col(m).dot(fr.acc) + work.i_tf.col(m).dot(fr.alpha) + f.modal_mass.row(m).dot(eta_dd);
+  out.head<3>() = fr.a * work.body.head<3>();
+  out.segment<4>(3) = 2.0 * fr.g_bar.transpose() * work.body.segment<3>(3);
+  out.tail(n) = work.body.tail(n);
+}
+
+Eigen::VectorXd ffrf_mass_product(const FfrfModel& f, const VectorRef& q, const VectorRef& x) {
+  FfrfWorkspace work;
+  Eigen::VectorXd out(7 + f.modes);
+  ffrf_mass_product(f, q, x, work, out);
+  return out;
 }
 
 Eigen::VectorXd ffrf_forces(const FfrfModel& f, const VectorRef& q, const VectorRef& v, const Eigen::Vector3d& gravity) {
@@ -207,7 +237,7 @@ FfrfTangent ffrf_tangent(const FfrfModel& f, const VectorRef& q, const VectorRef
   const Eigen::Index n = f.modes, size = 7 + n;
   const Eigen::Vector4d p = segment4(q, 3), p_d = segment4(v, 3), p_dd = segment4(a, 3);
   const Frame fr = frame_of(p, p_d, p_dd, a.head<3>(), gravity);
-  const Invariants inv = invariants_at(f, q.tail(n));
+  Invariants inv = invariants_at(f, q.tail(n));
   const VectorRef eta = q.tail(n), eta_d = v.tail(n), eta_dd = a.tail(n);
   const Eigen::VectorXd body = body_forces(f, inv, fr, eta_d, eta_dd);
   const Eigen::MatrixXd m_bar = body_mass(f, inv);

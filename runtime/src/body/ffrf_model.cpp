@@ -70,6 +70,12 @@ FfrfModel make_ffrf_model(const BodyModel& model, FloatingFrame frame, const std
   f.mode_second_moments = gw.middleRows<3>(1);
   f.mode_products = f.shapes.transpose() * gw;
   f.mode_products = 0.5 * (f.mode_products + f.mode_products.transpose()).eval();  // exactly symmetric
+  f.mode_cross.resize(3 * n_m, n_m);
+  for (Eigen::Index k = 0; k < n_m; ++k)
+    for (Eigen::Index m = 0; m < n_m; ++m) {
+      const Eigen::Matrix3d j2 = f.mode_products.block<3, 3>(3 * k, 3 * m);
+      f.mode_cross.block<3, 1>(3 * k, m) = Eigen::Vector3d(j2(1, 2) - j2(2, 1), j2(2, 0) - j2(0, 2), j2(0, 1) - j2(1, 0));
+    }
   f.modal_mass.resize(n_m, n_m);
   for (Eigen::Index m = 0; m < n_m; ++m)
     for (Eigen::Index n = 0; n < n_m; ++n) f.modal_mass(m, n) = f.mode_products.block<3, 3>(3 * m, 3 * n).trace();

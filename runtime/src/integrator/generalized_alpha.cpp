@@ -398,9 +398,9 @@ void GeneralizedAlpha::advance(double h, double t1) {
         work_.nu += work_.nu_step;
         q += position_step;
       }
-      const Eigen::VectorXd inertia = system_.mass_product(q, qdd);
-      residual = (inertia - system_.forces(t1, q, v)) * (1.0 / beta_prime) +  // a product: a division per entry costs
-                 system_.constraint_jacobian_transpose_product(t1, q, mu);   // more than the rest of this line
+      system_.dynamic_residual(t1, q, v, qdd, residual);  // M q̈ − f, a floating-frame body's in one pass
+      residual *= 1.0 / beta_prime;  // a product: a division per entry costs more than the rest of this line
+      residual += system_.constraint_jacobian_transpose_product(t1, q, mu);
       solver_->solve(q, residual, stabilized ? velocity_rows : phi, dx);
       if (!all_finite(dx)) diverged(phi);
       q += dx.head(n);

@@ -272,6 +272,34 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
       f_b = ffrf_forces(*b.model.floating_frame, q.segment(b.offset, n), v.segment(b.offset, n), gravity_);
       continue;
     }
+    add_body_forces(b, q, v, f_b);
+  }
+  add_applied_forces(t, q, v, 1.0, f);
+  return f;
+}
+
+void System::dynamic_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
+                              Eigen::VectorXd& out) const {
+  out.resize(coordinates_);
+  for (const Body& b : bodies_) {
+    const Eigen::Index n = b.model.coordinate_count();
+    auto out_b = out.segment(b.offset, n);
+    if (b.model.floating()) {  // R(q, q̇, q̈) in one pass over the invariants
+      ffrf_residual(*b.model.floating_frame, q.segment(b.offset, n), v.segment(b.offset, n), qdd.segment(b.offset, n),
+                    gravity_, b.work, out_b);
+      continue;
+    }
+    out_b = -mass_times(b.model, qdd.segment(b.offset, n));
+    add_body_forces(b, q, v, out_b);
+    out_b = -out_b;
+  }
+  add_applied_forces(t, q, v, -1.0, out);
+}
+
+void System::add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                             Eigen::Ref<Eigen::VectorXd> f_b) const {
+  const Eigen::Index n = b.model.coordinate_count();
+  {
     for (Eigen::Index k = 0; k < n / 3; ++k) f_b.segment<3>(3 * k) += b.model.g_border(0, k) * gravity_;  // (G[:, 0] ⊗ I3) g
     if (!b.model.rigid()) {
       const auto q_b = q.segment(b.offset, n);
@@ -296,15 +324,19 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
       }
     }
   }
+}
+
+void System::add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, double sign,
+                                Eigen::VectorXd& f) const {
   for (const PointForce& p : forces_) {
     const Body& b = bodies_.at(static_cast<std::size_t>(p.marker.body));
     const Eigen::Index n = b.model.coordinate_count();
-    add_marker_force(f.segment(b.offset, n), p.marker, q.segment(b.offset, n), p.force(t));
+    add_marker_force(f.segment(b.offset, n), p.marker, q.segment(b.offset, n), sign * p.force(t));
   }
   for (const PointTorque& p : torques_) {
     const Body& b = bodies_.at(static_cast<std::size_t>(p.marker.body));
     const Eigen::Index n = b.model.coordinate_count();
-    const Eigen::Vector3d torque = p.torque(t);
+    const Eigen::Vector3d torque = sign * p.torque(t);
     if (b.model.floating()) {  // δφ = A (2 Ḡ δp + Θ_c δη): Q_p = 2 Ḡᵀ Aᵀ T, Q_η = Θ_cᵀ Aᵀ T
       const Eigen::Vector4d e = q.segment<4>(b.offset + 3);
       const Eigen::Vector3d body_torque = euler_rotation(e).transpose() * torque;
@@ -331,13 +363,12 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
     const Eigen::Vector3d e = d / length;
     const Eigen::Vector3d rate = (s.second.body == kGround ? Eigen::Vector3d::Zero() : Eigen::Vector3d(marker_position_jacobian(s.second, q2) * v2)) -
                                  (s.first.body == kGround ? Eigen::Vector3d::Zero() : Eigen::Vector3d(marker_position_jacobian(s.first, q1) * v1));
-    const double tension = s.stiffness * (length - s.rest_length) + s.damping * e.dot(rate);
+    const double tension = sign * (s.stiffness * (length - s.rest_length) + s.damping * e.dot(rate));
     if (s.first.body != kGround)
       add_marker_force(f.segment(offset(s.first.body), model(s.first.body).coordinate_count()), s.first, q1, tension * e);
     if (s.second.body != kGround)
       add_marker_force(f.segment(offset(s.second.body), model(s.second.body).coordinate_count()), s.second, q2, -tension * e);
   }
-  return f;
 }
 
 FfrfTangent System::floating_frame_tangent(int body, const Eigen::VectorXd& q, const Eigen::VectorXd& v,

@@ -31,13 +31,31 @@ namespace flexbody::runtime {
 /// Ḡ(p) = [−e, −[e]× + e0 I] (3 x 4): ω̄ = 2 Ḡ(p) ṗ is the body-frame angular velocity.
 [[nodiscard]] Eigen::Matrix<double, 3, 4> euler_body_velocity_matrix(const Eigen::Vector4d& p);
 
+/// Scratch of one evaluation: the η-dependent invariants S, P_m, I_θθ, I_θf and buffers, sized for the model's modes
+/// at first use, so that evaluations with the same workspace allocate nothing (a System keeps one per body).
+struct FfrfWorkspace {
+  Eigen::Vector3d s;          ///< S = ∫ρ ū
+  Eigen::Matrix3d i_tt;       ///< I_θθ
+  Eigen::Matrix3Xd p;         ///< 3 x 3 n: P_m = ∫ρ ψ_m ūᵀ
+  Eigen::Matrix3Xd i_tf;      ///< 3 x n: ∫ρ ū × ψ_m
+  Eigen::MatrixXd stacked;    ///< 3 n x 3: Σ_k η_k J2_mk
+  Eigen::Matrix3Xd gyro;      ///< 3 x n: Σ_k η̇_k ∫ρ ψ_k × ψ_m
+  Eigen::VectorXd body;       ///< F̄ (6 + n)
+  void resize(Eigen::Index modes);
+};
+
 /// The residual of one FFRF body (7 + n_m) at coordinates q_b, velocities v_b and accelerations a_b under gravity g
-/// [m/s²]: inertia forces, gravity and the elastic and damping forces (see above).
+/// [m/s²]: inertia forces, gravity and the elastic and damping forces (see above). One pass over the invariants.
 [[nodiscard]] Eigen::VectorXd ffrf_residual(const FfrfModel& model, const VectorRef& q_b, const VectorRef& v_b,
                                             const VectorRef& a_b, const Eigen::Vector3d& gravity);
+/// The same into `out` (7 + n_m), with no allocation once `work` has been used for this model.
+void ffrf_residual(const FfrfModel& model, const VectorRef& q_b, const VectorRef& v_b, const VectorRef& a_b,
+                   const Eigen::Vector3d& gravity, FfrfWorkspace& work, Eigen::Ref<Eigen::VectorXd> out);
 
 /// M(q) x: the part of the residual linear in the accelerations.
 [[nodiscard]] Eigen::VectorXd ffrf_mass_product(const FfrfModel& model, const VectorRef& q_b, const VectorRef& x);
+void ffrf_mass_product(const FfrfModel& model, const VectorRef& q_b, const VectorRef& x, FfrfWorkspace& work,
+                       Eigen::Ref<Eigen::VectorXd> out);
 
 /// −R at zero acceleration: gravity, the quadratic velocity vector and the elastic and damping forces (what
 /// System::forces holds for the body).

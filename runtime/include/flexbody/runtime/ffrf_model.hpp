@@ -44,6 +44,8 @@ struct FfrfModel {
   Eigen::Matrix3Xd mode_first_moments;   ///< S_Ψ (3 x n_m): column m = ∫ρ ψ_m [kg^1/2]
   Eigen::Matrix3Xd mode_second_moments;  ///< J1 (3 x 3 n_m): block m = ∫ρ X̄ ψ_mᵀ [kg^1/2 m]
   Eigen::MatrixXd mode_products;         ///< J2 (3 n_m square): block (m, n) = ∫ρ ψ_m ψ_nᵀ [1]
+  /// (3 n_m x n_m): rows 3k..3k+2 of column m = ∫ρ ψ_k × ψ_m = axial(J2_km) [1], for the gyroscopic terms
+  Eigen::MatrixXd mode_cross;
   Eigen::MatrixXd modal_mass;            ///< M_ff (n_m square): tr of J2's blocks (I in the mean-axis frame)
   Eigen::MatrixXd modal_stiffness;       ///< K_ff (n_m square) [1/s²]: diag(ω²) for M-orthonormal modes
   Eigen::MatrixXd modal_damping;         ///< D_ff (n_m square) [1/s], empty: undamped

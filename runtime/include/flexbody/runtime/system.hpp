@@ -129,6 +129,11 @@ class System {
   /// elastic forces (Eqs. 86-87) and the bodies' structural damping (damping.hpp); for a floating-frame body also
   /// its quadratic velocity vector.
   [[nodiscard]] Eigen::VectorXd forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
+  /// M(q) q̈ − forces(t, q, q̇) into `out` (resized to the coordinates): the Newton iteration's dynamic rows. A
+  /// floating-frame body's part is one pass over its η-dependent invariants (ffrf_residual) in a workspace the
+  /// System keeps per body, so this is not safe to call on one System from two threads at once.
+  void dynamic_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
+                        Eigen::VectorXd& out) const;
   /// ∂²U/∂q² of the GCMS bodies, dense (the applied forces here do not depend on q; the springs' tangents are
   /// spring_tangents(); floating-frame bodies have floating_frame_tangent()).
   [[nodiscard]] Eigen::MatrixXd stiffness(const Eigen::VectorXd& q) const;
@@ -197,7 +202,12 @@ class System {
     Eigen::Index reference_rows = 0;  ///< 6 (rigid), 9, or 12 with the translational Tisserand rows; 1 (floating)
     /// K̂ as the runtime's product kernel reads it fastest (null for rigid and full-order bodies).
     std::shared_ptr<const detail::PaddedMatrix> stiffness;
+    mutable FfrfWorkspace work;  ///< a floating-frame body's evaluation scratch (dynamic_residual)
   };
+  /// A GCMS body's gravity, elastic and damping forces, added to its slice f_b.
+  void add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::Ref<Eigen::VectorXd> f_b) const;
+  /// The applied forces, torques and spring-dampers, times `sign`, added to f.
+  void add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, double sign, Eigen::VectorXd& f) const;
   [[nodiscard]] static Eigen::Index reference_rows(const Body& b) { return b.reference_rows; }
   /// Body `body`'s slice of q without a copy (empty for ground); valid while q is.
   [[nodiscard]] VectorRef body_view(const Eigen::VectorXd& q, int body) const;

@@ -79,7 +79,11 @@ BodyModel full_order_model(const format::BodyData& body, const std::string& sour
   if (mesh.element_order != 1)
     throw std::invalid_argument(source + ": the full-order body needs linear tetrahedra (element order " +
                                 std::to_string(mesh.element_order) + ")");
-  const AssembledMesh fe = assemble_mesh(mesh, body.material, source);
+  const format::Material& material = body.material;
+  if (!(material.youngs_modulus > 0.0) || !(material.density > 0.0) || !(material.poisson_ratio > -1.0) ||
+      !(material.poisson_ratio < 0.5))
+    throw std::invalid_argument(source + ": the full-order body needs the material's E > 0, rho > 0 and -1 < nu < 0.5");
+  const AssembledMesh fe = assemble_mesh(mesh, material, source);
   const FieldMatrix fields = affine_node_sets(mesh.nodes, body.interfaces, source);
   BodyModel model = sparse_body(fe.stiffness, fe.scalar_mass, fields, mesh.nodes, source);
   model.surface_triangles = mesh.surface_triangles;

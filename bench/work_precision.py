@@ -24,9 +24,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-SCENES = ["pendulum", "plate", "rotor"]
+SCENES = ["pendulum", "slider-crank", "plate", "rotor"]
 TITLES = {
     "pendulum": "flexible pendulum (Craig-Bampton, rbe2 root pinned), 0.5 s",
+    "slider-crank": "slider-crank, flexible rod (Craig-Bampton, both ends), crank spun up, 1 s",
     "plate": "free plate flipping about its intermediate axis, 1 s",
     "rotor": "blade spun up to 94 rad/s by a driven hub, 0.75 s",
 }

@@ -283,9 +283,8 @@ Scene scene_pendulum(bool quick) {
 // fbsim stops such a run at its deformation limit (measured: 2 % RMS at 114 rad/s). At 0.25 ω_pp it is 9 %. No gravity.
 // Quantities: the rod's midspan path and the force at the crank pin. Every model is damped by D̂ = β K̂ with ζ = 2 % at
 // ω_pp (β = 0.04 / ω_pp). Steps of 5e-4 s and more fail in every formulation, Newton not converging near t = 0.3-0.9
-// s: a closed loop of prismatic and revolute joints needs 6 iterations per step even with a rigid rod at 2e-3 s
-// (fbsim, measured), which points at the joints' constraint Hessians, missing from the Newton matrix (README, "Known
-// limits"); the bench records those runs as failed. The full-order reference is fbsim's `modes: full` of the Craig-Bampton body file: its rbe2 ends
+// s: the closed loop with its light slider and carriage fails with a rigid rod at 2e-3 s too (fbsim, measured; README,
+// "Known limits": the cause is not found yet); the bench records those runs as failed. The full-order reference is fbsim's `modes: full` of the Craig-Bampton body file: its rbe2 ends
 // move affinely, the span the GCMS's Craig-Bampton fields have there (full_order.hpp), so it is the limit the GCMS
 // approaches; the FFRF's modes hold the ends rigid to first order, a difference of second order in the deformation.
 // (Tying each end to a light hub as the other scenes do made the reference's Newton iteration fail at t = 0.85 s: the

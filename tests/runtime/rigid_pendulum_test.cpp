@@ -465,3 +465,60 @@ TEST(FloatingFrameRigidBody, AnObliqueTorqueAndHingeAgreeWithTheGcmsBody) {
   EXPECT_LT(d_force, 1e-6 * force) << d_force << " of " << force;
   EXPECT_LT(d_moment, 1e-6 * moment) << d_moment << " of " << moment;
 }
+
+// The Newton matrix's curvature of the joints (System::add_joint_hessian, by differences of the joints' Jacobians)
+// against second differences of λᵀΦ(q) itself, over every coordinate: two GCMS bars and a floating-frame bar joined to
+// each other and to ground by revolute, prismatic, fixed and driven joints, at a state off the assembly (every
+// coordinate moved by up to 0.05, A off SO(3)), with random multipliers. Independent of the Jacobians: only residuals
+// are differenced. Their agreement bounds both the assembly of the blocks and the Jacobians' consistency.
+TEST(JointCurvature, TheConstraintHessianHoldsTheJointsSecondDerivatives) {
+  fr::BodyModel gcms = rigid_bar();
+  fr::BodyModel ffrf = gcms;
+  ffrf.mode_coefficients.resize(0, 0);
+  ffrf.floating_frame = std::make_shared<const fr::FfrfModel>(fr::make_ffrf_model(ffrf, fr::FloatingFrame::mean_axis));
+  fr::System system;
+  fr::BodyState s1, s2, s3;
+  s2.position = Eigen::Vector3d(kLength, 0, 0);
+  s3.position = Eigen::Vector3d(2 * kLength, 0, 0);
+  s3.orientation = Eigen::AngleAxisd(0.3, Eigen::Vector3d(0, 0, 1)).toRotationMatrix();
+  const int a = system.add_body("a", gcms, s1), b = system.add_body("b", gcms, s2), c = system.add_body("c", ffrf, s3);
+  const Eigen::VectorXd q0 = system.initial_coordinates();
+  auto q_of = [&](int body) { return Eigen::VectorXd(system.body_coordinates(q0, body)); };
+  auto end = [&](int body, double x) { return fr::point_marker(system.model(body), body, "bar", Eigen::Vector3d(x, 0, 0)); };
+  const Eigen::Vector3d oblique = Eigen::Vector3d(0.3, 0.2, 1.0).normalized();
+  system.add_joint(fr::make_joint("hinge", fr::JointType::revolute, end(a, kLength / 2), end(b, -kLength / 2), oblique,
+                                  q_of(a), q_of(b)));
+  system.add_joint(fr::make_joint("slide", fr::JointType::prismatic, end(b, kLength / 2), end(c, -kLength / 2),
+                                  Eigen::Vector3d(1, 0.1, 0).normalized(), q_of(b), q_of(c)));
+  system.add_joint(fr::make_joint("weld", fr::JointType::fixed, end(c, kLength / 2),
+                                  fr::ground_marker(fr::marker_position(end(c, kLength / 2), q_of(c))), oblique, q_of(c),
+                                  Eigen::VectorXd()));
+  system.add_joint(fr::make_joint("drive", fr::JointType::driven_revolute, end(a, -kLength / 2),
+                                  fr::ground_marker(Eigen::Vector3d(-kLength / 2, 0, 0)), Eigen::Vector3d::UnitZ(), q_of(a),
+                                  Eigen::VectorXd(), [](double t) { return 2.0 * t; }));
+  std::srand(5);
+  const Eigen::VectorXd q = q0 + 0.05 * Eigen::VectorXd::Random(q0.size());
+  const Eigen::VectorXd lambda = Eigen::VectorXd::Random(system.constraint_count());
+  const Eigen::MatrixXd analytic = system.constraint_hessian(q, lambda);
+  const Eigen::Index n = q.size();
+  auto f = [&](const Eigen::VectorXd& x) { return lambda.dot(system.constraints(0.0, x)); };
+  Eigen::MatrixXd numeric(n, n);
+  const double h = 1e-4;
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index k = 0; k < n; ++k) {
+      Eigen::VectorXd pp = q, pm = q, mp = q, mm = q;
+      pp(i) += h, pp(k) += h;
+      pm(i) += h, pm(k) -= h;
+      mp(i) -= h, mp(k) += h;
+      mm(i) -= h, mm(k) -= h;
+      numeric(i, k) = (f(pp) - f(pm) - f(mp) + f(mm)) / (4 * h * h);
+    }
+  ASSERT_GT(numeric.cwiseAbs().maxCoeff(), 0.1);
+  // Second differences of a polynomial of degree ≤ 4 at h = 1e-4: O(h²) and round-off ε |f| / h² ≈ 1e-8 of the entries.
+  EXPECT_LT((analytic - numeric).cwiseAbs().maxCoeff(), 1e-6 * numeric.cwiseAbs().maxCoeff());
+  // The joints' part is what the test sees: with their multipliers zeroed the Hessian misses most of it.
+  Eigen::VectorXd bodies_only = lambda;
+  bodies_only.tail(system.constraint_count() - system.joint_row(0)).setZero();
+  const Eigen::MatrixXd without = system.constraint_hessian(q, bodies_only);
+  EXPECT_GT((without - numeric).cwiseAbs().maxCoeff(), 0.1 * numeric.cwiseAbs().maxCoeff());
+}

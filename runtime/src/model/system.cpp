@@ -610,7 +610,54 @@ Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen
         reference_hessian(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12), l);
     row += reference_rows(b);
   }
+  std::vector<Eigen::Index> offsets, counts;
+  for (const Body& b : bodies_) {
+    offsets.push_back(b.offset);
+    counts.push_back(b.model.coordinate_count());
+  }
+  add_joint_hessian(q, lambda, offsets, counts, h);
   return h;
+}
+
+void System::add_joint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda,
+                               const std::vector<Eigen::Index>& offsets, const std::vector<Eigen::Index>& counts,
+                               Eigen::MatrixXd& out) const {
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const Joint& j = joints_[k];
+    const Eigen::VectorXd l = lambda.segment(joint_row(k), j.rows());
+    if (!(l.cwiseAbs().maxCoeff() > 0.0)) continue;
+    // A spherical joint between GCMS bodies (or ground) has rows linear in q: no curvature.
+    if (j.type == JointType::spherical && !j.first.floating && !j.second.floating) continue;
+    const int body[2] = {j.first.body, j.second.body};
+    Eigen::VectorXd q_of[2];
+    for (int s = 0; s < 2; ++s)
+      if (body[s] != kGround) q_of[s] = body_coordinates(q, body[s]);
+    // Φ_jᵀ λ on each side, over the kept coordinates. t = 0: a driven joint's φ(t) shifts its residual only.
+    auto gradient = [&](Eigen::VectorXd (&g)[2]) {
+      const JointEvaluation e = evaluate_joint(j, 0.0, q_of[0], q_of[1]);
+      for (int s = 0; s < 2; ++s)
+        if (body[s] != kGround) g[s] = (s == 0 ? e.jacobian_first : e.jacobian_second).transpose() * l;
+    };
+    for (int s = 0; s < 2; ++s) {
+      if (body[s] == kGround) continue;
+      const auto bs = static_cast<std::size_t>(body[s]);
+      for (Eigen::Index c = 0; c < counts[bs]; ++c) {
+        const double x = q_of[s](c), step = 1e-6 * (1.0 + std::abs(x));
+        Eigen::VectorXd plus[2], minus[2];
+        q_of[s](c) = x + step;
+        gradient(plus);
+        q_of[s](c) = x - step;
+        gradient(minus);
+        q_of[s](c) = x;
+        for (int r = 0; r < 2; ++r) {
+          if (body[r] == kGround) continue;
+          const auto br = static_cast<std::size_t>(body[r]);
+          const Eigen::Index n = counts[br];
+          out.block(offsets[br], offsets[bs] + c, n, 1) += (plus[r].head(n) - minus[r].head(n)) / (2.0 * step);
+        }
+      }
+    }
+  }
 }
 
 Eigen::Index System::first_redundant_constraint(double t, const Eigen::VectorXd& q) const {

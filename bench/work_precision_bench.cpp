@@ -272,10 +272,11 @@ Scene scene_pendulum(bool quick) {
 // Craig-Bampton with its end faces as rbe2 interfaces (the bores: "crank" at x = 0, "slider" at x = 0.6). A rigid crank
 // (1 kg, gyration radius 0.05 m, radius r = 0.15 m) is driven about z at the origin; the rod's ends are held by
 // a spherical joint to the crank pin and a revolute joint (about z) to a rigid slider (0.05 kg), which slides along x on
-// a carriage (0.01 kg) that may slide along z: a planar loop of revolute joints in 3D repeats three rows, and closed
+// a carriage (0.5 kg) that may slide along z: a planar loop of revolute joints in 3D repeats three rows, and closed
 // with two spherical ends it leaves the rod's spin about its own axis free, with a tiny inertia (5e-6 kg m²) that the
 // bending excites (measured: 90 rad/s of spin and a failed Newton iteration within 1 s); the carriage's z freedom is
-// the row the revolute wrist adds, and nothing drives it out of the plane. The crank speeds up with φ̇ = Ω t / T (constant angular acceleration) to Ω = 0.25 ω_pp at T = 1 s,
+// the row the revolute wrist adds, and nothing drives it out of the plane. The crank speeds up with
+// φ̇ = Ω (1 − cos πt/T) / 2 to Ω = 0.25 ω_pp at T = 1 s,
 // ω_pp the rod's first pinned-pinned bending frequency (the free-free one / 2.267, Euler-Bernoulli's ratio). Not
 // through the rod's resonance: the crank's inertia loads compress the rod by about (m_slider + m_rod/2) Ω² r, which is
 // (m_slider/m_rod + 1/2) π² (Ω/ω_pp)² r/L of its buckling load; at Ω = ω_pp/2 (the second harmonic in resonance) that

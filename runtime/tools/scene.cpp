@@ -115,7 +115,10 @@ Scene read_scene(const std::filesystem::path& file) {
     if (full && b["damping"]) {  // D̂ = β K̄ keeps the full-order body's Newton core sparse (full_order.hpp)
       const YAML::Node damping = b["damping"];
       const YAML::Node rayleigh = damping.IsMap() ? damping["rayleigh"] : YAML::Node();
-      if (!rayleigh || damping.size() != 1 || !rayleigh.IsMap() || rayleigh.size() != 1 || !rayleigh["beta"])
+      const bool no_alpha = rayleigh && rayleigh.IsMap() &&
+                            (!rayleigh["alpha"] || (rayleigh["alpha"].IsScalar() && r.number(rayleigh["alpha"], where + " damping alpha") == 0.0));
+      if (!rayleigh || damping.size() != 1 || !rayleigh.IsMap() || !rayleigh["beta"] || !no_alpha ||
+          rayleigh.size() != (rayleigh["alpha"] ? 2u : 1u))
         r.fail(damping, fmt::format("{} damping: modes: full takes stiffness-proportional damping only, "
                                     "{{rayleigh: {{beta: β}}}} (β in s), which keeps its Newton matrix sparse", where));
       try {

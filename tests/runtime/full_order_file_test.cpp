@@ -70,7 +70,7 @@ TEST(FullOrderFromFile, AssemblesTheMatricesFbprepAssembled) {
   EXPECT_NEAR(model.mass, kSteel.density * 0.3 * 0.05 * 0.04, 1e-12 * model.mass);
 }
 
-TEST(FullOrderFromFile, RefusesAnInvertedElementAndOverlappingRbe2Sets) {
+TEST(FullOrderFromFile, RefusesBadMeshesAndOverlappingRbe2Sets) {
   BoxBody b = box_body(0.3, 0.05, 0.04, 6, 2, 2);
   flexbody::format::BodyData inverted = b.data;
   std::swap(inverted.mesh.tets(7, 1), inverted.mesh.tets(7, 2));
@@ -80,6 +80,19 @@ TEST(FullOrderFromFile, RefusesAnInvertedElementAndOverlappingRbe2Sets) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("box.fbh5: tetrahedron 7 is inverted or flat"), std::string::npos) << e.what();
   }
+  flexbody::format::BodyData orphan = b.data;  // a node that no tetrahedron holds: no mass, no stiffness
+  orphan.mesh.nodes.conservativeResize(orphan.mesh.nodes.rows() + 1, 3);
+  orphan.mesh.nodes.bottomRows<1>() << 1.0, 1.0, 1.0;
+  try {
+    static_cast<void>(fr::full_order_model(orphan, "box.fbh5"));
+    ADD_FAILURE() << "a node outside every element was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("box.fbh5: node " + std::to_string(b.data.mesh.nodes.rows()) +
+                                         " belongs to no tetrahedron"), std::string::npos) << e.what();
+  }
+  flexbody::format::BodyData beyond = b.data;
+  beyond.mesh.tets(3, 2) = static_cast<std::int32_t>(beyond.mesh.nodes.rows());
+  EXPECT_THROW(static_cast<void>(fr::full_order_model(beyond, "box.fbh5")), std::invalid_argument);
   const Eigen::MatrixXd none(b.data.mesh.nodes.rows(), 0);
   for (const char* name : {"a", "b"})
     b.data.interfaces.push_back(fp::interface_marker(name, "rbe2", patch_of(b.root), b.data.mesh.nodes, none));

@@ -468,7 +468,7 @@ TEST(FloatingFrameRigidBody, AnObliqueTorqueAndHingeAgreeWithTheGcmsBody) {
 
 // The Newton matrix's curvature of the joints (System::add_joint_hessian, by differences of the joints' Jacobians)
 // against second differences of λᵀΦ(q) itself, over every coordinate: two GCMS bars and a floating-frame bar joined to
-// each other and to ground by revolute, prismatic, fixed and driven joints, at a state off the assembly (every
+// each other and to ground by driven, prismatic, fixed and revolute joints, at a state off the assembly (every
 // coordinate moved by up to 0.05, A off SO(3)), with random multipliers. Independent of the Jacobians: only residuals
 // are differenced. Their agreement bounds both the assembly of the blocks and the Jacobians' consistency.
 TEST(JointCurvature, TheConstraintHessianHoldsTheJointsSecondDerivatives) {
@@ -486,22 +486,23 @@ TEST(JointCurvature, TheConstraintHessianHoldsTheJointsSecondDerivatives) {
   auto q_of = [&](int body) { return Eigen::VectorXd(system.body_coordinates(q0, body)); };
   auto end = [&](int body, double x) { return fr::point_marker(system.model(body), body, "bar", Eigen::Vector3d(x, 0, 0)); };
   const Eigen::Vector3d oblique = Eigen::Vector3d(0.3, 0.2, 1.0).normalized();
-  system.add_joint(fr::make_joint("hinge", fr::JointType::revolute, end(a, kLength / 2), end(b, -kLength / 2), oblique,
-                                  q_of(a), q_of(b)));
+  system.add_joint(fr::make_joint("drive", fr::JointType::driven_revolute, end(a, kLength / 2), end(b, -kLength / 2),
+                                  oblique, q_of(a), q_of(b), [](double t) { return 2.0 * t; }));
   system.add_joint(fr::make_joint("slide", fr::JointType::prismatic, end(b, kLength / 2), end(c, -kLength / 2),
                                   Eigen::Vector3d(1, 0.1, 0).normalized(), q_of(b), q_of(c)));
   system.add_joint(fr::make_joint("weld", fr::JointType::fixed, end(c, kLength / 2),
                                   fr::ground_marker(fr::marker_position(end(c, kLength / 2), q_of(c))), oblique, q_of(c),
                                   Eigen::VectorXd()));
-  system.add_joint(fr::make_joint("drive", fr::JointType::driven_revolute, end(a, -kLength / 2),
+  system.add_joint(fr::make_joint("hinge", fr::JointType::revolute, end(a, -kLength / 2),
                                   fr::ground_marker(Eigen::Vector3d(-kLength / 2, 0, 0)), Eigen::Vector3d::UnitZ(), q_of(a),
-                                  Eigen::VectorXd(), [](double t) { return 2.0 * t; }));
+                                  Eigen::VectorXd()));
   std::srand(5);
   const Eigen::VectorXd q = q0 + 0.05 * Eigen::VectorXd::Random(q0.size());
   const Eigen::VectorXd lambda = Eigen::VectorXd::Random(system.constraint_count());
-  const Eigen::MatrixXd analytic = system.constraint_hessian(q, lambda);
+  const double t = 0.4;  // the drive between the bars at φ = 0.8 rad: its angle row's curvature turns with φ(t)
+  const Eigen::MatrixXd analytic = system.constraint_hessian(t, q, lambda);
   const Eigen::Index n = q.size();
-  auto f = [&](const Eigen::VectorXd& x) { return lambda.dot(system.constraints(0.0, x)); };
+  auto f = [&](const Eigen::VectorXd& x) { return lambda.dot(system.constraints(t, x)); };
   Eigen::MatrixXd numeric(n, n);
   const double h = 1e-4;
   for (Eigen::Index i = 0; i < n; ++i)
@@ -519,6 +520,6 @@ TEST(JointCurvature, TheConstraintHessianHoldsTheJointsSecondDerivatives) {
   // The joints' part is what the test sees: with their multipliers zeroed the Hessian misses most of it.
   Eigen::VectorXd bodies_only = lambda;
   bodies_only.tail(system.constraint_count() - system.joint_row(0)).setZero();
-  const Eigen::MatrixXd without = system.constraint_hessian(q, bodies_only);
+  const Eigen::MatrixXd without = system.constraint_hessian(t, q, bodies_only);
   EXPECT_GT((without - numeric).cwiseAbs().maxCoeff(), 0.1 * numeric.cwiseAbs().maxCoeff());
 }

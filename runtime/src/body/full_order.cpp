@@ -47,8 +47,11 @@ BodyModel sparse_body(const SparseMatrix& stiffness, const SparseMatrix& scalar_
         for (int d = 0; d < 3; ++d) entries.emplace_back(3 * it.row() + d, 3 * it.col() + d, it.value());
     SparseMatrix expanded(3 * n_n, 3 * n_f);
     expanded.setFromTriplets(entries.begin(), entries.end());
-    blocks->mass = SparseMatrix(t.transpose() * scalar_mass * t);
-    blocks->stiffness = SparseMatrix(expanded.transpose() * stiffness * expanded);
+    // Symmetric to the last bit: the Cholesky reads one triangle, the products read both.
+    const SparseMatrix mass = t.transpose() * scalar_mass * t;
+    const SparseMatrix k = expanded.transpose() * stiffness * expanded;
+    blocks->mass = 0.5 * (mass + SparseMatrix(mass.transpose()));
+    blocks->stiffness = 0.5 * (k + SparseMatrix(k.transpose()));
     blocks->fields = fields;
   }
   blocks->border.resize(4, 4 + n_f);
@@ -83,7 +86,22 @@ BodyModel full_order_model(const format::BodyData& body, const std::string& sour
   if (!(material.youngs_modulus > 0.0) || !(material.density > 0.0) || !(material.poisson_ratio > -1.0) ||
       !(material.poisson_ratio < 0.5))
     throw std::invalid_argument(source + ": the full-order body needs the material's E > 0, rho > 0 and -1 < nu < 0.5");
+  const Eigen::Index n_n = mesh.nodes.rows();
+  const auto outside = [n_n](Eigen::Index i) { return i < 0 || i >= n_n; };
+  for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e)
+    for (int a = 0; a < 4; ++a)
+      if (outside(mesh.tets(e, a)))
+        throw std::invalid_argument(source + ": tetrahedron " + std::to_string(e) + " names node " +
+                                    std::to_string(mesh.tets(e, a)) + ", outside the mesh's " + std::to_string(n_n));
+  for (const format::Interface& i : body.interfaces)
+    for (const int node : i.nodes)
+      if (outside(node))
+        throw std::invalid_argument(source + ": interface '" + i.name + "' names node " + std::to_string(node) +
+                                    ", outside the mesh's " + std::to_string(n_n));
   const AssembledMesh fe = assemble_mesh(mesh, material, source);
+  for (Eigen::Index i = 0; i < n_n; ++i)  // a node of no element has no mass and no stiffness: a singular body
+    if (!(fe.scalar_mass.coeff(i, i) > 0.0))
+      throw std::invalid_argument(source + ": node " + std::to_string(i) + " belongs to no tetrahedron");
   const FieldMatrix fields = affine_node_sets(mesh.nodes, body.interfaces, source);
   BodyModel model = sparse_body(fe.stiffness, fe.scalar_mass, fields, mesh.nodes, source);
   model.surface_triangles = mesh.surface_triangles;

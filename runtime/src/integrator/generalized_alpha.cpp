@@ -65,10 +65,10 @@ void append_scales(const BodyModel& model, Eigen::VectorXd& scales, Eigen::Index
     // the amplitude whose largest nodal displacement is r (each node's displacement in the mode, W_mᵀ Y(i, :)ᵀ).
     const FfrfModel& f = *model.floating_frame;
     scales.segment(offset + 3, 4).setConstant(0.5);
+    const bool has_fields = model.fields.cols() == model.field_count() && model.fields.rows() == model.nodes.rows();
     for (Eigen::Index m = 0; m < f.modes; ++m) {
       double largest = 0.0;
       const auto w = f.shapes.middleCols<3>(3 * m);
-      const bool has_fields = model.fields.cols() == model.field_count() && model.fields.rows() == model.nodes.rows();
       for (Eigen::Index i = 0; has_fields && i < model.nodes.rows(); ++i) {
         const Eigen::Vector3d u = w.row(0).transpose() + w.middleRows<3>(1).transpose() * model.nodes.row(i).transpose() +
                                   w.bottomRows(model.field_count()).transpose() * model.fields.row(i).transpose();
@@ -370,7 +370,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
       const bool refresh = refresh_ || !options_.reuse_newton_matrix;
       if (refresh) {
         jacobian = system_.constraint_jacobian(t1, q);
-        solver_->factor(q, v, qdd, mu, jacobian);
+        solver_->factor(t1, q, v, qdd, mu, jacobian);
         if (stabilized) {  // Φ_q W Φ_qᵀ
           projected_.compute(jacobian * squared_scales_.asDiagonal() * jacobian.transpose());
           if (projected_.info() != Eigen::Success)

@@ -37,11 +37,11 @@ Eigen::MatrixXd spring_jacobian(const SpringTangent& t, int body, Eigen::Index c
 DenseNewton::DenseNewton(const System& system, double beta_prime, double gamma_prime)
     : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime) {}
 
-void DenseNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
+void DenseNewton::factor(double time, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
                          const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
   const Eigen::Index n = q.size(), m = jacobian.rows();
   Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
-  kkt.topLeftCorner(n, n) = system_.mass_matrix(q) + (system_.stiffness(q) + system_.constraint_hessian(q, beta_prime_ * mu)) / beta_prime_;
+  kkt.topLeftCorner(n, n) = system_.mass_matrix(q) + (system_.stiffness(q) + system_.constraint_hessian(time, q, beta_prime_ * mu)) / beta_prime_;
   for (int b = 0; b < system_.body_count(); ++b) {  // a floating-frame body: (∂R/∂q + γ' ∂R/∂q̇)/β'
     if (!system_.model(b).floating()) continue;
     const FfrfTangent t = system_.floating_frame_tangent(b, q, v, qdd);
@@ -157,7 +157,7 @@ void ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const do
   Eigen::Map<Eigen::Matrix3Xd>(y, 3, n_f).noalias() = a * core_y;
 }
 
-void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
+void ConstantCoreNewton::factor(double time, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
                                 const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
   const int n_b = system_.body_count();
   const Eigen::Index m = jacobian.rows(), n_r = kept_total_;
@@ -245,9 +245,8 @@ void ConstantCoreNewton::factor(const Eigen::VectorXd& q, const Eigen::VectorXd&
     }
   }
   // The joints' curvature ∂(Φ_qᵀ μ)/∂q over the kept coordinates (their ξ parts cannot enter the constant core). It is
-  // μ = λ/β' times the rows' second derivatives, so it matters at large steps with large reactions; on the bench's
-  // slider-crank at h = 2e-3 s it was 1e-7 of the matrix (and did not change the iteration).
-  system_.add_joint_hessian(q, mu, kept_offset_, kept_, reduced);
+  // μ = λ/β' times the rows' second derivatives, so it matters at large steps with large reactions.
+  system_.add_joint_hessian(time, q, mu, kept_offset_, kept_, reduced);
   for (std::size_t s = 0; s < springs.size(); ++s)  // springs between two bodies: their rigid-rigid blocks
     for (int b = 0; b < n_b; ++b)
       for (int c = 0; c < n_b; ++c) {

@@ -29,9 +29,9 @@ namespace flexbody::runtime::detail {
 class NewtonSolver {
  public:
   virtual ~NewtonSolver() = default;
-  /// Builds and factorizes the Newton matrix at (q, q̇, q̈, μ) with the constraint Jacobian J (μ = λ/β', scaled).
-  /// q̈ enters through the floating-frame bodies, whose mass matrix depends on q.
-  virtual void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a,
+  /// Builds and factorizes the Newton matrix at (t, q, q̇, q̈, μ) with the constraint Jacobian J (μ = λ/β', scaled).
+  /// q̈ enters through the floating-frame bodies, whose mass matrix depends on q; t through driven joints' curvature.
+  virtual void factor(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a,
                       const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) = 0;
   /// dx = [Δq; Δμ] for the scaled residual r and Φ with the last factorization (which may be from an earlier
   /// iterate: a modified Newton iteration; the constant core is always applied at the current A). Not const:
@@ -44,8 +44,8 @@ class NewtonSolver {
 class DenseNewton final : public NewtonSolver {
  public:
   DenseNewton(const System& system, double beta_prime, double gamma_prime);
-  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a, const Eigen::VectorXd& mu,
-              const Eigen::MatrixXd& jacobian) override;
+  void factor(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a,
+              const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) override;
   void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
              Eigen::VectorXd& dx) override;
 
@@ -58,8 +58,8 @@ class DenseNewton final : public NewtonSolver {
 class ConstantCoreNewton final : public NewtonSolver {
  public:
   ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime);
-  void factor(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a, const Eigen::VectorXd& mu,
-              const Eigen::MatrixXd& jacobian) override;
+  void factor(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a,
+              const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) override;
   void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
              Eigen::VectorXd& dx) override;
 

@@ -94,7 +94,7 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
   const Eigen::Index rows = model.floating() ? 1 : model.rigid() ? 6 : (model.needs_translational_tisserand() ? 12 : 9);
   std::shared_ptr<const detail::PaddedMatrix> stiffness;
   if (!model.sparse && !model.rigid() && !model.floating()) stiffness = std::make_shared<const detail::PaddedMatrix>(model.stiffness);
-  bodies_.push_back({name, std::move(model), state, coordinates_, rows, std::move(stiffness)});
+  bodies_.push_back({name, std::move(model), state, coordinates_, rows, std::move(stiffness), {}});
   coordinates_ += bodies_.back().model.coordinate_count();
   return static_cast<int>(bodies_.size()) - 1;
 }
@@ -594,7 +594,7 @@ Eigen::VectorXd System::constraint_time_derivative(double t, const Eigen::Vector
   return rate;
 }
 
-Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const {
+Eigen::MatrixXd System::constraint_hessian(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const {
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(coordinates_, coordinates_);
   Eigen::Index row = 0;
   for (const Body& b : bodies_) {
@@ -615,11 +615,11 @@ Eigen::MatrixXd System::constraint_hessian(const Eigen::VectorXd& q, const Eigen
     offsets.push_back(b.offset);
     counts.push_back(b.model.coordinate_count());
   }
-  add_joint_hessian(q, lambda, offsets, counts, h);
+  add_joint_hessian(t, q, lambda, offsets, counts, h);
   return h;
 }
 
-void System::add_joint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda,
+void System::add_joint_hessian(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& lambda,
                                const std::vector<Eigen::Index>& offsets, const std::vector<Eigen::Index>& counts,
                                Eigen::MatrixXd& out) const {
   for (std::size_t k = 0; k < joints_.size(); ++k) {
@@ -632,9 +632,9 @@ void System::add_joint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& 
     Eigen::VectorXd q_of[2];
     for (int s = 0; s < 2; ++s)
       if (body[s] != kGround) q_of[s] = body_coordinates(q, body[s]);
-    // Φ_jᵀ λ on each side, over the kept coordinates. t = 0: a driven joint's φ(t) shifts its residual only.
+    // Φ_jᵀ λ on each side, over the kept coordinates.
     auto gradient = [&](Eigen::VectorXd (&g)[2]) {
-      const JointEvaluation e = evaluate_joint(j, 0.0, q_of[0], q_of[1]);
+      const JointEvaluation e = evaluate_joint(j, t, q_of[0], q_of[1]);
       for (int s = 0; s < 2; ++s)
         if (body[s] != kGround) g[s] = (s == 0 ? e.jacobian_first : e.jacobian_second).transpose() * l;
     };

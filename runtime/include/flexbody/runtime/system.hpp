@@ -161,15 +161,15 @@ class System {
   /// the step ∛(ε (1 + |t|)) that balances truncation (step² φ‴) against the rounding of the angle (ε |φ|).
   [[nodiscard]] Eigen::VectorXd constraint_time_derivative(double t, const Eigen::VectorXd& q) const;
   /// Σ_k λ_k ∂²Φ_k/∂q² of the reference conditions (exact) and of the joints (joint_hessian, over every coordinate).
-  [[nodiscard]] Eigen::MatrixXd constraint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const;
-  /// Adds Σ_j ∂(Φ_jᵀ λ_j)/∂q of the joints to `out`, over the first counts[b] coordinates of each body b, placed at
+  [[nodiscard]] Eigen::MatrixXd constraint_hessian(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const;
+  /// Adds Σ_j ∂(Φ_jᵀ λ_j)/∂q of the joints at time t (a driven joint's rows turn with φ(t)) to `out`, over the first counts[b] coordinates of each body b, placed at
   /// rows and columns offsets[b] + those (τ included: a prismatic row multiplies positions by a direction). By central
   /// differences of the joints' Jacobians, whose entries are low-degree polynomials in q (A(p) is quadratic, vec(A)
   /// enters linearly), so the differences are exact up to round-off and the cubic terms of a floating-frame marker:
   /// 2 counts joint evaluations per joint and side; spherical joints between GCMS bodies are linear and skipped. Direction rows (revolute, prismatic, fixed) are bilinear in
   /// the two bodies' orientations, and on a floating-frame body every marker row is nonlinear: without these terms
   /// Newton converged linearly where joints carry large reactions (README, "Known limits").
-  void add_joint_hessian(const Eigen::VectorXd& q, const Eigen::VectorXd& lambda, const std::vector<Eigen::Index>& offsets,
+  void add_joint_hessian(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& lambda, const std::vector<Eigen::Index>& offsets,
                          const std::vector<Eigen::Index>& counts, Eigen::MatrixXd& out) const;
   /// The first constraint row (in row order) that is linearly dependent on the rows before it at (t, q), or −1 if
   /// the rows are independent. A dependent row makes [M Φ_qᵀ; Φ_q 0] singular: its joint repeats what earlier

@@ -369,7 +369,7 @@ Scene scene_slider_crank(bool quick) {
     slider_state.position = Eigen::Vector3d(r + length, 0, 0);
     const int slider = b->system.add_body("slider", hub_model(0.05, 0.01), slider_state);
     // The carriage never moves (the mechanism stays in its plane), so its mass does not enter the results; at 0.01 kg
-    // and 1e-6 kg m² it made the stabilised index-2 iteration fail at steps from 5e-4 s (README, "Known limits").
+    // and 1e-6 kg m² the stabilised index-2 iteration needs its coupled step, which costs more (README, "Known limits").
     const int carriage = b->system.add_body("carriage", hub_model(0.5, 0.05), slider_state);
     const fr::BodyModel& m = b->system.model(b->body);
     b->tip = fr::node_marker(m, b->body, "rod", nearest(part, {0.3, 0.005, 0.01}));

@@ -2,6 +2,7 @@
 
 #include "newton_solvers.hpp"
 #include "saddle_point.hpp"
+#include "stabilized_coupling.hpp"
 
 #include <Eigen/SparseCore>
 
@@ -166,7 +167,7 @@ std::string GeneralizedAlpha::last_state_diagnosis() const {
 }
 
 GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaOptions& options, double t0)
-    : system_(system), options_(options), t0_(t0), t_(t0) {
+    : system_(system), options_(options), t0_(t0), t_(t0), coupling_(std::make_unique<detail::StabilizedCoupling>()) {
   const double rho = options.rho_infinity;
   if (!(rho >= 0.0 && rho <= 1.0)) throw std::invalid_argument("generalized-alpha: rho_inf must lie in [0, 1]");
   if (!(options.step > 0.0) || !std::isfinite(options.step))
@@ -363,46 +364,74 @@ void GeneralizedAlpha::advance(double h, double t1) {
     bool slow = false;  // a correction shrank less than fourfold in this attempt: the kept matrix may be stale
     for (iterations_ = 1; iterations_ <= options_.max_iterations; ++iterations_) {
       Eigen::VectorXd& phi = work_.phi;
-      if (stabilized)
+      if (stabilized) {
         system_.constraints_and_rates(t1, q, v, phi, velocity_rows);  // Φ and Φ_q v, each joint evaluated once
-      else
+        if (time_dependent_) velocity_rows += system_.constraint_time_derivative(t1, q);
+        velocity_rows /= gamma_prime;
+      } else {
         phi = system_.constraints(t1, q);
+      }
+      auto evaluate_residual = [&] {  // the scaled dynamic rows at the iterate: (M q̈ − f)/β' + Φ_qᵀ μ
+        system_.dynamic_residual(t1, q, v, qdd, residual);  // a floating-frame body's in one pass
+        residual *= 1.0 / beta_prime;  // a product: a division per entry costs more than the rest of this line
+        residual += system_.constraint_jacobian_transpose_product(t1, q, mu);
+      };
+      bool evaluated = false;
       const bool refresh = refresh_ || !options_.reuse_newton_matrix;
       if (refresh) {
         jacobian = system_.constraint_jacobian(t1, q);
         solver_->factor(t1, q, v, qdd, mu, jacobian);
-        if (stabilized) {  // Φ_q W Φ_qᵀ
-          projected_.compute(jacobian * squared_scales_.asDiagonal() * jacobian.transpose());
+        if (stabilized) {
+          projected_.compute(jacobian * squared_scales_.asDiagonal() * jacobian.transpose());  // Φ_q W Φ_qᵀ
           if (projected_.info() != Eigen::Success)
             throw StepFailure("t = " + std::to_string(t1) + " s: the constraint rows are dependent (Φ_q W Φ_qᵀ is not "
                               "positive definite)" + last_state_diagnosis());
+          coupled_ = couple_;  // the coupled step, once a step failed with the alternating one (below)
+          if (coupled_) {
+            evaluate_residual();
+            evaluated = true;
+            const Eigen::MatrixXd direction = squared_scales_.asDiagonal() * system_.constraint_jacobian(t_, q_).transpose();
+            if (!coupling_->build(system_, *solver_, t1, q, v, qdd, mu, jacobian, direction, residual, scales_, beta_prime,
+                                  gamma_prime, h))
+              throw StepFailure("t = " + std::to_string(t1) + " s: the coupling of the position and velocity rows "
+                                "(stabilised index-2) is not finite" + last_state_diagnosis());
+          }
         }
         refresh_ = false;
         extra_iterations_ = 0;
         fresh_this_step = true;
         ++factorizations_;
       }
-      if (stabilized) {
-        // The stabilised index-2 step (ConstraintForm::stabilized_index2), position rows first. The Newmark correction
-        // δ (v += γ' δ, q̈ += β' δ) will meet the velocity rows, γ' Φ_q δ = −Ψ with Ψ = Φ_q v + Φ_t; the position
-        // rows are then met by ν alone: Φ_q W Φ_qᵀ Δν = −Φ − Φ_q δ = −Φ + Ψ/γ'. The position moves by W Φ_qᵀ Δν before
-        // the dynamic rows are evaluated, so that δ sees it in the same iteration (with the move applied one
-        // iteration late, the corrections of the two cancelled and the stopping test ended the iteration early:
-        // velocities off by 6.5e-7 of 3 m/s, helper review of 77a5e2a).
-        if (time_dependent_) velocity_rows += system_.constraint_time_derivative(t1, q);
-        velocity_rows /= gamma_prime;
+      if (stabilized && !coupled_) {
+        // Alternating: position rows first. The Newmark correction δ (v += γ' δ, q̈ += β' δ) will meet the velocity
+        // rows, γ' Φ_q δ = −Ψ with Ψ = Φ_q v + Φ_t; the position rows are then met by ν alone: Φ_q W Φ_qᵀ Δν =
+        // −Φ − Φ_q δ = −Φ + Ψ/γ'. The position moves by W Φ_qᵀ Δν before the dynamic rows are evaluated, so that δ
+        // sees it in the same iteration (with the move applied one iteration late, the corrections of the two
+        // cancelled and the stopping test ended the iteration early: velocities off by 6.5e-7 of 3 m/s, helper
+        // review of 77a5e2a).
         work_.nu_step = velocity_rows - phi;
         projected_.solveInPlace(work_.nu_step);
         position_step = correction_of(work_.nu_step);
         if (!all_finite(position_step)) diverged(phi);
         work_.nu += work_.nu_step;
         q += position_step;
+        evaluate_residual();
+        solver_->solve(q, residual, velocity_rows, dx);
+        if (!all_finite(dx)) diverged(phi);
+      } else {
+        // Index-3, or the coupled stabilised step: the index-3 system's solve, then Δν from the velocity rows, which
+        // couple through Z = dΦ_q/dt (stabilized_coupling.hpp).
+        if (!evaluated) evaluate_residual();
+        solver_->solve(q, residual, phi, dx);
+        if (!all_finite(dx)) diverged(phi);
+        if (stabilized) {
+          coupling_->complete(dx, phi, velocity_rows, work_.nu_step);
+          position_step = correction_of(work_.nu_step);
+          if (!all_finite(position_step) || !all_finite(dx)) diverged(phi);
+          work_.nu += work_.nu_step;
+          q += position_step;
+        }
       }
-      system_.dynamic_residual(t1, q, v, qdd, residual);  // M q̈ − f, a floating-frame body's in one pass
-      residual *= 1.0 / beta_prime;  // a product: a division per entry costs more than the rest of this line
-      residual += system_.constraint_jacobian_transpose_product(t1, q, mu);
-      solver_->solve(q, residual, stabilized ? velocity_rows : phi, dx);
-      if (!all_finite(dx)) diverged(phi);
       q += dx.head(n);
       v += gamma_prime * dx.head(n);
       qdd += beta_prime * dx.head(n);
@@ -444,6 +473,12 @@ void GeneralizedAlpha::advance(double h, double t1) {
     if (converged) break;
     if (attempt == 0 && !fresh_this_step) {  // the kept matrix was too old: once more with a fresh one
       refresh_ = true;
+      continue;
+    }
+    if (stabilized && !coupled_) {
+      // A fresh matrix did not converge with the alternating step: once more with the coupled one, which then stays
+      // for the rest of the run (stabilized_coupling.hpp; slower to build, so not used before it is needed).
+      couple_ = refresh_ = true;
       continue;
     }
     Eigen::Index worst = 0;

@@ -39,7 +39,9 @@ enum class ConstraintForm {
   /// GGL form of generalized-α). The velocity constraints are met at every step by the Newmark update itself, and
   /// the position constraints by a second multiplier ν that moves the positions off the Newmark update,
   /// q_{n+1} = (Newmark) + W Φ_q(q_n)ᵀ ν, W = diag(scale²)/(m r²) per body (the coordinates' length scales,
-  /// divided by each body's m r²; ν → 0 with h). Without
+  /// divided by each body's m r²; ν → 0 with h). Each Newton iteration first alternates (ν, then the dynamic rows);
+  /// after a step fails that way with a fresh Newton matrix, the run solves δ, μ and ν together (a light carriage
+  /// under a fast slider needs it; runtime/src/integrator/stabilized_coupling.hpp). Without
   /// the velocity rows the velocities drift off the hidden constraints and, at ρ∞ near 1, a spinning body gains
   /// energy and angular momentum (issue 12: a heavy top at 150 rad/s diverges at ρ∞ = 1, a flipping plate gains
   /// 17.6 % energy at ρ∞ = 0.99).
@@ -99,6 +101,7 @@ class StepFailure : public std::runtime_error {
 
 namespace detail {
 class NewtonSolver;
+class StabilizedCoupling;
 }
 
 class GeneralizedAlpha {
@@ -158,9 +161,15 @@ class GeneralizedAlpha {
     Eigen::VectorXd phi, velocity_rows, nu, nu_step, position_step;  ///< Φ; Ψ/γ', ν, Δν, W Φ_qᵀ Δν (stabilized_index2)
     Eigen::MatrixXd jacobian;                      ///< Φ_q at the iterate
   } work_;
-  /// ConstraintForm::stabilized_index2: the Cholesky factor of Φ_q W Φ_qᵀ at the Newton matrix's iterate (Δν from
-  /// an older matrix only converges more slowly; the direction W Φ_q(q_n)ᵀ of each step decides the result).
+  /// ConstraintForm::stabilized_index2: Φ_q W Φ_qᵀ at the Newton matrix's iterate, factorized to detect dependent
+  /// rows, and the coupling of ν to δ and μ kept with the Newton matrix (an older one only converges more slowly;
+  /// the direction W Φ_q(q_n)ᵀ of each step decides the result).
   Eigen::LLT<Eigen::MatrixXd> projected_;
+  std::unique_ptr<detail::StabilizedCoupling> coupling_;
+  /// ConstraintForm::stabilized_index2 builds its Newton matrices with the coupled step (stabilized_coupling.hpp):
+  /// set once a step failed with a fresh Newton matrix and the alternating step.
+  bool couple_ = false;
+  bool coupled_ = false;  ///< the kept Newton matrix was built with the coupled step
   Eigen::VectorXd nu_;  ///< the last step's ν, the next step's first guess
   bool time_dependent_ = false;  ///< a constraint depends on t (a driven joint)
   std::vector<double> body_sizes_;  ///< bounding-box diagonal of each body's mesh [m]

@@ -13,11 +13,16 @@ Eigen::Index fields_of_first_modes(const format::Gcms& gcms, Eigen::Index k) {
 }
 
 Eigen::VectorXd mass_times(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& x_b) {
+  Eigen::VectorXd y(x_b.size());
+  mass_times(model, x_b, y);
+  return y;
+}
+
+void mass_times(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& x_b, Eigen::Ref<Eigen::VectorXd> y) {
   const Eigen::Index columns = 4 + model.field_count();
-  if (x_b.size() != 3 * columns)
+  if (x_b.size() != 3 * columns || y.size() != x_b.size())
     throw std::invalid_argument(model.source + ": " + std::to_string(x_b.size()) + " coordinates for a body of " +
                                 std::to_string(3 * columns));
-  Eigen::VectorXd y(x_b.size());
   if (model.unit_field_mass && !model.sparse) {  // G = [G_rr G_rf; G_rfᵀ I]: O(n_f) instead of O(n_f²)
     const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> x(x_b.data(), 3, columns);
     Eigen::Map<Eigen::Matrix<double, 3, Eigen::Dynamic>> out(y.data(), 3, columns);  // column c: 3-block c of y
@@ -28,7 +33,7 @@ Eigen::VectorXd mass_times(const BodyModel& model, const Eigen::Ref<const Eigen:
     out.leftCols<4>() = rigid.transpose();
     const Eigen::Matrix<double, 3, 4> x_r = x.leftCols<4>();
     for (Eigen::Index f = 4; f < columns; ++f) out.col(f) = x.col(f) + x_r * model.mass_matrix.col(f).head<4>();
-    return y;
+    return;
   }
   using Strided = Eigen::InnerStride<3>;
   // (G ⊗ I3) x = per direction d, G times the d-th entries of the 3-blocks (GEMM's packing does not pay off for
@@ -45,7 +50,6 @@ Eigen::VectorXd mass_times(const BodyModel& model, const Eigen::Ref<const Eigen:
     y_d.head<4>().noalias() = s.border * Eigen::VectorXd(x_d);
     y_d.tail(columns - 4).noalias() = s.border.rightCols(columns - 4).transpose() * x_d.head<4>() + s.mass * x_f;
   }
-  return y;
 }
 
 double field_mass_norm_squared(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& xi) {

@@ -39,17 +39,18 @@ Eigen::VectorXd body_frame_coordinates(const Eigen::Matrix3d& a, const VectorRef
 
 namespace {
 
+// U and its gradient into `out`, with ξ̄ in `xi_bar`: sized once, no allocation when reused (the dense kinds of K̂).
 template <class Stiffness>
-ElasticForces forces_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi) {
+void forces_into(const Stiffness& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi, ElasticForces& out,
+                 Eigen::VectorXd& xi_bar) {
   check_sizes(k_hat, xi);
   const Eigen::Index n_f = xi.size() / 3;
-  const Eigen::VectorXd xi_bar = body_frame_coordinates(a, xi);
-  ElasticForces out;
+  xi_bar.resize(xi.size());  // as 3 x n_f matrices, one column per field: Ξ̄ = Aᵀ Ξ
+  Eigen::Map<Eigen::Matrix3Xd>(xi_bar.data(), 3, n_f).noalias() = a.transpose() * Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f);
+  out.h.resize(xi.size());
   if constexpr (std::is_same_v<Stiffness, detail::PaddedMatrix>) {  // every iteration: the dispatched kernel
-    out.h.resize(xi.size());
     k_hat.multiply(xi_bar.data(), out.h.data());
   } else if constexpr (std::is_same_v<Stiffness, Eigen::MatrixXd>) {
-    out.h.resize(xi.size());
     detail::dense_product(k_hat, xi_bar.data(), out.h.data());
   } else {
     out.h = k_hat * xi_bar;
@@ -60,6 +61,13 @@ ElasticForces forces_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const 
   const Eigen::Map<const Eigen::Matrix3Xd> h(out.h.data(), 3, n_f);
   Eigen::Map<Eigen::Matrix3Xd>(out.grad_xi.data(), 3, n_f).noalias() = a * h;
   Eigen::Map<Eigen::Matrix3d>(out.grad_a.data()) = detail::outer_sum(Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f), h);
+}
+
+template <class Stiffness>
+ElasticForces forces_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi) {
+  ElasticForces out;
+  Eigen::VectorXd xi_bar;
+  forces_into(k_hat, a, xi, out, xi_bar);
   return out;
 }
 
@@ -99,6 +107,11 @@ ElasticForces elastic_forces(const Eigen::SparseMatrix<double>& k_hat, const Eig
 
 ElasticForces detail::elastic_forces(const PaddedMatrix& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi) {
   return forces_of(k_hat, a, xi);
+}
+
+void detail::elastic_forces(const PaddedMatrix& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi, ElasticForces& out,
+                            Eigen::VectorXd& xi_bar) {
+  forces_into(k_hat, a, xi, out, xi_bar);
 }
 
 ElasticTangent elastic_tangent(const Eigen::MatrixXd& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi,

@@ -10,5 +10,8 @@
 namespace flexbody::runtime::detail {
 
 [[nodiscard]] ElasticForces elastic_forces(const PaddedMatrix& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi);
+/// The same into `out`, with ξ̄ in `xi_bar`: no allocation once both are sized (System's Newton iterations).
+void elastic_forces(const PaddedMatrix& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi, ElasticForces& out,
+                    Eigen::VectorXd& xi_bar);
 
 }  // namespace flexbody::runtime::detail

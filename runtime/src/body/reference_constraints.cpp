@@ -64,11 +64,13 @@ Eigen::MatrixXd reference_jacobian(const TisserandMatrix& g, const Eigen::Matrix
   return jac;
 }
 
-Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, const Eigen::Matrix3d& a,
-                                                     const VectorRef& xi, const Eigen::Matrix<double, 9, 1>& mu) {
+void reference_jacobian_transpose_product(const TisserandMatrix& g, const Eigen::Matrix3d& a, const VectorRef& xi,
+                                          const Eigen::Matrix<double, 9, 1>& mu, Eigen::Ref<Eigen::VectorXd> out) {
   check_sizes(g, xi);
   const Eigen::Index n_f = g.cols();
-  Eigen::VectorXd out(9 + 3 * n_f);
+  if (out.size() != 9 + 3 * n_f)
+    throw std::invalid_argument("reference_jacobian_transpose_product: the output has " + std::to_string(out.size()) +
+                                " entries, not " + std::to_string(9 + 3 * n_f));
   Eigen::Matrix3d d_a = Eigen::Matrix3d::Zero();  // ∂/∂A, column j = ∂/∂a_j
   for (int k = 0; k < kOrthogonalityRows; ++k) {
     const auto [i, j] = kPairs[static_cast<std::size_t>(k)];
@@ -79,8 +81,15 @@ Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, c
   // ∂/∂ξ_f = A c_f.
   const Eigen::Matrix3d mu_t = skew(mu.tail<3>());
   d_a.noalias() -= detail::outer_sum(Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f), g) * mu_t;
-  Eigen::Map<Eigen::Matrix3Xd>(out.data() + 9, 3, n_f).noalias() = (a * mu_t) * g;
+  const Eigen::Matrix3d turn = a * mu_t;
+  Eigen::Map<Eigen::Matrix3Xd>(out.data() + 9, 3, n_f).noalias() = turn * g;
   out.head<9>() = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(d_a.data());
+}
+
+Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, const Eigen::Matrix3d& a,
+                                                     const VectorRef& xi, const Eigen::Matrix<double, 9, 1>& mu) {
+  Eigen::VectorXd out(9 + xi.size());
+  reference_jacobian_transpose_product(g, a, xi, mu, out);
   return out;
 }
 

@@ -97,7 +97,14 @@ void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) con
   for (int b = 0; b < system_.body_count(); ++b) {
     const BodyModel& model = system_.model(b);
     if (model.rigid()) continue;
-    const double squared = elastic_mass_norm_squared(system_, b, q);
+    double squared = 0.0;
+    if (model.floating()) {  // ηᵀ Γ η with Γ = Cᵀ (G_ff ⊗ I3) C: the same as ‖Σ η_k c_k‖², without a vector of 3 n_f
+      const Eigen::MatrixXd& gram = modal_grams_[static_cast<std::size_t>(b)];
+      const auto eta = q.segment(system_.offset(b) + 7, gram.rows());
+      for (Eigen::Index k = 0; k < gram.rows(); ++k) squared += eta(k) * gram.col(k).dot(eta);
+    } else {
+      squared = elastic_mass_norm_squared(system_, b, q);
+    }
     const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
     const double size = body_sizes_[static_cast<std::size_t>(b)];
     if (rms > options_.deformation_limit * size) {
@@ -118,21 +125,22 @@ void GeneralizedAlpha::check_spin(double t, const Eigen::VectorXd& q, const Eige
     if (model.rigid() || !(model.lowest_frequency_hz > 0.0)) continue;
     const double spin = system_.angular_velocity(b, q, v).norm();
     const double ratio = spin / (2.0 * std::numbers::pi * model.lowest_frequency_hz);
+    const bool over_limit = options_.spin_limit > 0.0 && ratio > options_.spin_limit;
+    const bool warn = options_.spin_warning > 0.0 && ratio > options_.spin_warning && !spin_warned_[static_cast<std::size_t>(b)];
+    if (!over_limit && !warn) continue;  // the message only when it is said: this runs every step
     std::ostringstream what;
     what << "t = " << t << " s: body '" << system_.body_name(b) << "' spins at " << spin << " rad/s = " << ratio
          << " of its lowest elastic frequency (" << model.lowest_frequency_hz << " Hz); a linear corotational model "
          << "has no centrifugal stiffening (FORMULATION.md section 8), so its deformation is wrong by about "
          << 100.0 * 0.36 * ratio * ratio << " % in the spin plane and " << 100.0 * 1.2 * ratio * ratio
          << " % out of it";
-    if (options_.spin_limit > 0.0 && ratio > options_.spin_limit) {
+    if (over_limit) {
       what << " (limit: " << options_.spin_limit << " of it)";
       throw StepFailure(what.str());
     }
-    if (options_.spin_warning > 0.0 && ratio > options_.spin_warning && !spin_warned_[static_cast<std::size_t>(b)]) {
-      spin_warned_[static_cast<std::size_t>(b)] = 1;
-      what << " (warning above " << options_.spin_warning << " of it)";
-      warnings_.push_back(what.str());
-    }
+    spin_warned_[static_cast<std::size_t>(b)] = 1;
+    what << " (warning above " << options_.spin_warning << " of it)";
+    warnings_.push_back(what.str());
   }
 }
 
@@ -207,6 +215,27 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   for (int b = 0; b < system.body_count(); ++b) {  // bounding-box diagonals, for the deformation limit
     const format::RowMatrixX3d& nodes = system.model(b).nodes;
     body_sizes_.push_back(nodes.rows() ? (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm() : 0.0);
+  }
+  modal_grams_.resize(static_cast<std::size_t>(system.body_count()));
+  for (int b = 0; b < system.body_count(); ++b) {  // Γ_kl = c_kᵀ (G_ff ⊗ I3) c_l, by polarisation of the mass norm
+    const BodyModel& model = system.model(b);
+    if (!model.floating()) continue;
+    const Eigen::Index modes = model.coordinate_count() - 7;
+    Eigen::VectorXd q_b = Eigen::VectorXd::Zero(7 + modes);
+    q_b(3) = 1.0;
+    std::vector<Eigen::VectorXd> c(static_cast<std::size_t>(modes));
+    for (Eigen::Index k = 0; k < modes; ++k) {
+      q_b(7 + k) = 1.0;
+      c[static_cast<std::size_t>(k)] = ffrf_field_coordinates(*model.floating_frame, q_b);
+      q_b(7 + k) = 0.0;
+    }
+    Eigen::MatrixXd& gram = modal_grams_[static_cast<std::size_t>(b)];
+    gram.resize(modes, modes);
+    for (Eigen::Index k = 0; k < modes; ++k)
+      for (Eigen::Index l = 0; l <= k; ++l) {
+        const Eigen::VectorXd &ck = c[static_cast<std::size_t>(k)], &cl = c[static_cast<std::size_t>(l)];
+        gram(k, l) = gram(l, k) = 0.25 * (field_mass_norm_squared(model, ck + cl) - field_mass_norm_squared(model, ck - cl));
+      }
   }
   const Eigen::Index n = q_.size(), m = system.constraint_count();
   const Eigen::VectorXd phi = system.constraints(t_, q_);
@@ -326,8 +355,10 @@ void GeneralizedAlpha::advance(double h, double t1) {
   // the constraint manifold at q_n. (Taken from an older Newton matrix, it turned the correction along the manifold:
   // a drift that put a rigid pendulum's error at h = 1e-5 s 5000 times above its second-order value.) Applied as
   // W Φ_qᵀ ν without forming Φ_q, O(n_f) per body: forming it every step cost a fifth of a 20-mode step.
-  auto correction_of = [&](const Eigen::VectorXd& nu) {
-    return Eigen::VectorXd(squared_scales_.cwiseProduct(system_.constraint_jacobian_transpose_product(t_, q_, nu)));
+  auto correction_of = [&](const Eigen::VectorXd& nu, Eigen::VectorXd& out) {
+    out.setZero(n);
+    system_.add_constraint_jacobian_transpose_product(t_, q_, nu, out);
+    out.array() *= squared_scales_.array();
   };
   auto diverged = [&](const Eigen::VectorXd& phi) {
     std::ostringstream why;
@@ -351,7 +382,8 @@ void GeneralizedAlpha::advance(double h, double t1) {
       // the last step's ν leaves the first iteration a small Δν, whose effect on the dynamic rows is only seen at the
       // next iteration (measured: a flexible pendulum needed 3.1-3.6 iterations per step from ν = 0).
       if (nu_.size() != m) nu_ = Eigen::VectorXd::Zero(m);
-      q += correction_of(nu_);
+      correction_of(nu_, position_step);
+      q += position_step;
       work_.nu = nu_;
     }
     // The world's extent [m]: joints and springs compare positions of this size, so their residuals round at ε times
@@ -366,15 +398,15 @@ void GeneralizedAlpha::advance(double h, double t1) {
       Eigen::VectorXd& phi = work_.phi;
       if (stabilized) {
         system_.constraints_and_rates(t1, q, v, phi, velocity_rows);  // Φ and Φ_q v, each joint evaluated once
-        if (time_dependent_) velocity_rows += system_.constraint_time_derivative(t1, q);
+        if (time_dependent_) system_.add_constraint_time_derivative(t1, q, velocity_rows);
         velocity_rows /= gamma_prime;
       } else {
-        phi = system_.constraints(t1, q);
+        system_.constraints(t1, q, phi);
       }
       auto evaluate_residual = [&] {  // the scaled dynamic rows at the iterate: (M q̈ − f)/β' + Φ_qᵀ μ
         system_.dynamic_residual(t1, q, v, qdd, residual);  // a floating-frame body's in one pass
         residual *= 1.0 / beta_prime;  // a product: a division per entry costs more than the rest of this line
-        residual += system_.constraint_jacobian_transpose_product(t1, q, mu);
+        system_.add_constraint_jacobian_transpose_product(t1, q, mu, residual);
       };
       bool evaluated = false;
       const bool refresh = refresh_ || !options_.reuse_newton_matrix;
@@ -411,7 +443,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
         // review of 77a5e2a).
         work_.nu_step = velocity_rows - phi;
         projected_.solveInPlace(work_.nu_step);
-        position_step = correction_of(work_.nu_step);
+        correction_of(work_.nu_step, position_step);
         if (!all_finite(position_step)) diverged(phi);
         work_.nu += work_.nu_step;
         q += position_step;
@@ -426,7 +458,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
         if (!all_finite(dx)) diverged(phi);
         if (stabilized) {
           coupling_->complete(dx, phi, velocity_rows, work_.nu_step);
-          position_step = correction_of(work_.nu_step);
+          correction_of(work_.nu_step, position_step);
           if (!all_finite(position_step) || !all_finite(dx)) diverged(phi);
           work_.nu += work_.nu_step;
           q += position_step;

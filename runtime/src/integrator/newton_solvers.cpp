@@ -284,10 +284,10 @@ void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& 
     // S_ff⁻¹ r_f at the current A (the core is exact for any A; only the coupling blocks are from the factorization).
     e.residual_solution.resize(n_xi);
     core_solve(b, orientation_of(q.segment(o, 12)), residual.data() + o + 12, e.residual_solution.data());
-    coupled_.resize(e.coupling.rows());
-    e.coupling_kernel.multiply(e.residual_solution.data(), coupled_.data());  // [S_rf; J_f] S_ff⁻¹ r_f
-    rhs_.segment(r_b, 12) += coupled_.head<12>();
-    for (std::size_t i = 0; i < e.rows.size(); ++i) rhs_(n_r + e.rows[i]) += coupled_(12 + static_cast<Eigen::Index>(i));
+    e.coupled.resize(e.coupling.rows());  // per body: its size differs between bodies
+    e.coupling_kernel.multiply(e.residual_solution.data(), e.coupled.data());  // [S_rf; J_f] S_ff⁻¹ r_f
+    rhs_.segment(r_b, 12) += e.coupled.head<12>();
+    for (std::size_t i = 0; i < e.rows.size(); ++i) rhs_(n_r + e.rows[i]) += e.coupled(12 + static_cast<Eigen::Index>(i));
   }
   reduced_solution_.resize(rhs_.size());
   reduced_inverse_.multiply(rhs_.data(), reduced_solution_.data());
@@ -300,11 +300,12 @@ void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& 
     const Eigen::Index r_b = kept_offset_[static_cast<std::size_t>(b)], k_b = kept_[static_cast<std::size_t>(b)];
     dx.segment(o, k_b) = x.segment(r_b, k_b);
     if (n_xi == 0) continue;
-    const Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
+    Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
     const auto k_rows = static_cast<Eigen::Index>(e.rows.size());
-    unknowns_.resize(12 + k_rows);  // [Δq_r; Δμ of the rows that touch ξ]
-    unknowns_ << x.segment(r_b, 12), x.tail(m)(e.rows);
-    e.y_kernel.multiply(unknowns_.data(), dx.data() + o + 12);
+    e.unknowns.resize(12 + k_rows);  // [Δq_r; Δμ of the rows that touch ξ]
+    e.unknowns.head<12>() = x.segment(r_b, 12);
+    for (Eigen::Index i = 0; i < k_rows; ++i) e.unknowns(12 + i) = x(n_r + e.rows[static_cast<std::size_t>(i)]);
+    e.y_kernel.multiply(e.unknowns.data(), dx.data() + o + 12);
     dx.segment(o + 12, n_xi) = -(dx.segment(o + 12, n_xi) + e.residual_solution);
   }
 }

@@ -71,6 +71,7 @@ class ConstantCoreNewton final : public NewtonSolver {
     PaddedMatrix coupling_kernel, y_kernel;  ///< the same, stored for the product kernel
     std::vector<Eigen::Index> rows;
     Eigen::VectorXd residual_solution;  ///< S_ff⁻¹ r_f of the current solve (work vector)
+    Eigen::VectorXd coupled, unknowns;  ///< [S_rf; J_f] S_ff⁻¹ r_f and [Δq_r; Δμ_f] of the current solve (work)
   };
   /// S_ff⁻¹ x = Â C⁻¹ Âᵀ x at the orientation a: for a block of right-hand sides (factorization), and for one
   /// (x and y of 3 n_f doubles, every iteration, through the work vectors).
@@ -88,7 +89,7 @@ class ConstantCoreNewton final : public NewtonSolver {
   std::vector<Eigen::Index> kept_offset_, kept_;
   Eigen::Index kept_total_ = 0;
   PaddedMatrix reduced_inverse_;  ///< of the matrix in [Δq_r; Δμ] left after eliminating every body's ξ
-  Eigen::VectorXd rotated_, core_y_, rhs_, coupled_, reduced_solution_, unknowns_;  ///< work vectors of solve()
+  Eigen::VectorXd rotated_, core_y_, rhs_, reduced_solution_;  ///< work vectors of solve()
 };
 
 }  // namespace flexbody::runtime::detail

@@ -2,51 +2,51 @@
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
 namespace flexbody::runtime {
 namespace {
 
-// A body-fixed direction at a marker and its Jacobian (0 columns on ground).
+// A body-fixed direction at a marker and its Jacobian (0 columns on ground), the Jacobian in work storage.
 struct Direction {
   Eigen::Vector3d value;
-  Eigen::MatrixXd jacobian;
+  const Eigen::MatrixXd* jacobian;
 };
-Direction direction(const Marker& m, const VectorRef& q, const Eigen::Vector3d& d) {
-  if (m.body == kGround) return {d, Eigen::MatrixXd(3, 0)};
-  return {marker_direction(m, q, d), marker_direction_jacobian(m, q, d)};
+Direction direction(const Marker& m, const VectorRef& q, const Eigen::Vector3d& d, Eigen::MatrixXd& storage) {
+  marker_direction_jacobian(m, q, d, storage);
+  return {marker_direction(m, q, d), &storage};
 }
 
 // The frame of a marker's body: A for a body, identity for ground (directions are fixed in it at assembly).
 Eigen::Matrix3d frame_of(const Marker& m, const VectorRef& q) { return marker_body_orientation(m, q); }
 
-Eigen::MatrixXd position_jacobian(const Marker& m, const VectorRef& q) {
-  return m.body == kGround ? Eigen::MatrixXd(3, 0) : marker_position_jacobian(m, q);
+// row = wᵀ J (1 x 3 times 3 x n) into a row of a column-major matrix, column by column: no temporary.
+void set_row(Eigen::MatrixXd& out, int row, const Eigen::Vector3d& w, const Eigen::MatrixXd& jac) {
+  for (Eigen::Index c = 0; c < jac.cols(); ++c) out(row, c) = w.dot(jac.col(c));
 }
 
 // Appends rows to an evaluation.
 struct Rows {
   JointEvaluation& out;
   int next = 0;
-  void add(double value, const Eigen::RowVectorXd& j1, const Eigen::RowVectorXd& j2) {
-    out.residual(next) = value;
-    if (j1.size()) out.jacobian_first.row(next) = j1;
-    if (j2.size()) out.jacobian_second.row(next) = j2;
-    ++next;
-  }
   // u · w with u at marker 1, w at marker 2.
   void dot(const Direction& u, const Direction& w) {
-    add(u.value.dot(w.value), w.value.transpose() * u.jacobian, u.value.transpose() * w.jacobian);
+    out.residual(next) = u.value.dot(w.value);
+    set_row(out.jacobian_first, next, w.value, *u.jacobian);
+    set_row(out.jacobian_second, next, u.value, *w.jacobian);
+    ++next;
   }
 };
 
 // The three rows that keep two triads aligned: z1·y2, z1·x2, y1·x2.
 void orientation_rows(Rows& rows, const Joint& j, const VectorRef& q1, const VectorRef& q2) {
-  const Direction x2 = direction(j.second, q2, j.triad_second.col(0));
-  const Direction y2 = direction(j.second, q2, j.triad_second.col(1));
-  const Direction y1 = direction(j.first, q1, j.triad_first.col(1));
-  const Direction z1 = direction(j.first, q1, j.triad_first.col(2));
+  std::array<Eigen::MatrixXd, 4>& d = rows.out.directions;
+  const Direction x2 = direction(j.second, q2, j.triad_second.col(0), d[0]);
+  const Direction y2 = direction(j.second, q2, j.triad_second.col(1), d[1]);
+  const Direction y1 = direction(j.first, q1, j.triad_first.col(1), d[2]);
+  const Direction z1 = direction(j.first, q1, j.triad_first.col(2), d[3]);
   rows.dot(z1, y2);
   rows.dot(z1, x2);
   rows.dot(y1, x2);
@@ -102,44 +102,58 @@ Joint make_joint(const std::string& name, JointType type, Marker first, Marker s
   return j;
 }
 
-JointEvaluation evaluate_joint(const Joint& j, double t, const VectorRef& q1, const VectorRef& q2) {
+void evaluate_joint(const Joint& j, double t, const VectorRef& q1, const VectorRef& q2, JointEvaluation& out) {
   const int n_rows = j.rows();
-  JointEvaluation out;
   out.residual.resize(n_rows);
-  out.jacobian_first = Eigen::MatrixXd::Zero(n_rows, j.first.body == kGround ? 0 : q1.size());
-  out.jacobian_second = Eigen::MatrixXd::Zero(n_rows, j.second.body == kGround ? 0 : q2.size());
+  out.jacobian_first.setZero(n_rows, j.first.body == kGround ? 0 : q1.size());
+  out.jacobian_second.setZero(n_rows, j.second.body == kGround ? 0 : q2.size());
   Rows rows{out};
   const Eigen::Vector3d gap = marker_position(j.first, q1) - marker_position(j.second, q2);
-  const Eigen::MatrixXd jr1 = position_jacobian(j.first, q1), jr2 = position_jacobian(j.second, q2);
+  Eigen::MatrixXd &jr1 = out.position_first, &jr2 = out.position_second;
+  if (j.first.body == kGround) jr1.resize(3, 0); else marker_position_jacobian(j.first, q1, jr1);
+  if (j.second.body == kGround) jr2.resize(3, 0); else marker_position_jacobian(j.second, q2, jr2);
   if (j.type != JointType::prismatic)
-    for (int k = 0; k < 3; ++k) rows.add(gap(k), jr1.row(k), -jr2.row(k));
+    for (int k = 0; k < 3; ++k) {
+      out.residual(k) = gap(k);
+      if (jr1.cols()) out.jacobian_first.row(k) = jr1.row(k);
+      if (jr2.cols()) out.jacobian_second.row(k) = -jr2.row(k);
+    }
+  rows.next = j.type == JointType::prismatic ? 0 : 3;
+  std::array<Eigen::MatrixXd, 4>& d = out.directions;
   switch (j.type) {
     case JointType::spherical: break;
     case JointType::fixed: orientation_rows(rows, j, q1, q2); break;
     case JointType::prismatic: {
-      for (int k = 0; k < 2; ++k) {
-        const Direction n = direction(j.second, q2, k == 0 ? j.normal_a : j.normal_b);
-        const Eigen::RowVectorXd j2 = n.jacobian.cols() ? Eigen::RowVectorXd(-n.value.transpose() * jr2 + gap.transpose() * n.jacobian)
-                                                        : Eigen::RowVectorXd();
-        rows.add(gap.dot(n.value) - j.offset(k), n.value.transpose() * jr1, j2);
+      for (int k = 0; k < 2; ++k) {  // gap · n with n at marker 2: ∂/∂q1 = nᵀ J_r1, ∂/∂q2 = −nᵀ J_r2 + gapᵀ J_n
+        const Direction n = direction(j.second, q2, k == 0 ? j.normal_a : j.normal_b, d[0]);
+        out.residual(k) = gap.dot(n.value) - j.offset(k);
+        set_row(out.jacobian_first, k, n.value, jr1);
+        for (Eigen::Index c = 0; c < n.jacobian->cols(); ++c)
+          out.jacobian_second(k, c) = -n.value.dot(jr2.col(c)) + gap.dot(n.jacobian->col(c));
       }
+      rows.next = 2;
       orientation_rows(rows, j, q1, q2);
       break;
     }
     case JointType::revolute:
     case JointType::driven_revolute: {
-      const Direction axis = direction(j.first, q1, j.axis_first);
-      rows.dot(axis, direction(j.second, q2, j.normal_a));
-      rows.dot(axis, direction(j.second, q2, j.normal_b));
+      const Direction axis = direction(j.first, q1, j.axis_first, d[0]);
+      rows.dot(axis, direction(j.second, q2, j.normal_a, d[1]));
+      rows.dot(axis, direction(j.second, q2, j.normal_b, d[1]));
       if (j.type == JointType::driven_revolute) {
         // u1 · (cos φ n_b − sin φ n_a) = 0 holds when marker 1 has turned by φ about the axis.
         const double phi = j.angle(t);
-        rows.dot(direction(j.first, q1, j.reference_first),
-                 direction(j.second, q2, std::cos(phi) * j.normal_b - std::sin(phi) * j.normal_a));
+        rows.dot(direction(j.first, q1, j.reference_first, d[2]),
+                 direction(j.second, q2, std::cos(phi) * j.normal_b - std::sin(phi) * j.normal_a, d[3]));
       }
       break;
     }
   }
+}
+
+JointEvaluation evaluate_joint(const Joint& j, double t, const VectorRef& q1, const VectorRef& q2) {
+  JointEvaluation out;
+  evaluate_joint(j, t, q1, q2, out);
   return out;
 }
 

@@ -108,63 +108,103 @@ Eigen::Vector3d marker_position(const Marker& m, const VectorRef& q_b) {
   return r;
 }
 
-Eigen::MatrixXd marker_position_jacobian(const Marker& m, const VectorRef& q_b) {
+void marker_position_jacobian(const Marker& m, const VectorRef& q_b, Eigen::MatrixXd& jac) {
   if (m.floating) {
     check_coordinates(m, q_b);
     const Eigen::Index n = q_b.size() - 7;
     const Eigen::Vector4d p = euler_of(q_b);
-    Eigen::MatrixXd jac(3, q_b.size());
+    jac.resize(3, q_b.size());
     jac.leftCols<3>().setIdentity();
-    jac.middleCols<4>(3) = euler_rotation_derivative(p, m.y.segment<3>(1) + m.modal_displacement * q_b.tail(n));
-    jac.rightCols(n) = euler_rotation(p) * m.modal_displacement;
-    return jac;
+    const Eigen::Vector3d local = m.y.segment<3>(1) + m.modal_displacement * q_b.tail(n);
+    jac.middleCols<4>(3) = euler_rotation_derivative(p, local);
+    jac.rightCols(n).noalias() = euler_rotation(p) * m.modal_displacement;
+    return;
   }
-  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(3, 3 * m.y.size());
+  jac.setZero(3, 3 * m.y.size());
   for (Eigen::Index k = 0; k < m.y.size(); ++k) jac.block<3, 3>(0, 3 * k).diagonal().setConstant(m.y(k));
+}
+
+Eigen::MatrixXd marker_position_jacobian(const Marker& m, const VectorRef& q_b) {
+  Eigen::MatrixXd jac;
+  marker_position_jacobian(m, q_b, jac);
   return jac;
 }
+
+namespace {
+
+// R ξ̄ = Σ_f R_f Aᵀ ξ_f, the marker's small rotation, without forming ξ̄.
+Eigen::Vector3d small_rotation(const Marker& m, const Eigen::Matrix3d& a, const VectorRef& xi) {
+  Eigen::Vector3d theta = Eigen::Vector3d::Zero();
+  for (Eigen::Index f = 0; f < xi.size() / 3; ++f) {
+    const Eigen::Vector3d xi_bar = a.transpose() * xi.segment<3>(3 * f);
+    theta.noalias() += m.rotation.middleCols<3>(3 * f) * xi_bar;
+  }
+  return theta;
+}
+
+}  // namespace
 
 Eigen::Vector3d marker_direction(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d) {
   if (m.body == kGround) return d;
   check_coordinates(m, q_b);
-  if (m.floating)  // A(p) (d − [d]× Θ_c η)
-    return euler_rotation(euler_of(q_b)) * (d - skew(d) * (m.modal_rotation * q_b.tail(q_b.size() - 7)));
+  if (m.floating) {  // A(p) (d − [d]× Θ_c η)
+    const Eigen::Vector3d theta = m.modal_rotation * q_b.tail(q_b.size() - 7);
+    return euler_rotation(euler_of(q_b)) * (d - skew(d) * theta);
+  }
   const Eigen::Matrix3d a = orientation_of(q_b);
   const auto xi = q_b.tail(q_b.size() - 12);
   if (xi.size() == 0) return a * d;
-  return a * (d - skew(d) * (m.rotation * body_frame_coordinates(a, xi)));
+  return a * (d - skew(d) * small_rotation(m, a, xi));
 }
 
-Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d) {
-  if (m.body == kGround) return Eigen::MatrixXd(3, 0);
+void marker_direction_jacobian(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d, Eigen::MatrixXd& jac) {
+  if (m.body == kGround) {
+    jac.resize(3, 0);
+    return;
+  }
   check_coordinates(m, q_b);
   if (m.floating) {
     const Eigen::Index n = q_b.size() - 7;
     const Eigen::Vector4d p = euler_of(q_b);
     const Eigen::Matrix3d dx = skew(d);
-    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(3, q_b.size());
-    jac.middleCols<4>(3) = euler_rotation_derivative(p, d - dx * (m.modal_rotation * q_b.tail(n)));
-    jac.rightCols(n) = -euler_rotation(p) * dx * m.modal_rotation;
-    return jac;
+    const Eigen::Vector3d theta = m.modal_rotation * q_b.tail(n);
+    jac.setZero(3, q_b.size());
+    jac.middleCols<4>(3) = euler_rotation_derivative(p, d - dx * theta);
+    const Eigen::Matrix3d turn = -euler_rotation(p) * dx;
+    jac.rightCols(n).noalias() = turn * m.modal_rotation;
+    return;
   }
   const Eigen::Index n = q_b.size(), n_xi = n - 12;
   const Eigen::Matrix3d a = orientation_of(q_b);
   const auto xi = q_b.tail(n_xi);
-  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(3, n);
+  jac.setZero(3, n);
   Eigen::Vector3d v = d;
   Eigen::Matrix<double, 3, 9> dv_da = Eigen::Matrix<double, 3, 9>::Zero();
   if (n_xi > 0) {
     const Eigen::Matrix3d dx = skew(d);
-    v -= dx * (m.rotation * body_frame_coordinates(a, xi));
-    dv_da = -dx * m.rotation * body_frame_coordinates_derivative(xi);
+    v -= dx * small_rotation(m, a, xi);
+    // ∂(R ξ̄)/∂A(i, j) = Σ_f R_f(:, j) ξ_f(i) (ξ̄_f = Aᵀ ξ_f), column 3j + i; then ∂v/∂a = −[d]× of it.
+    Eigen::Matrix<double, 3, 9> r_d = Eigen::Matrix<double, 3, 9>::Zero();
+    for (Eigen::Index f = 0; f < n_xi / 3; ++f) {
+      const Eigen::Vector3d xi_f = xi.segment<3>(3 * f);
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i) r_d.col(3 * j + i) += xi_f(i) * m.rotation.col(3 * f + j);
+    }
+    dv_da.noalias() = -dx * r_d;
     // ∂u/∂ξ_f = −A [d]× R_f Aᵀ
+    const Eigen::Matrix3d turn = -a * dx;
     for (Eigen::Index f = 0; f < n_xi / 3; ++f)
-      jac.block<3, 3>(0, 12 + 3 * f) = -a * dx * m.rotation.middleCols<3>(3 * f) * a.transpose();
+      jac.block<3, 3>(0, 12 + 3 * f).noalias() = turn * m.rotation.middleCols<3>(3 * f) * a.transpose();
   }
   // ∂(A v)/∂A(i, j) = e_i v_j + A ∂v/∂A(i, j), column 3 + 3j + i.
   for (int j = 0; j < 3; ++j)
     for (int i = 0; i < 3; ++i) jac(i, 3 + 3 * j + i) += v(j);
-  jac.middleCols<9>(3) += a * dv_da;
+  jac.middleCols<9>(3).noalias() += a * dv_da;
+}
+
+Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d) {
+  Eigen::MatrixXd jac;
+  marker_direction_jacobian(m, q_b, d, jac);
   return jac;
 }
 

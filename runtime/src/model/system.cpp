@@ -1,6 +1,7 @@
 #include "flexbody/runtime/system.hpp"
 
 #include "../body/gcms_elastic_padded.hpp"
+#include "../kernels/outer_sum.hpp"
 
 #include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
@@ -22,8 +23,14 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 
 // Adds ∂r/∂q_bᵀ F to the body's block of f: (y ⊗ I3) F on a GCMS body.
 void add_marker_force(Eigen::Ref<Eigen::VectorXd> f_b, const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& force) {
-  if (m.floating) {
-    f_b += marker_position_jacobian(m, q_b).transpose() * force;
+  if (m.floating) {  // ∂r/∂qᵀ F = [F; (∂(A ū_c)/∂p)ᵀ F; Ψ_cᵀ Aᵀ F], marker_position_jacobian's blocks
+    const Eigen::Index n = q_b.size() - 7;
+    const Eigen::Vector4d p = q_b.segment<4>(3);
+    const Eigen::Vector3d local = m.y.segment<3>(1) + m.modal_displacement * q_b.tail(n);
+    const Eigen::Vector3d body_force = euler_rotation(p).transpose() * force;
+    f_b.head<3>() += force;
+    f_b.segment<4>(3).noalias() += euler_rotation_derivative(p, local).transpose() * force;
+    f_b.tail(n).noalias() += m.modal_displacement.transpose() * body_force;
     return;
   }
   for (Eigen::Index k = 0; k < m.y.size(); ++k) f_b.segment<3>(3 * k) += m.y(k) * force;
@@ -94,7 +101,7 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
   const Eigen::Index rows = model.floating() ? 1 : model.rigid() ? 6 : (model.needs_translational_tisserand() ? 12 : 9);
   std::shared_ptr<const detail::PaddedMatrix> stiffness;
   if (!model.sparse && !model.rigid() && !model.floating()) stiffness = std::make_shared<const detail::PaddedMatrix>(model.stiffness);
-  bodies_.push_back({name, std::move(model), state, coordinates_, rows, std::move(stiffness), {}});
+  bodies_.push_back({name, std::move(model), state, coordinates_, rows, std::move(stiffness), {}, {}});
   coordinates_ += bodies_.back().model.coordinate_count();
   return static_cast<int>(bodies_.size()) - 1;
 }
@@ -105,6 +112,7 @@ void System::add_joint(Joint joint) {
   for (const Joint& j : joints_)
     if (j.name == joint.name) throw std::invalid_argument("joint '" + joint.name + "' is defined twice");
   joints_.push_back(std::move(joint));
+  joint_work_.emplace_back();
 }
 
 void System::add_force(PointForce force) {
@@ -289,7 +297,8 @@ void System::dynamic_residual(double t, const Eigen::VectorXd& q, const Eigen::V
                     gravity_, b.work, out_b);
       continue;
     }
-    out_b = -mass_times(b.model, qdd.segment(b.offset, n));
+    mass_times(b.model, qdd.segment(b.offset, n), out_b);
+    out_b = -out_b;
     add_body_forces(b, q, v, out_b);
     out_b = -out_b;
   }
@@ -303,8 +312,13 @@ void System::add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eige
     for (Eigen::Index k = 0; k < n / 3; ++k) f_b.segment<3>(3 * k) += b.model.g_border(0, k) * gravity_;  // (G[:, 0] ⊗ I3) g
     if (!b.model.rigid()) {
       const auto q_b = q.segment(b.offset, n);
-      const ElasticForces elastic = b.stiffness ? detail::elastic_forces(*b.stiffness, orientation_of(q_b), q_b.tail(n - 12))
-                                                : body_elastic_forces(b.model, orientation_of(q_b), q_b.tail(n - 12));
+      GcmsWorkspace& w = b.gcms;
+      if (b.stiffness) {
+        detail::elastic_forces(*b.stiffness, orientation_of(q_b), q_b.tail(n - 12), w.elastic, w.xi_bar);
+      } else {
+        w.elastic = body_elastic_forces(b.model, orientation_of(q_b), q_b.tail(n - 12));
+      }
+      const ElasticForces& elastic = w.elastic;
       f_b.segment<9>(3) -= elastic.grad_a;   // Eq. 86
       f_b.tail(n - 12) -= elastic.grad_xi;   // Eq. 87
       const bool sparse_damping = b.model.sparse && b.model.sparse->stiffness_damping > 0.0;
@@ -313,14 +327,20 @@ void System::add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eige
         const auto xi = q_b.tail(n - 12);
         const auto xi_dot = v_b.tail(n - 12);
         const Eigen::Matrix3d a = orientation_of(q_b), a_dot = orientation_of(v_b);
-        Eigen::VectorXd rate(n - 12);
-        for (Eigen::Index i = 0; i < (n - 12) / 3; ++i)
-          rate.segment<3>(3 * i) = a_dot.transpose() * xi.segment<3>(3 * i) + a.transpose() * xi_dot.segment<3>(3 * i);
-        const Eigen::VectorXd damping_force = sparse_damping ? Eigen::VectorXd(b.model.sparse->stiffness_damping *
-                                                                               (b.model.sparse->stiffness * rate))
-                                                             : Eigen::VectorXd(b.model.damping * rate);
-        f_b.segment<9>(3) -= body_frame_coordinates_derivative(xi).transpose() * damping_force;
-        for (Eigen::Index i = 0; i < (n - 12) / 3; ++i) f_b.segment<3>(12 + 3 * i) -= a * damping_force.segment<3>(3 * i);
+        const Eigen::Index n_f = (n - 12) / 3;
+        w.rate.resize(n - 12);
+        w.damping_force.resize(n - 12);
+        for (Eigen::Index i = 0; i < n_f; ++i)
+          w.rate.segment<3>(3 * i) = a_dot.transpose() * xi.segment<3>(3 * i) + a.transpose() * xi_dot.segment<3>(3 * i);
+        if (sparse_damping)
+          w.damping_force = b.model.sparse->stiffness_damping * (b.model.sparse->stiffness * w.rate);
+        else
+          w.damping_force.noalias() = b.model.damping * w.rate;
+        // Dᵀ y with D = ∂ξ̄/∂a (gcms_elastic.hpp) is Σ_f ξ_f y_fᵀ, vectorised.
+        const Eigen::Matrix3d d_t_y = detail::outer_sum(Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f),
+                                                        Eigen::Map<const Eigen::Matrix3Xd>(w.damping_force.data(), 3, n_f));
+        f_b.segment<9>(3) -= Eigen::Map<const Eigen::Matrix<double, 9, 1>>(d_t_y.data());
+        for (Eigen::Index i = 0; i < n_f; ++i) f_b.segment<3>(12 + 3 * i) -= a * w.damping_force.segment<3>(3 * i);
       }
     }
   }
@@ -341,7 +361,7 @@ void System::add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen:
       const Eigen::Vector4d e = q.segment<4>(b.offset + 3);
       const Eigen::Vector3d body_torque = euler_rotation(e).transpose() * torque;
       f.segment<4>(b.offset + 3) += 2.0 * euler_body_velocity_matrix(e).transpose() * body_torque;
-      f.segment(b.offset + 7, n - 7) += p.marker.modal_rotation.transpose() * body_torque;
+      f.segment(b.offset + 7, n - 7).noalias() += p.marker.modal_rotation.transpose() * body_torque;
       continue;
     }
     const Eigen::Matrix3d a = orientation_of(q.segment(b.offset, n));
@@ -349,9 +369,16 @@ void System::add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen:
     f.segment<9>(b.offset + 3) += Eigen::Map<const Eigen::Matrix<double, 9, 1>>(q_a.data());
     if (n > 12) {  // δθ = A R Âᵀ δξ through the marker's small rotation: Q_ξf = A R_fᵀ Aᵀ T
       // (and through ξ̄ = Âᵀ ξ also on A: Q_a += Dᵀ Rᵀ Aᵀ T).
-      const Eigen::VectorXd q_bar = p.marker.rotation.transpose() * (a.transpose() * torque);
-      for (Eigen::Index i = 0; i < (n - 12) / 3; ++i) f.segment<3>(b.offset + 12 + 3 * i) += a * q_bar.segment<3>(3 * i);
-      f.segment<9>(b.offset + 3) += body_frame_coordinates_derivative(q.segment(b.offset + 12, n - 12)).transpose() * q_bar;
+      const Eigen::Vector3d body_torque = a.transpose() * torque;
+      const Eigen::Index n_f = (n - 12) / 3;
+      const auto xi = q.segment(b.offset + 12, n - 12);
+      Eigen::Matrix3d d_t_q = Eigen::Matrix3d::Zero();  // Dᵀ q̄ = Σ_f ξ_f q̄_fᵀ, q̄_f = R_fᵀ Aᵀ T
+      for (Eigen::Index i = 0; i < n_f; ++i) {
+        const Eigen::Vector3d q_bar = p.marker.rotation.middleCols<3>(3 * i).transpose() * body_torque;
+        f.segment<3>(b.offset + 12 + 3 * i) += a * q_bar;
+        d_t_q.noalias() += xi.segment<3>(3 * i) * q_bar.transpose();
+      }
+      f.segment<9>(b.offset + 3) += Eigen::Map<const Eigen::Matrix<double, 9, 1>>(d_t_q.data());
     }
   }
   for (const SpringDamper& s : springs_) {
@@ -361,8 +388,15 @@ void System::add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen:
     const double length = d.norm();
     if (!(length > 0.0)) continue;  // coincident markers: no direction, no force
     const Eigen::Vector3d e = d / length;
-    const Eigen::Vector3d rate = (s.second.body == kGround ? Eigen::Vector3d::Zero() : Eigen::Vector3d(marker_position_jacobian(s.second, q2) * v2)) -
-                                 (s.first.body == kGround ? Eigen::Vector3d::Zero() : Eigen::Vector3d(marker_position_jacobian(s.first, q1) * v1));
+    Eigen::Vector3d rate = Eigen::Vector3d::Zero();  // ṙ_2 − ṙ_1
+    if (s.second.body != kGround) {
+      marker_position_jacobian(s.second, q2, spring_work_);
+      rate.noalias() += spring_work_ * v2;
+    }
+    if (s.first.body != kGround) {
+      marker_position_jacobian(s.first, q1, spring_work_);
+      rate.noalias() -= spring_work_ * v1;
+    }
     const double tension = sign * (s.stiffness * (length - s.rest_length) + s.damping * e.dot(rate));
     if (s.first.body != kGround)
       add_marker_force(f.segment(offset(s.first.body), model(s.first.body).coordinate_count()), s.first, q1, tension * e);
@@ -474,23 +508,33 @@ Eigen::Index System::reference_rates(const Eigen::VectorXd& q, const Eigen::Vect
   return row;
 }
 
-Eigen::VectorXd System::joint_rate(const Joint& j, const JointEvaluation& e, const Eigen::VectorXd& v) const {
-  Eigen::VectorXd rate = Eigen::VectorXd::Zero(j.rows());
-  if (j.first.body != kGround) rate += e.jacobian_first * v.segment(offset(j.first.body), e.jacobian_first.cols());
-  if (j.second.body != kGround) rate += e.jacobian_second * v.segment(offset(j.second.body), e.jacobian_second.cols());
-  return rate;
+void System::joint_rate(const Joint& j, const JointEvaluation& e, const Eigen::VectorXd& v,
+                        Eigen::Ref<Eigen::VectorXd> rate) const {
+  rate.setZero();
+  if (j.first.body != kGround) rate.noalias() += e.jacobian_first * v.segment(offset(j.first.body), e.jacobian_first.cols());
+  if (j.second.body != kGround)
+    rate.noalias() += e.jacobian_second * v.segment(offset(j.second.body), e.jacobian_second.cols());
+}
+
+const JointEvaluation& System::evaluated(std::size_t k, double t, const Eigen::VectorXd& q) const {
+  const Joint& j = joints_[k];
+  evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body), joint_work_[k]);
+  return joint_work_[k];
 }
 
 Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
-  Eigen::VectorXd phi(constraint_count());
-  Eigen::Index row = reference_residuals(q, phi);
-  for (const Joint& j : joints_) {
-    const JointEvaluation e =
-        evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
-    phi.segment(row, j.rows()) = e.residual;
-    row += j.rows();
-  }
+  Eigen::VectorXd phi;
+  constraints(t, q, phi);
   return phi;
+}
+
+void System::constraints(double t, const Eigen::VectorXd& q, Eigen::VectorXd& phi) const {
+  phi.resize(constraint_count());
+  Eigen::Index row = reference_residuals(q, phi);
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    phi.segment(row, joints_[k].rows()) = evaluated(k, t, q).residual;
+    row += joints_[k].rows();
+  }
 }
 
 void System::constraints_and_rates(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& phi,
@@ -499,10 +543,11 @@ void System::constraints_and_rates(double t, const Eigen::VectorXd& q, const Eig
   rate.resize(constraint_count());
   Eigen::Index row = reference_residuals(q, phi);
   reference_rates(q, v, rate);
-  for (const Joint& j : joints_) {  // each joint evaluated once for both
-    const JointEvaluation e = evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
+  for (std::size_t k = 0; k < joints_.size(); ++k) {  // each joint evaluated once for both
+    const Joint& j = joints_[k];
+    const JointEvaluation& e = evaluated(k, t, q);
     phi.segment(row, j.rows()) = e.residual;
-    rate.segment(row, j.rows()) = joint_rate(j, e, v);
+    joint_rate(j, e, v, rate.segment(row, j.rows()));
     row += j.rows();
   }
 }
@@ -525,9 +570,9 @@ Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) 
         jac.block<3, 3>(row + 9, b.offset + 12 + 3 * f).diagonal().setConstant(b.model.g_border(0, 4 + f));
     row += reference_rows(b);
   }
-  for (const Joint& j : joints_) {
-    const JointEvaluation e =
-        evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const Joint& j = joints_[k];
+    const JointEvaluation& e = evaluated(k, t, q);
     if (j.first.body != kGround) jac.block(row, offset(j.first.body), j.rows(), e.jacobian_first.cols()) += e.jacobian_first;
     if (j.second.body != kGround)
       jac.block(row, offset(j.second.body), j.rows(), e.jacobian_second.cols()) += e.jacobian_second;
@@ -539,39 +584,48 @@ Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) 
 Eigen::VectorXd System::constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q,
                                                               const Eigen::VectorXd& mu) const {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(coordinates_);
+  add_constraint_jacobian_transpose_product(t, q, mu, out);
+  return out;
+}
+
+void System::add_constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& mu,
+                                                       Eigen::VectorXd& out) const {
   Eigen::Index row = 0;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count(), rows = std::min<Eigen::Index>(9, reference_rows(b));
     const auto q_b = q.segment(b.offset, n);
     if (b.model.floating()) {
-      out.segment<4>(b.offset + 3) = 2.0 * mu(row++) * q_b.segment<4>(3);
+      out.segment<4>(b.offset + 3) += 2.0 * mu(row++) * q_b.segment<4>(3);
       continue;
     }
     Eigen::Matrix<double, 9, 1> mu_b = Eigen::Matrix<double, 9, 1>::Zero();
     mu_b.head(rows) = mu.segment(row, rows);
-    out.segment(b.offset + 3, n - 3) = reference_jacobian_transpose_product(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12), mu_b);
+    b.gcms.reference.resize(n - 3);
+    reference_jacobian_transpose_product(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12), mu_b, b.gcms.reference);
+    out.segment(b.offset + 3, n - 3) += b.gcms.reference;
     if (reference_rows(b) == 12)
       for (Eigen::Index f = 0; f < b.model.field_count(); ++f)
         out.segment<3>(b.offset + 12 + 3 * f) += b.model.g_border(0, 4 + f) * mu.segment<3>(row + 9);
     row += reference_rows(b);
   }
-  for (const Joint& j : joints_) {
-    const JointEvaluation e = evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const Joint& j = joints_[k];
+    const JointEvaluation& e = evaluated(k, t, q);
     const auto mu_j = mu.segment(row, j.rows());
-    if (j.first.body != kGround) out.segment(offset(j.first.body), e.jacobian_first.cols()) += e.jacobian_first.transpose() * mu_j;
+    if (j.first.body != kGround)
+      out.segment(offset(j.first.body), e.jacobian_first.cols()).noalias() += e.jacobian_first.transpose() * mu_j;
     if (j.second.body != kGround)
-      out.segment(offset(j.second.body), e.jacobian_second.cols()) += e.jacobian_second.transpose() * mu_j;
+      out.segment(offset(j.second.body), e.jacobian_second.cols()).noalias() += e.jacobian_second.transpose() * mu_j;
     row += j.rows();
   }
-  return out;
 }
 
 Eigen::VectorXd System::constraint_jacobian_product(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   Eigen::VectorXd out(constraint_count());
   Eigen::Index row = reference_rates(q, v, out);
-  for (const Joint& j : joints_) {
-    const JointEvaluation e = evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body));
-    out.segment(row, j.rows()) = joint_rate(j, e, v);
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const Joint& j = joints_[k];
+    joint_rate(j, evaluated(k, t, q), v, out.segment(row, j.rows()));
     row += j.rows();
   }
   return out;
@@ -579,19 +633,23 @@ Eigen::VectorXd System::constraint_jacobian_product(double t, const Eigen::Vecto
 
 Eigen::VectorXd System::constraint_time_derivative(double t, const Eigen::VectorXd& q) const {
   Eigen::VectorXd rate = Eigen::VectorXd::Zero(constraint_count());
+  add_constraint_time_derivative(t, q, rate);
+  return rate;
+}
+
+void System::add_constraint_time_derivative(double t, const Eigen::VectorXd& q, Eigen::VectorXd& out) const {
   Eigen::Index row = 0;
   for (const Body& b : bodies_) row += reference_rows(b);
   const double dt = std::cbrt(std::numeric_limits<double>::epsilon() * (1.0 + std::abs(t)));
   const double before = t - dt, after = t + dt;  // divided by after − before: exact, whatever t + dt rounds to
-  for (const Joint& j : joints_) {
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const Joint& j = joints_[k];
     if (j.type == JointType::driven_revolute) {
-      const auto q1 = body_view(q, j.first.body), q2 = body_view(q, j.second.body);
-      rate.segment(row, j.rows()) =
-          (evaluate_joint(j, after, q1, q2).residual - evaluate_joint(j, before, q1, q2).residual) / (after - before);
+      out.segment(row, j.rows()) += evaluated(k, after, q).residual / (after - before);
+      out.segment(row, j.rows()) -= evaluated(k, before, q).residual / (after - before);
     }
     row += j.rows();
   }
-  return rate;
 }
 
 Eigen::MatrixXd System::constraint_hessian(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const {

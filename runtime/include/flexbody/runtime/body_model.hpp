@@ -103,6 +103,8 @@ struct BodyModel {
 
 /// (G ⊗ I3) x_b for one body's coordinates x_b (12 + 3 n_f), as three products with G, one per direction.
 [[nodiscard]] Eigen::VectorXd mass_times(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& x_b);
+/// The same into y (the size of x_b); without allocating for a body of unit field mass (every body file's).
+void mass_times(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& x_b, Eigen::Ref<Eigen::VectorXd> y);
 /// ξᵀ (G_ff ⊗ I3) ξ = ∫|u|² dm of the fields' displacement ξ (3 n_f) [kg m²].
 [[nodiscard]] double field_mass_norm_squared(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& xi);
 /// Row `node` of Ῡ' (n_f): the node's weights of the fields.

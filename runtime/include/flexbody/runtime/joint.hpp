@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -55,8 +56,14 @@ struct Joint {
 struct JointEvaluation {
   Eigen::VectorXd residual;
   Eigen::MatrixXd jacobian_first, jacobian_second;
+  /// Work storage: the markers' position Jacobians and up to four direction Jacobians.
+  Eigen::MatrixXd position_first, position_second;
+  std::array<Eigen::MatrixXd, 4> directions;
 };
 [[nodiscard]] JointEvaluation evaluate_joint(const Joint& joint, double t, const VectorRef& q1,
                                              const VectorRef& q2);
+/// The same into `out`: an evaluation reused for the same joint allocates nothing (the Newton iteration's
+/// joints, System).
+void evaluate_joint(const Joint& joint, double t, const VectorRef& q1, const VectorRef& q2, JointEvaluation& out);
 
 }  // namespace flexbody::runtime

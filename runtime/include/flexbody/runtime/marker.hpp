@@ -46,11 +46,15 @@ struct Marker {
 /// ∂r/∂q_b (3 x BodyModel::coordinate_count()): yᵀ ⊗ I3 on a GCMS body (constant; q_b unused), [I, ∂(A ū_c)/∂p,
 /// A Ψ_c] on a floating-frame body.
 [[nodiscard]] Eigen::MatrixXd marker_position_jacobian(const Marker& m, const VectorRef& q_b);
+/// The same into `jac`, resized only when its size differs (no allocation when reused for the same marker).
+void marker_position_jacobian(const Marker& m, const VectorRef& q_b, Eigen::MatrixXd& jac);
 /// A body-fixed direction d (body frame) at the marker, in the global frame: A (d − [d]× R ξ̄).
 [[nodiscard]] Eigen::Vector3d marker_direction(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d);
 /// Its Jacobian (3 x (12 + 3 n_f)); zero columns for τ.
 [[nodiscard]] Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const VectorRef& q_b,
                                                         const Eigen::Vector3d& d);
+/// The same into `jac` (3 x 0 on ground), resized only when its size differs.
+void marker_direction_jacobian(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d, Eigen::MatrixXd& jac);
 
 /// The orientation A of the marker's body (identity for ground): mat(a), or A(p) on a floating-frame body.
 [[nodiscard]] Eigen::Matrix3d marker_body_orientation(const Marker& m, const VectorRef& q_b);

@@ -36,6 +36,9 @@ using TisserandMatrix = Eigen::Matrix<double, 3, Eigen::Dynamic>;
 [[nodiscard]] Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, const Eigen::Matrix3d& a,
                                                                    const VectorRef& xi,
                                                                    const Eigen::Matrix<double, 9, 1>& mu);
+/// The same into `out` (9 + 3 n_f), without allocating.
+void reference_jacobian_transpose_product(const TisserandMatrix& g, const Eigen::Matrix3d& a, const VectorRef& xi,
+                                          const Eigen::Matrix<double, 9, 1>& mu, Eigen::Ref<Eigen::VectorXd> out);
 
 /// J [ȧ; ξ̇] for the 9 rows without forming J: O(n_f), the velocity constraints of the stabilised index-2 form.
 /// Orthogonality: ȧ_i·a_j + a_i·ȧ_j; Tisserand: the axial vector of Ṗ = (Σ_f g_f ξ̇_fᵀ) A + (Σ_f g_f ξ_fᵀ) Ȧ.

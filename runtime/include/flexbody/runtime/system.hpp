@@ -147,10 +147,17 @@ class System {
   /// The spring-dampers' tangents at (q, q̇), one per spring with a defined direction (coincident markers have none).
   [[nodiscard]] std::vector<SpringTangent> spring_tangents(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
   [[nodiscard]] Eigen::VectorXd constraints(double t, const Eigen::VectorXd& q) const;
+  /// The same into `phi` (resized): with the System's per-joint work storage, no allocation once sizes are set.
+  /// The `add_…` and in-place forms below share that storage, so like dynamic_residual they must not run on one
+  /// System from two threads at once.
+  void constraints(double t, const Eigen::VectorXd& q, Eigen::VectorXd& phi) const;
   [[nodiscard]] Eigen::MatrixXd constraint_jacobian(double t, const Eigen::VectorXd& q) const;
   /// Φ_qᵀ μ without forming Φ_q (the reference rows in O(n_f) per body): what a Newton residual needs.
   [[nodiscard]] Eigen::VectorXd constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q,
                                                                       const Eigen::VectorXd& mu) const;
+  /// Adds Φ_qᵀ μ to `out` (n), allocating nothing: the Newton iteration's residual and position correction.
+  void add_constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& mu,
+                                                 Eigen::VectorXd& out) const;
   /// Φ_q v without forming Φ_q (the reference rows in O(n_f) per body): the velocity constraints Φ_q q̇ + Φ_t.
   [[nodiscard]] Eigen::VectorXd constraint_jacobian_product(double t, const Eigen::VectorXd& q,
                                                             const Eigen::VectorXd& v) const;
@@ -160,6 +167,8 @@ class System {
   /// Φ_t: zero but in the rows of driven joints, where it is the central difference in t of the joint's rows, with
   /// the step ∛(ε (1 + |t|)) that balances truncation (step² φ‴) against the rounding of the angle (ε |φ|).
   [[nodiscard]] Eigen::VectorXd constraint_time_derivative(double t, const Eigen::VectorXd& q) const;
+  /// Adds Φ_t to `out` (m), allocating nothing.
+  void add_constraint_time_derivative(double t, const Eigen::VectorXd& q, Eigen::VectorXd& out) const;
   /// Σ_k λ_k ∂²Φ_k/∂q² of the reference conditions (exact) and of the joints (joint_hessian, over every coordinate).
   [[nodiscard]] Eigen::MatrixXd constraint_hessian(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const;
   /// Adds Σ_j ∂(Φ_jᵀ λ_j)/∂q of the joints at time t (a driven joint's rows turn with φ(t)) to `out`, over the first counts[b] coordinates of each body b, placed at
@@ -201,8 +210,15 @@ class System {
   /// The reference rows' residuals and Φ_q v into the first rows of `phi` / `rate`; return how many rows.
   Eigen::Index reference_residuals(const Eigen::VectorXd& q, Eigen::VectorXd& phi) const;
   Eigen::Index reference_rates(const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& rate) const;
-  /// Φ_q v of one joint from its evaluation.
-  [[nodiscard]] Eigen::VectorXd joint_rate(const Joint& j, const JointEvaluation& e, const Eigen::VectorXd& v) const;
+  /// Φ_q v of one joint from its evaluation, into `rate` (the joint's rows).
+  void joint_rate(const Joint& j, const JointEvaluation& e, const Eigen::VectorXd& v, Eigen::Ref<Eigen::VectorXd> rate) const;
+  /// Joint k evaluated at (t, q) in its work storage.
+  const JointEvaluation& evaluated(std::size_t k, double t, const Eigen::VectorXd& q) const;
+  /// A GCMS body's work storage for its forces and reference rows (Newton iterations allocate nothing).
+  struct GcmsWorkspace {
+    ElasticForces elastic;
+    Eigen::VectorXd xi_bar, rate, damping_force, reference;
+  };
   struct Body {
     std::string name;
     BodyModel model;
@@ -212,6 +228,7 @@ class System {
     /// K̂ as the runtime's product kernel reads it fastest (null for rigid and full-order bodies).
     std::shared_ptr<const detail::PaddedMatrix> stiffness;
     mutable FfrfWorkspace work;  ///< a floating-frame body's evaluation scratch (dynamic_residual)
+    mutable GcmsWorkspace gcms;  ///< a GCMS body's (dynamic_residual, Φ_qᵀ μ)
   };
   /// A GCMS body's gravity, elastic and damping forces, added to its slice f_b.
   void add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::Ref<Eigen::VectorXd> f_b) const;
@@ -223,6 +240,8 @@ class System {
   void check_marker(const Marker& m, const std::string& what) const;
   std::deque<Body> bodies_;  ///< a deque: add_body never moves a body, so references to its model stay valid
   std::vector<Joint> joints_;
+  mutable std::vector<JointEvaluation> joint_work_;  ///< per joint: its last evaluation's storage
+  mutable Eigen::MatrixXd spring_work_;              ///< a spring marker's position Jacobian
   std::vector<PointForce> forces_;
   std::vector<PointTorque> torques_;
   std::vector<SpringDamper> springs_;

@@ -189,8 +189,9 @@ double slider_crank_energy_error(double carriage_mass, double h) {
 // integrator then retries with the coupled step (stabilized_coupling.hpp) and keeps it. The energy balance checks the
 // result: the drive's work against the change of kinetic energy, to the trapezoid rule's and generalized-α's O(h²)
 // (measured: 8.3e-4 and 2.07e-4 of the largest kinetic energy at 1e-3 and 5e-4 s, a ratio of 4.0; the bounds are 1.5
-// times those). The 0.5 kg carriage, which does not move either, runs with the alternating step throughout: the two
-// steps solve the same equations, so the balances agree to the Newton tolerance (1e-6 of a step's correction).
+// times those). The 0.5 kg carriage runs with the alternating step throughout. The carriage does not move, but its
+// mass sets its share of the position correction (W ∝ 1/m), so the two runs differ at the discretisation's order:
+// measured 1.7e-5 of the balance (5 kg against 0.5 kg: 1.0e-5; the two steps on one model: 1.2e-6, helper review).
 TEST(StabilizedIndex2, ALightCarriageUnderAFastSliderConverges) {
   double light_coarse = 0.0, light_fine = 0.0, heavy = 0.0;
   ASSERT_NO_THROW(light_coarse = slider_crank_energy_error(0.01, 1e-3));
@@ -200,5 +201,5 @@ TEST(StabilizedIndex2, ALightCarriageUnderAFastSliderConverges) {
   EXPECT_LT(light_coarse, 1.25e-3);
   EXPECT_LT(light_fine, 3.1e-4);
   EXPECT_GT(light_coarse / light_fine, 3.5);  // second order
-  EXPECT_NEAR(heavy, light_coarse, 1e-4 * light_coarse);  // measured: 1.6e-5 of it
+  EXPECT_NEAR(heavy, light_coarse, 1e-4 * light_coarse);  // measured: 1.7e-5 of it
 }

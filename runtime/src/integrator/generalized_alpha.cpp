@@ -415,9 +415,14 @@ void GeneralizedAlpha::advance(double h, double t1) {
         solver_->factor(t1, q, v, qdd, mu, jacobian);
         if (stabilized) {
           projected_.compute(jacobian * squared_scales_.asDiagonal() * jacobian.transpose());  // Φ_q W Φ_qᵀ
-          if (projected_.info() != Eigen::Success)
+          if (projected_.info() != Eigen::Success) {
+            if (iterations_ > 1)  // rows independent at the predictor lost it at a diverging iterate
+              throw StepFailure("t = " + std::to_string(t1) + " s: the Newton iteration diverged: at iteration " +
+                                std::to_string(iterations_) + " the constraint rows became dependent (Φ_q W Φ_qᵀ is "
+                                "not positive definite)" + last_state_diagnosis());
             throw StepFailure("t = " + std::to_string(t1) + " s: the constraint rows are dependent (Φ_q W Φ_qᵀ is not "
                               "positive definite)" + last_state_diagnosis());
+          }
           coupled_ = couple_;  // the coupled step, once a step failed with the alternating one (below)
           if (coupled_) {
             evaluate_residual();
@@ -499,7 +504,9 @@ void GeneralizedAlpha::advance(double h, double t1) {
         converged = true;
         break;
       }
-      if (correction > 0.25 * previous_correction) refresh_ = slow = true;
+      // Judged against a correction of the same matrix: the first one of a matrix built in this iteration follows
+      // one of the stale matrix (helper review: counting it rebuilt a fresh matrix at once, two builds per step).
+      if (!refresh && correction > 0.25 * previous_correction) refresh_ = slow = true;
       previous_correction = correction;
     }
     if (converged) break;
@@ -511,6 +518,9 @@ void GeneralizedAlpha::advance(double h, double t1) {
       // A fresh matrix did not converge with the alternating step: once more with the coupled one, which then stays
       // for the rest of the run (stabilized_coupling.hpp; slower to build, so not used before it is needed).
       couple_ = refresh_ = true;
+      warnings_.push_back("t = " + std::to_string(t1) + " s: Newton did not converge with the stabilised index-2 "
+                          "form's alternating step; the run continues with its coupled step, which costs m solves "
+                          "per Newton matrix (m = " + std::to_string(m) + " constraint rows)");
       continue;
     }
     Eigen::Index worst = 0;

@@ -17,7 +17,9 @@ bool StabilizedCoupling::build(const System& system, NewtonSolver& solver, doubl
   // (|v_i| / (|q_i| + scale_i)) or over 1/h, whichever is faster. Z only sets the convergence rate.
   double fastest = 1.0 / h;
   for (Eigen::Index i = 0; i < n; ++i) fastest = std::max(fastest, std::abs(v(i)) / (std::abs(q(i)) + scales(i)));
-  const double s = std::cbrt(eps) / fastest;
+  // t ± s exact: far from t = 0 the rounding of t + s would change the step of the time part (a driven joint's).
+  const double guess = std::cbrt(eps) / fastest, exact = (t + guess) - t;
+  const double s = exact > 0.0 ? exact : guess;
   rate_ = system.constraint_jacobian(t + s, q + s * v);
   rate_ -= system.constraint_jacobian(t - s, q - s * v);
   rate_ *= 1.0 / (2.0 * s * gamma_prime);

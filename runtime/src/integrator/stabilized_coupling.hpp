@@ -14,7 +14,8 @@
 //
 //   (J P − (Z/γ') (X + P)) Δν = Ψ/γ' − Φ + (Z/γ') δ₀.
 //
-// Without Z and X this is J W Jᵀ Δν = Ψ/γ' − Φ, the projection of the alternating step (generalized_alpha.cpp):
+// Without Z and X this is J W Φ_q(q_n)ᵀ Δν = Ψ/γ' − Φ, nearly the projection J W Jᵀ Δν = Ψ/γ' − Φ (J at the
+// iterate) of the alternating step (generalized_alpha.cpp):
 // Δν first, then the dynamic rows with the velocity rows at the moved positions. That alternation is cheaper (no
 // solves to build) and converges in two iterations in most scenes, but not where the velocity rows move fast with the
 // positions: a slider-crank whose 0.01 kg carriage (1 cm gyration radius) guides a slider at up to 11 m/s converged
@@ -25,7 +26,7 @@
 // It costs m solves and m + 1 evaluations of the dynamic residual (G P by forward differences) and three Jacobians
 // each time the Newton matrix is built (a chain of four 10-mode bars, 56 rows: 3.2 ms more per build, 53 % more per
 // step). So generalized-α uses it only after a step failed with a fresh matrix and the alternating step, and from
-// then on (GeneralizedAlpha::couple_). On the slider-crank with a 0.5 kg carriage, where the alternating step
+// then on (GeneralizedAlpha::couple_), with a line in warnings(). On the slider-crank with a 0.5 kg carriage, where the alternating step
 // converges (5.6 iterations per step at h = 1e-3 s, with the matrix kept), the coupled one took 5.1 iterations and
 // 1.5 times as long.
 // The matrix parts (X, Y, Z, the m x m factor) are kept with the Newton matrix: from an older matrix the iteration

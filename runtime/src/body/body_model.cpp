@@ -20,9 +20,12 @@ Eigen::VectorXd mass_times(const BodyModel& model, const Eigen::Ref<const Eigen:
 
 void mass_times(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& x_b, Eigen::Ref<Eigen::VectorXd> y) {
   const Eigen::Index columns = 4 + model.field_count();
-  if (x_b.size() != 3 * columns || y.size() != x_b.size())
+  if (x_b.size() != 3 * columns)
     throw std::invalid_argument(model.source + ": " + std::to_string(x_b.size()) + " coordinates for a body of " +
                                 std::to_string(3 * columns));
+  if (y.size() != x_b.size())
+    throw std::invalid_argument(model.source + ": mass product into " + std::to_string(y.size()) + " entries, not " +
+                                std::to_string(x_b.size()));
   if (model.unit_field_mass && !model.sparse) {  // G = [G_rr G_rf; G_rfᵀ I]: O(n_f) instead of O(n_f²)
     const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> x(x_b.data(), 3, columns);
     Eigen::Map<Eigen::Matrix<double, 3, Eigen::Dynamic>> out(y.data(), 3, columns);  // column c: 3-block c of y

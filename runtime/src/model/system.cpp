@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -140,6 +141,7 @@ void System::add_spring(SpringDamper spring) {
   if (!(spring.stiffness >= 0.0) || !(spring.damping >= 0.0) || !(spring.rest_length >= 0.0))
     throw std::invalid_argument("spring '" + spring.name + "': stiffness, damping and length must be >= 0");
   springs_.push_back(std::move(spring));
+  spring_work_.emplace_back();
 }
 
 int System::body_index(const std::string& name) const {
@@ -381,7 +383,9 @@ void System::add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen:
       f.segment<9>(b.offset + 3) += Eigen::Map<const Eigen::Matrix<double, 9, 1>>(d_t_q.data());
     }
   }
-  for (const SpringDamper& s : springs_) {
+  for (std::size_t k = 0; k < springs_.size(); ++k) {
+    const SpringDamper& s = springs_[k];
+    std::array<Eigen::MatrixXd, 2>& work = spring_work_[k];  // one per marker: their bodies' sizes differ
     const VectorRef q1 = body_view(q, s.first.body), q2 = body_view(q, s.second.body);
     const VectorRef v1 = body_view(v, s.first.body), v2 = body_view(v, s.second.body);
     const Eigen::Vector3d d = marker_position(s.second, q2) - marker_position(s.first, q1);
@@ -390,12 +394,12 @@ void System::add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen:
     const Eigen::Vector3d e = d / length;
     Eigen::Vector3d rate = Eigen::Vector3d::Zero();  // ṙ_2 − ṙ_1
     if (s.second.body != kGround) {
-      marker_position_jacobian(s.second, q2, spring_work_);
-      rate.noalias() += spring_work_ * v2;
+      marker_position_jacobian(s.second, q2, work[1]);
+      rate.noalias() += work[1] * v2;
     }
     if (s.first.body != kGround) {
-      marker_position_jacobian(s.first, q1, spring_work_);
-      rate.noalias() -= spring_work_ * v1;
+      marker_position_jacobian(s.first, q1, work[0]);
+      rate.noalias() -= work[0] * v1;
     }
     const double tension = sign * (s.stiffness * (length - s.rest_length) + s.damping * e.dot(rate));
     if (s.first.body != kGround)

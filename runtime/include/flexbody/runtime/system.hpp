@@ -20,6 +20,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <array>
 #include <deque>
 #include <functional>
 #include <memory>
@@ -90,6 +91,9 @@ struct Energies {
   [[nodiscard]] double total() const { return kinetic + elastic + gravity + springs; }
 };
 
+/// The bodies, joints and forces of a scene, and the equations of motion's terms at (t, q, q̇, q̈).
+/// Its const members evaluate into work storage the System keeps (per joint, per body, per spring), so that a Newton
+/// iteration allocates nothing: no member, const or not, may run on one System from two threads at once.
 class System {
  public:
   /// Adds a body; returns its index. Throws std::invalid_argument for a state of the wrong size or a
@@ -148,8 +152,6 @@ class System {
   [[nodiscard]] std::vector<SpringTangent> spring_tangents(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
   [[nodiscard]] Eigen::VectorXd constraints(double t, const Eigen::VectorXd& q) const;
   /// The same into `phi` (resized): with the System's per-joint work storage, no allocation once sizes are set.
-  /// The `add_…` and in-place forms below share that storage, so like dynamic_residual they must not run on one
-  /// System from two threads at once.
   void constraints(double t, const Eigen::VectorXd& q, Eigen::VectorXd& phi) const;
   [[nodiscard]] Eigen::MatrixXd constraint_jacobian(double t, const Eigen::VectorXd& q) const;
   /// Φ_qᵀ μ without forming Φ_q (the reference rows in O(n_f) per body): what a Newton residual needs.
@@ -241,7 +243,7 @@ class System {
   std::deque<Body> bodies_;  ///< a deque: add_body never moves a body, so references to its model stay valid
   std::vector<Joint> joints_;
   mutable std::vector<JointEvaluation> joint_work_;  ///< per joint: its last evaluation's storage
-  mutable Eigen::MatrixXd spring_work_;              ///< a spring marker's position Jacobian
+  mutable std::vector<std::array<Eigen::MatrixXd, 2>> spring_work_;  ///< per spring: its markers' position Jacobians
   std::vector<PointForce> forces_;
   std::vector<PointTorque> torques_;
   std::vector<SpringDamper> springs_;

@@ -48,15 +48,7 @@ constexpr double kGravity = 9.81;
 constexpr double kBarLength = 1.0, kBarWidth = 0.05, kBarMass = 19.625;
 
 fr::BodyModel rigid_model(double mass, const Eigen::Matrix3d& second_moment) {
-  fr::BodyModel model;
-  model.source = "rigid";
-  model.mass = mass;
-  model.mass_matrix = Eigen::Matrix4d::Zero();
-  model.mass_matrix(0, 0) = mass;
-  model.mass_matrix.block<3, 3>(1, 1) = second_moment;  // J = ∫ x xᵀ dm
-  model.stiffness.resize(0, 0);
-  model.tisserand.resize(3, 0);
-  return model;
+  return fr::rigid_body_model(mass, second_moment, "rigid");  // J = ∫ x xᵀ dm
 }
 
 std::unique_ptr<fr::System> rigid_pendulum() {

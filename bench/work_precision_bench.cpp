@@ -133,16 +133,7 @@ fr::BodyModel model_of(const Part& p, const flexbody::format::BodyData* data, Ki
 
 // A tiny rigid body (a hub) of mass m and gyration radius r, its centre at the origin of its frame.
 fr::BodyModel hub_model(double mass, double radius) {
-  fr::BodyModel m;
-  m.source = "hub";
-  m.mass = mass;
-  m.mass_matrix = Eigen::Matrix4d::Zero();
-  m.mass_matrix(0, 0) = mass;
-  m.mass_matrix.block<3, 3>(1, 1) = Eigen::Matrix3d::Identity() * mass * radius * radius;
-  m.stiffness.resize(0, 0);
-  m.tisserand.resize(3, 0);
-  m.fields.resize(0, 0);
-  return m;
+  return fr::rigid_body_model(mass, Eigen::Matrix3d::Identity() * mass * radius * radius, "hub");
 }
 
 // A scene built for one model: its system, the marked node, and the joint whose reaction is watched (if any).
@@ -278,10 +269,10 @@ Scene scene_pendulum(bool quick) {
 // the row the revolute wrist adds, and nothing drives it out of the plane. The crank speeds up with
 // φ̇ = Ω (1 − cos πt/T) / 2 to Ω = 0.25 ω_pp at T = 1 s,
 // ω_pp the rod's first pinned-pinned bending frequency (the free-free one / 2.267, Euler-Bernoulli's ratio). Not
-// through the rod's resonance: the crank's inertia loads compress the rod by about (m_slider + m_rod/2) Ω² r, which is
-// (m_slider/m_rod + 1/2) π² (Ω/ω_pp)² r/L of its buckling load; at Ω = ω_pp/2 (the second harmonic in resonance) that
-// is a third of it, where the missing geometric stiffness (FORMULATION.md section 8) changes the frequency by 20 %, and
-// fbsim stops such a run at its deformation limit (measured: 2 % RMS at 114 rad/s). At 0.25 ω_pp it is 9 %. No gravity.
+// through the rod's resonance: the crank's inertia loads compress the rod by up to (m_slider + m_rod/2) Ω² r, which is
+// (m_slider/m_rod + 1/2) π² (Ω/ω_pp)² r/L = 2.3 (Ω/ω_pp)² of its buckling load: 0.14 here, 0.57 at Ω = ω_pp/2 (the
+// second harmonic in resonance; fbsim stops such a run at its deformation limit, measured: 2 % RMS at 114 rad/s),
+// above buckling at ω_pp, where no linear model holds (bench/README.md). No gravity.
 // Quantities: the rod's midspan path and the force at the crank pin. Every model is damped by D̂ = β K̂ with ζ = 2 % at
 // ω_pp (β = 0.04 / ω_pp). The full-order reference is fbsim's `modes: full` of the Craig-Bampton body file: its rbe2 ends
 // move affinely, the span the GCMS's Craig-Bampton fields have there (full_order.hpp), so it is the limit the GCMS

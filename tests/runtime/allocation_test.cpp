@@ -3,14 +3,11 @@
 // FFRF and rigid bodies, in both constraint forms. This executable replaces malloc and realloc (glibc's
 // __libc_malloc behind them; CMake builds it on glibc only) to count the calls made during steps that kept their
 // Newton matrix; a step that builds one allocates (the factorization), and is not counted.
-#include "flexbody/preprocess/free_free_modes.hpp"
-#include "flexbody/preprocess/gcms_constants.hpp"
-#include "flexbody/preprocess/mass_properties.hpp"
 #include "flexbody/runtime/damping.hpp"
 #include "flexbody/runtime/ffrf_model.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
-#include "test_meshes.hpp"
+#include "test_bodies.hpp"
 
 #include <gtest/gtest.h>
 
@@ -45,33 +42,14 @@ namespace {
 const flexbody::format::BodyData& bar() {
   static const flexbody::format::BodyData data = [] {
     const fp::Material soft{"soft", 5e9, 0.3, 1000.0};
-    const auto fe = flexbody::test::assemble(flexbody::test::box_mesh(1.0, 0.04, 0.02, 10, 2, 1), soft);
-    flexbody::format::BodyData b;
-    b.mass = fp::mass_properties(fe.scalar_mass, fe.mesh.nodes);
-    b.mesh.nodes = fe.mesh.nodes.rowwise() - b.mass.center_of_mass_input.transpose();
-    b.mesh.tets = fe.mesh.tets;
-    fp::FreeFreeOptions options;
-    options.modes = 4;
-    const fp::FreeFreeModes m = fp::free_free_modes(b.mesh.nodes, fe.stiffness, fe.scalar_mass, soft, options);
-    b.modes.frequencies_hz = m.frequencies_hz;
-    b.modes.relative_residuals = m.relative_residuals;
-    b.modes.upsilon = fp::upsilon_from_modes(m.vectors);
-    b.gcms = fp::gcms_constants(fe.stiffness, fe.scalar_mass, b.mesh.nodes, b.modes.upsilon);
-    return b;
+    return flexbody::test::free_free_body(flexbody::test::assemble(flexbody::test::box_mesh(1.0, 0.04, 0.02, 10, 2, 1), soft),
+                                          soft, 4);
   }();
   return data;
 }
 
 fr::BodyModel box(double mass, double radius) {
-  fr::BodyModel m;
-  m.source = "box";
-  m.mass = mass;
-  m.mass_matrix = Eigen::Matrix4d::Zero();
-  m.mass_matrix(0, 0) = mass;
-  m.mass_matrix.block<3, 3>(1, 1) = Eigen::Matrix3d::Identity() * mass * radius * radius;
-  m.stiffness.resize(0, 0);
-  m.tisserand.resize(3, 0);
-  return m;
+  return fr::rigid_body_model(mass, Eigen::Matrix3d::Identity() * mass * radius * radius, "box");
 }
 
 Eigen::Index nearest(const fr::BodyModel& model, const Eigen::Vector3d& point) {

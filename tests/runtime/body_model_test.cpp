@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+#include <limits>
 #include <string>
 
 namespace fr = flexbody::runtime;
@@ -127,5 +128,28 @@ TEST(BodyModel, OrthonormalFieldsGiveTheShortMassProduct) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("body 'bar': unit_field_mass is set, but G_ff is not exactly I"), std::string::npos)
         << e.what();
+  }
+}
+
+// A rigid body a simulator builds without a body file: G = diag(m, J), refused with its name for a mass that is not
+// positive and a second moment that is not symmetric positive semidefinite.
+TEST(RigidBodyModel, HoldsMassAndSecondMomentAndRefusesNonsense) {
+  const Eigen::Matrix3d j = Eigen::Vector3d(0.5, 0.2, 0.1).asDiagonal();
+  const fr::BodyModel model = fr::rigid_body_model(2.0, j, "wheel");
+  EXPECT_TRUE(model.rigid());
+  EXPECT_EQ(model.coordinate_count(), 12);
+  EXPECT_EQ(model.mass_matrix(0, 0), 2.0);
+  EXPECT_EQ((model.mass_matrix.block<3, 3>(1, 1) - j).norm(), 0.0);
+  EXPECT_EQ(model.mass_matrix.row(0).tail<3>().norm(), 0.0);
+  for (const double mass : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN()})
+    EXPECT_THROW((void)fr::rigid_body_model(mass, j, "wheel"), std::invalid_argument);
+  Eigen::Matrix3d asymmetric = j;
+  asymmetric(0, 1) = 0.1;
+  EXPECT_THROW((void)fr::rigid_body_model(2.0, asymmetric, "wheel"), std::invalid_argument);
+  try {
+    (void)fr::rigid_body_model(2.0, Eigen::Vector3d(0.5, -0.2, 0.1).asDiagonal(), "wheel");
+    FAIL() << "a negative second moment was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("wheel"), std::string::npos) << e.what();
   }
 }

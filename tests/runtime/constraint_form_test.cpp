@@ -13,15 +13,7 @@ namespace {
 
 // A rigid box of mass m and edges `edges`: J = ∫ x xᵀ dm = m diag(edges²)/12.
 fr::BodyModel box(double mass, const Eigen::Vector3d& edges) {
-  fr::BodyModel model;
-  model.source = "box";
-  model.mass = mass;
-  model.mass_matrix = Eigen::Matrix4d::Zero();
-  model.mass_matrix(0, 0) = mass;
-  model.mass_matrix.block<3, 3>(1, 1) = mass / 12.0 * edges.cwiseProduct(edges).asDiagonal();
-  model.stiffness.resize(0, 0);
-  model.tisserand.resize(3, 0);
-  return model;
+  return fr::rigid_body_model(mass, mass / 12.0 * edges.cwiseProduct(edges).asDiagonal(), "box");
 }
 
 // The largest |ω − 10 rad/s| of a 1 m bar driven about z at 10 rad/s from t0, over 500 steps of 1 ms.

@@ -6,11 +6,9 @@
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
 
+#include "test_bodies.hpp"
 #include "test_meshes.hpp"
 
-#include "flexbody/preprocess/free_free_modes.hpp"
-#include "flexbody/preprocess/gcms_constants.hpp"
-#include "flexbody/preprocess/mass_properties.hpp"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -25,15 +23,7 @@ namespace {
 
 // A rigid body of mass m and second moment J = ∫ x xᵀ dm about its centre of mass.
 fr::BodyModel rigid(double mass, const Eigen::Matrix3d& second_moment) {
-  fr::BodyModel model;
-  model.source = "rigid";
-  model.mass = mass;
-  model.mass_matrix = Eigen::Matrix4d::Zero();
-  model.mass_matrix(0, 0) = mass;
-  model.mass_matrix.block<3, 3>(1, 1) = second_moment;
-  model.stiffness.resize(0, 0);
-  model.tisserand.resize(3, 0);
-  return model;
+  return fr::rigid_body_model(mass, second_moment, "rigid");
 }
 
 // L about the origin, Σ_kl G_kl q_k × v_l over the 3-blocks of q = [τ; a_1..3; ξ] (the nodal sums Σ m_i r_i × ṙ_i).
@@ -198,17 +188,7 @@ Drift run_flexible_spin(fr::ConstraintForm form, double step = 1e-4) {
   static const fr::BodyModel model = [] {
     const fp::Material steel{"steel", 210e9, 0.3, 7850.0};
     const auto fe = flexbody::test::assemble(flexbody::test::box_mesh(0.5, 0.05, 0.05, 10, 2, 2), steel);
-    flexbody::format::BodyData b;
-    b.mass = fp::mass_properties(fe.scalar_mass, fe.mesh.nodes);
-    b.mesh.nodes = fe.mesh.nodes.rowwise() - b.mass.center_of_mass_input.transpose();
-    b.mesh.tets = fe.mesh.tets;
-    fp::FreeFreeOptions options;
-    options.modes = 4;
-    const fp::FreeFreeModes modes = fp::free_free_modes(b.mesh.nodes, fe.stiffness, fe.scalar_mass, steel, options);
-    b.modes.frequencies_hz = modes.frequencies_hz;
-    b.modes.relative_residuals = modes.relative_residuals;
-    b.modes.upsilon = fp::upsilon_from_modes(modes.vectors);
-    b.gcms = fp::gcms_constants(fe.stiffness, fe.scalar_mass, b.mesh.nodes, b.modes.upsilon);
+    const flexbody::format::BodyData b = flexbody::test::free_free_body(fe, steel, 4);
     return fr::make_body_model(b, std::nullopt, "beam");
   }();
   fr::BodyState state;

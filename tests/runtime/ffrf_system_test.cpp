@@ -5,7 +5,6 @@
 #include "flexbody/preprocess/assembly.hpp"
 #include "flexbody/runtime/damping.hpp"
 #include "flexbody/preprocess/free_free_modes.hpp"
-#include "flexbody/preprocess/gcms_constants.hpp"
 #include "flexbody/preprocess/interfaces.hpp"
 #include "flexbody/preprocess/mass_properties.hpp"
 #include "flexbody/runtime/ffrf_dynamics.hpp"
@@ -13,6 +12,7 @@
 #include "flexbody/runtime/full_order.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
+#include "test_bodies.hpp"
 #include "test_meshes.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -38,21 +38,7 @@ const flexbody::test::AssembledMesh& bar_mesh() {
   return mesh;
 }
 
-flexbody::format::BodyData bar(int modes) {
-  const auto& fe = bar_mesh();
-  flexbody::format::BodyData b;
-  b.mass = fp::mass_properties(fe.scalar_mass, fe.mesh.nodes);
-  b.mesh.nodes = fe.mesh.nodes.rowwise() - b.mass.center_of_mass_input.transpose();
-  b.mesh.tets = fe.mesh.tets;
-  fp::FreeFreeOptions options;
-  options.modes = modes;
-  const fp::FreeFreeModes m = fp::free_free_modes(b.mesh.nodes, fe.stiffness, fe.scalar_mass, kSoft, options);
-  b.modes.frequencies_hz = m.frequencies_hz;
-  b.modes.relative_residuals = m.relative_residuals;
-  b.modes.upsilon = fp::upsilon_from_modes(m.vectors);
-  b.gcms = fp::gcms_constants(fe.stiffness, fe.scalar_mass, b.mesh.nodes, b.modes.upsilon);
-  return b;
-}
+flexbody::format::BodyData bar(int modes) { return flexbody::test::free_free_body(bar_mesh(), kSoft, modes); }
 
 fr::BodyModel floating_model(fr::BodyModel model) {
   model.floating_frame = std::make_shared<const fr::FfrfModel>(fr::make_ffrf_model(model, fr::FloatingFrame::mean_axis));

@@ -11,6 +11,7 @@
 #include "flexbody/runtime/full_order.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
+#include "test_bodies.hpp"
 #include "test_meshes.hpp"
 
 #include <Eigen/Geometry>
@@ -33,19 +34,8 @@ const fp::Material kSteel{"steel", 210e9, 0.3, 7850.0};
 // A 0.5 x 0.05 x 0.05 m steel beam (10 x 2 x 2 cells), 4 free-free modes, as a body file would hold it.
 const flexbody::format::BodyData& beam() {
   static const flexbody::format::BodyData body = [] {
-    const auto model = flexbody::test::assemble(flexbody::test::box_mesh(0.5, 0.05, 0.05, 10, 2, 2), kSteel);
-    flexbody::format::BodyData b;
-    b.mass = fp::mass_properties(model.scalar_mass, model.mesh.nodes);
-    b.mesh.nodes = model.mesh.nodes.rowwise() - b.mass.center_of_mass_input.transpose();
-    b.mesh.tets = model.mesh.tets;
-    fp::FreeFreeOptions options;
-    options.modes = 4;
-    const fp::FreeFreeModes modes = fp::free_free_modes(b.mesh.nodes, model.stiffness, model.scalar_mass, kSteel, options);
-    b.modes.frequencies_hz = modes.frequencies_hz;
-    b.modes.relative_residuals = modes.relative_residuals;
-    b.modes.upsilon = fp::upsilon_from_modes(modes.vectors);
-    b.gcms = fp::gcms_constants(model.stiffness, model.scalar_mass, b.mesh.nodes, b.modes.upsilon);
-    return b;
+    return flexbody::test::free_free_body(flexbody::test::assemble(flexbody::test::box_mesh(0.5, 0.05, 0.05, 10, 2, 2), kSteel),
+                                          kSteel, 4);
   }();
   return body;
 }

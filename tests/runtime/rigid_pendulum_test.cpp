@@ -21,16 +21,8 @@ constexpr double kLength = 1.0, kWidth = 0.05, kMass = 19.625, kGravity = 9.81;
 
 // A rigid 1 x 0.05 x 0.05 m bar: G = [[m, 0], [0, J]] with J = ∫ x xᵀ dm = m diag(L², w², w²) / 12.
 fr::BodyModel rigid_bar() {
-  fr::BodyModel model;
-  model.source = "rigid bar";
-  model.mass = kMass;
-  model.mass_matrix = Eigen::Matrix4d::Zero();
-  model.mass_matrix(0, 0) = kMass;
-  model.mass_matrix.block<3, 3>(1, 1) = kMass / 12.0 * Eigen::Vector3d(kLength * kLength, kWidth * kWidth, kWidth * kWidth).asDiagonal();
-  model.stiffness.resize(0, 0);
-  model.tisserand.resize(3, 0);
-  model.fields.resize(0, 0);
-  return model;
+  return fr::rigid_body_model(kMass, kMass / 12.0 * Eigen::Vector3d(kLength * kLength, kWidth * kWidth, kWidth * kWidth).asDiagonal(),
+                              "rigid bar");
 }
 
 // K(k), the complete elliptic integral of the first kind, by the arithmetic-geometric mean: K = π / (2 AGM(1, k')).

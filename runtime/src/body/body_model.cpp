@@ -1,6 +1,9 @@
 #include "flexbody/runtime/body_model.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
+#include <cmath>
 
 #include <stdexcept>
 
@@ -10,6 +13,27 @@ Eigen::Index fields_of_first_modes(const format::Gcms& gcms, Eigen::Index k) {
   Eigen::Index n = 0;
   while (n < gcms.field_mode.size() && gcms.field_mode(n) < k) ++n;  // non-decreasing (SCHEMA.md)
   return n;
+}
+
+BodyModel rigid_body_model(double mass, const Eigen::Matrix3d& second_moment, const std::string& source) {
+  if (!(mass > 0.0) || !std::isfinite(mass))
+    throw std::invalid_argument(source + ": a rigid body's mass must be positive and finite, not " + std::to_string(mass));
+  const double size = second_moment.cwiseAbs().maxCoeff();
+  if (!second_moment.allFinite() || (second_moment - second_moment.transpose()).cwiseAbs().maxCoeff() > 1e-12 * size ||
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(second_moment, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() <
+          -1e-12 * size)
+    throw std::invalid_argument(source + ": the second moment ∫ x xᵀ dm must be finite, symmetric and positive "
+                                "semidefinite");
+  BodyModel model;
+  model.source = source;
+  model.mass = mass;
+  model.mass_matrix = Eigen::Matrix4d::Zero();
+  model.mass_matrix(0, 0) = mass;
+  model.mass_matrix.block<3, 3>(1, 1) = second_moment;
+  model.stiffness.resize(0, 0);
+  model.tisserand.resize(3, 0);
+  model.fields.resize(0, 0);
+  return model;
 }
 
 Eigen::VectorXd mass_times(const BodyModel& model, const Eigen::Ref<const Eigen::VectorXd>& x_b) {

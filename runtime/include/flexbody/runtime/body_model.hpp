@@ -96,6 +96,12 @@ struct BodyModel {
   [[nodiscard]] bool floating() const { return floating_frame != nullptr; }
 };
 
+/// A rigid body of `mass` [kg] and second moment J = ∫ x xᵀ dm [kg m²] about its centre of mass in its frame
+/// (J = m diag(a², b², c²)/12 for an a x b x c box), for parts a simulator has no body file for: G = diag(m, J).
+/// Throws std::invalid_argument naming `source` unless m > 0 and J is finite, symmetric and positive semidefinite.
+[[nodiscard]] BodyModel rigid_body_model(double mass, const Eigen::Matrix3d& second_moment,
+                                         const std::string& source = "rigid body");
+
 /// The body of `file` with its first `modes` modes (nullopt: all; 0: rigid, from the mass properties in G).
 /// Throws std::invalid_argument naming the file if `modes` is negative or exceeds the modes it holds.
 [[nodiscard]] BodyModel make_body_model(const format::BodyData& body, std::optional<Eigen::Index> modes,

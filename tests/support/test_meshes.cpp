@@ -46,18 +46,22 @@ preprocess::TetMesh box_mesh(double lx, double ly, double lz, int nx, int ny, in
   return preprocess::box_mesh(lx, ly, lz, nx, ny, nz);
 }
 
-preprocess::TetMesh read_abaqus_c3d4(const std::filesystem::path& path) {
+namespace {
+
+// The first *Node block and the first element block of `type` (N nodes per element, 0-based) of an Abaqus .inp file.
+template <int N>
+void read_abaqus(const std::filesystem::path& path, const std::string& type, preprocess::RowMatrixX3d& nodes_out,
+                 std::vector<std::array<std::int32_t, N>>& elements) {
   std::ifstream file(path);
   if (!file) throw std::runtime_error(path.string() + ": cannot open");
   std::vector<std::array<double, 3>> nodes;
-  std::vector<std::array<std::int32_t, 4>> tets;
   enum class Block { none, nodes, elements } block = Block::none;
   std::string line;
   while (std::getline(file, line)) {
     if (line.rfind("**", 0) == 0) continue;
     if (line.rfind('*', 0) == 0) {
       if (line.rfind("*Node", 0) == 0 && nodes.empty()) block = Block::nodes;
-      else if (line.find("type=C3D4") != std::string::npos && tets.empty()) block = Block::elements;
+      else if (line.find("type=" + type) != std::string::npos && elements.empty()) block = Block::elements;
       else block = Block::none;
       continue;
     }
@@ -72,21 +76,38 @@ preprocess::TetMesh read_abaqus_c3d4(const std::filesystem::path& path) {
       if (label != static_cast<long>(nodes.size()) + 1) throw std::runtime_error("unexpected node numbering");
       nodes.push_back(x);
     } else if (block == Block::elements) {
-      std::array<std::int32_t, 4> t{};
+      std::array<std::int32_t, N> t{};
       for (auto& n : t) {
-        in >> n;
+        if (!(in >> n)) throw std::runtime_error(path.string() + ": an element of " + type + " with too few nodes");
         --n;
       }
-      tets.push_back(t);
+      elements.push_back(t);
     }
   }
-  preprocess::TetMesh mesh;
-  mesh.nodes.resize(static_cast<Eigen::Index>(nodes.size()), 3);
+  nodes_out.resize(static_cast<Eigen::Index>(nodes.size()), 3);
   for (std::size_t i = 0; i < nodes.size(); ++i)
-    for (int c = 0; c < 3; ++c) mesh.nodes(static_cast<Eigen::Index>(i), c) = nodes[i][c];
+    for (int c = 0; c < 3; ++c) nodes_out(static_cast<Eigen::Index>(i), c) = nodes[i][static_cast<std::size_t>(c)];
+}
+
+}  // namespace
+
+preprocess::TetMesh read_abaqus_c3d4(const std::filesystem::path& path) {
+  preprocess::TetMesh mesh;
+  std::vector<std::array<std::int32_t, 4>> tets;
+  read_abaqus<4>(path, "C3D4", mesh.nodes, tets);
   mesh.tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
   for (std::size_t e = 0; e < tets.size(); ++e)
-    for (int a = 0; a < 4; ++a) mesh.tets(static_cast<Eigen::Index>(e), a) = tets[e][a];
+    for (int a = 0; a < 4; ++a) mesh.tets(static_cast<Eigen::Index>(e), a) = tets[e][static_cast<std::size_t>(a)];
+  return mesh;
+}
+
+Tet10Mesh read_abaqus_c3d10(const std::filesystem::path& path) {
+  Tet10Mesh mesh;
+  std::vector<std::array<std::int32_t, 10>> tets;
+  read_abaqus<10>(path, "C3D10", mesh.nodes, tets);
+  mesh.tets.resize(static_cast<Eigen::Index>(tets.size()), 10);
+  for (std::size_t e = 0; e < tets.size(); ++e)
+    for (int a = 0; a < 10; ++a) mesh.tets(static_cast<Eigen::Index>(e), a) = tets[e][static_cast<std::size_t>(a)];
   return mesh;
 }
 

@@ -1,0 +1,45 @@
+#pragma once
+// flexbody/format/tet10_element.hpp: the quadratic tetrahedron (10 nodes) of issue 15, beside the linear one
+// (tet4_element.hpp) for the same reason: fbprep assembles K̄ and M_s from it and the runtime's full-order body would
+// assemble them again from a body file's mesh.
+//
+// Node order (Abaqus C3D10, VTK_QUADRATIC_TETRA): the corners 0-3, then the mid-edge nodes of the edges (0,1), (1,2),
+// (2,0), (0,3), (1,3), (2,3). (gmsh's 10-node tetrahedron lists the last two edges the other way round, (2,3) before
+// (1,3): its meshes are reordered on import.) With barycentric coordinates L_0 = 1 − ξ_1 − ξ_2 − ξ_3, L_k = ξ_k:
+// N_i = L_i (2 L_i − 1) at a corner, N_ij = 4 L_i L_j at the middle of edge (i, j). The geometry is isoparametric:
+// x(ξ) = Σ_a N_a(ξ) x_a, so mid-edge nodes off their edge's middle curve the element.
+
+#include <Eigen/Core>
+
+#include <array>
+
+namespace flexbody::format {
+
+using Tet10Nodes = Eigen::Matrix<double, 10, 3>;  ///< one element's node coordinates, one row per node [m]
+
+/// The corners of each mid-edge node 4..9.
+inline constexpr std::array<std::array<int, 2>, 6> kTet10Edges{{{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}}};
+
+/// The 30 x 30 stiffness of an isotropic linear-elastic element [N/m], node-interleaved (row 3a + r: node a,
+/// direction r), by the 4-point Gauss rule of degree 2: exact for a straight-sided element (constant Jacobian, strains
+/// linear), Abaqus' rule for C3D10 otherwise.
+[[nodiscard]] Eigen::Matrix<double, 30, 30> tet10_stiffness(const Tet10Nodes& nodes, double lambda, double mu);
+
+/// The scalar consistent mass ρ ∫ N_a N_b dV (10 x 10) [kg]; the vector mass is this ⊗ I3. By a collapsed 5 x 5 x 5
+/// Gauss product rule (degree 9 in each direction): exact for straight-sided elements and for curved ones, whose
+/// Jacobian determinant is cubic.
+[[nodiscard]] Eigen::Matrix<double, 10, 10> tet10_mass(const Tet10Nodes& nodes, double density);
+
+/// The Jacobian determinant det ∂x/∂ξ at the 4 Gauss points, then at the 10 nodes [m³ per unit reference volume,
+/// 6 V for a straight element]: an element whose values are not all positive is inverted or folded by its
+/// curvature (issue 15's quality check).
+[[nodiscard]] Eigen::Matrix<double, 14, 1> tet10_jacobian_determinants(const Tet10Nodes& nodes);
+
+/// The shape functions' gradients ∂N_a/∂x (row a, 1/m) and det ∂x/∂ξ at reference point ξ (for stress recovery).
+struct Tet10Gradients {
+  Eigen::Matrix<double, 10, 3> gradients = Eigen::Matrix<double, 10, 3>::Zero();
+  double determinant = 0.0;
+};
+[[nodiscard]] Tet10Gradients tet10_gradients(const Tet10Nodes& nodes, const Eigen::Vector3d& xi);
+
+}  // namespace flexbody::format

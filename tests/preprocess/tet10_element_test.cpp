@@ -3,6 +3,7 @@
 // strain, a linear field is recovered exactly by a solve.
 #include "flexbody/format/tet10_element.hpp"
 #include "flexbody/preprocess/material.hpp"
+#include "flexbody/preprocess/tet10_assembly.hpp"
 #include "test_meshes.hpp"
 
 #include <Eigen/Dense>
@@ -12,6 +13,8 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace fmt10 = flexbody::format;
@@ -42,25 +45,16 @@ double volume(const Eigen::Matrix<double, 4, 3>& c) {
   return j.determinant() / 6.0;
 }
 
-// A C3D10 mesh assembled dense (the block's 771 DOFs): K with the 4-point rule, M consistent (⊗ I3).
+// A C3D10 mesh assembled by the pipeline's assemble_tet10, then made dense (the block's 771 DOFs) with M̄ = M_s ⊗ I3.
 struct Assembled {
   Eigen::MatrixXd stiffness, mass;
 };
-Assembled assemble(const flexbody::test::Tet10Mesh& mesh, const fp::Material& material) {
-  const Eigen::Index n = 3 * mesh.nodes.rows();
-  Assembled a{Eigen::MatrixXd::Zero(n, n), Eigen::MatrixXd::Zero(n, n)};
-  for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) {
-    fmt10::Tet10Nodes x;
-    for (int k = 0; k < 10; ++k) x.row(k) = mesh.nodes.row(mesh.tets(e, k));
-    const Eigen::Matrix<double, 30, 30> k_e = fmt10::tet10_stiffness(x, fp::lame_lambda(material), fp::shear_modulus(material));
-    const Eigen::Matrix<double, 10, 10> m_e = fmt10::tet10_mass(x, material.density);
-    for (int b = 0; b < 10; ++b)
-      for (int c = 0; c < 10; ++c) {
-        const Eigen::Index rb = 3 * mesh.tets(e, b), rc = 3 * mesh.tets(e, c);
-        a.stiffness.block<3, 3>(rb, rc) += k_e.block<3, 3>(3 * b, 3 * c);
-        a.mass.block<3, 3>(rb, rc).diagonal().array() += m_e(b, c);
-      }
-  }
+Assembled assemble(const fp::Tet10Mesh& mesh, const fp::Material& material) {
+  const fp::Tet10Matrices m = fp::assemble_tet10(mesh, material);
+  Assembled a{Eigen::MatrixXd(fp::full_from_upper(m.stiffness)), Eigen::MatrixXd::Zero(3 * mesh.node_count(), 3 * mesh.node_count())};
+  const Eigen::MatrixXd m_s(fp::full_from_upper(m.scalar_mass));
+  for (Eigen::Index i = 0; i < m_s.rows(); ++i)
+    for (Eigen::Index j = 0; j < m_s.cols(); ++j) a.mass.block<3, 3>(3 * i, 3 * j).diagonal().setConstant(m_s(i, j));
   return a;
 }
 
@@ -93,8 +87,8 @@ TEST(Tet10Element, ConsistentMassEqualsTheClosedForm) {
   EXPECT_NEAR(m.sum(), rho * v, 1e-14 * rho * v);
 }
 
-// A quadratic field u(x) = c + G x + (xᵀ H_r x)_r sampled at the nodes is reproduced at any point of a straight
-// element, and so is its gradient.
+// The gradient of a quadratic field u(x) = c + G x + (xᵀ H_r x)_r sampled at the nodes is reproduced exactly at any
+// point of a straight element (what the strains and stresses are made of).
 TEST(Tet10Element, QuadraticFieldsAreRepresentedExactly) {
   const fmt10::Tet10Nodes x = straight(some_corners());
   std::mt19937 random(7);
@@ -145,15 +139,58 @@ TEST(Tet10Element, RigidMotionsAreFreeOfStrain) {
   EXPECT_LT((k * rigid).cwiseAbs().maxCoeff(), 1e-13 * k.cwiseAbs().maxCoeff() * rigid.cwiseAbs().maxCoeff());
 }
 
-// det ∂x/∂ξ is 6V everywhere on a straight element; a mid-edge node pulled far past its edge folds the element,
-// which the check at the nodes sees.
+// det ∂x/∂ξ is 6V everywhere on a straight element. A mid-edge node moved from its edge's middle toward a corner, past
+// the quarter point, folds the element at that corner while every Gauss point stays positive: only the check at the
+// nodes sees it. A node pulled beyond the corner folds it at a Gauss point too.
 TEST(Tet10Element, JacobianDeterminantsFlagAFoldedElement) {
   const Eigen::Matrix<double, 4, 3> c = some_corners();
   fmt10::Tet10Nodes x = straight(c);
   const Eigen::Matrix<double, 14, 1> good = fmt10::tet10_jacobian_determinants(x);
   EXPECT_LT((good.array() - 6.0 * volume(c)).abs().maxCoeff(), 1e-13 * volume(c));
-  x.row(4) = c.row(1) + 0.6 * (c.row(1) - c.row(0));  // the middle of edge (0, 1) beyond corner 1
-  EXPECT_LE(fmt10::tet10_jacobian_determinants(x).minCoeff(), 0.0);
+  x.row(4) = c.row(0) + 0.2 * (c.row(1) - c.row(0));  // the "middle" of edge (0, 1) at a fifth of it
+  const Eigen::Matrix<double, 14, 1> folded = fmt10::tet10_jacobian_determinants(x);
+  EXPECT_GT(folded.head<4>().minCoeff(), 0.0);  // the Gauss points do not see it
+  EXPECT_LE(folded(4), 0.0);                    // corner 0 does
+  x.row(4) = c.row(1) + 0.6 * (c.row(1) - c.row(0));  // beyond corner 1
+  EXPECT_LE(fmt10::tet10_jacobian_determinants(x).head<4>().minCoeff(), 0.0);
+}
+
+// On a curved element (two mid-edge nodes moved off their edges) the mass sums to ρ ∫ det J dξ, the volume computed
+// here by an independent 8 x 8 x 8 collapsed Gauss rule from the Jacobian alone (det J is cubic: both rules are exact).
+TEST(Tet10Element, CurvedElementMassIsItsVolumeTimesDensity) {
+  fmt10::Tet10Nodes x = straight(some_corners());
+  x.row(5) += Eigen::RowVector3d(0.08, 0.05, -0.06);
+  x.row(9) += Eigen::RowVector3d(-0.04, 0.07, 0.05);
+  const double rho = 7850.0;
+  // Gauss-Legendre on [0, 1], 8 points, by Newton's iteration on P_8.
+  constexpr int n = 8;
+  double t[n], w[n];
+  for (int i = 0; i < n; ++i) {
+    double z = std::cos(3.141592653589793 * (i + 0.75) / (n + 0.5)), dp = 0.0;
+    for (int it = 0; it < 50; ++it) {
+      double p0 = 1.0, p1 = z;
+      for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      dp = n * (z * p1 - p0) / (z * z - 1.0);
+      z -= p1 / dp;
+    }
+    t[i] = 0.5 * (1.0 + z);
+    w[i] = 1.0 / ((1.0 - z * z) * dp * dp);  // 2/((1 − z²) P'²) on [−1, 1], halved
+  }
+  double volume_curved = 0.0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k) {
+        const double u = t[i], v = t[j], s = t[k];
+        const Eigen::Vector3d xi(u, v * (1.0 - u), s * (1.0 - u) * (1.0 - v));
+        volume_curved += w[i] * w[j] * w[k] * (1.0 - u) * (1.0 - u) * (1.0 - v) * fmt10::tet10_gradients(x, xi).determinant;
+      }
+  const double mass = fmt10::tet10_mass(x, rho).sum();
+  EXPECT_GT(std::abs(volume_curved - volume(some_corners())), 1e-3 * volume_curved);  // it is curved
+  EXPECT_NEAR(mass, rho * volume_curved, 1e-13 * rho * volume_curved);
 }
 
 // Abaqus 2021's C3D10 matrices of the 4 x 1 x 1 m block (257 nodes, 122 elements; tests/data/abaqus-block). Abaqus
@@ -161,7 +198,7 @@ TEST(Tet10Element, JacobianDeterminantsFlagAFoldedElement) {
 // 1.8e-15 (stiffness) and 2.4e-15 (mass) of the largest entry, which also checks the node order.
 TEST(Tet10Element, AbaqusBlockStiffnessAndMass) {
   const auto dir = flexbody::test::data_dir() / "abaqus-block";
-  const flexbody::test::Tet10Mesh mesh = flexbody::test::read_abaqus_c3d10(dir / "blockC3D10.inp");
+  const fp::Tet10Mesh mesh = flexbody::test::read_abaqus_c3d10(dir / "blockC3D10.inp");
   ASSERT_EQ(mesh.tets.rows(), 122);
   const Assembled a = assemble(mesh, kAbaqusSteel);
   const Eigen::Index n = a.stiffness.rows();
@@ -180,7 +217,7 @@ TEST(Tet10Element, AbaqusBlockStiffnessAndMass) {
 // in every element. The bounds leave the solve's rounding (condition of K_ii) room.
 TEST(Tet10Element, PatchTestRecoversALinearFieldInside) {
   const auto dir = flexbody::test::data_dir() / "abaqus-block";
-  const flexbody::test::Tet10Mesh mesh = flexbody::test::read_abaqus_c3d10(dir / "blockC3D10.inp");
+  const fp::Tet10Mesh mesh = flexbody::test::read_abaqus_c3d10(dir / "blockC3D10.inp");
   const Assembled a = assemble(mesh, kAbaqusSteel);
   Eigen::Matrix3d g;
   g << 1e-3, 2e-4, -3e-4, 5e-4, -1e-3, 4e-4, -2e-4, 3e-4, 7e-4;
@@ -215,4 +252,21 @@ TEST(Tet10Element, PatchTestRecoversALinearFieldInside) {
               inside.size(), error, strain_error / g.cwiseAbs().maxCoeff());
   EXPECT_LT(error, 1e-10);
   EXPECT_LT(strain_error, 1e-9 * g.cwiseAbs().maxCoeff());
+}
+
+// The assembly refuses a mesh with a folded element, naming it, rather than assembling a negative volume.
+TEST(Tet10Element, AssemblyRefusesAFoldedElement) {
+  fp::Tet10Mesh mesh;
+  const Eigen::Matrix<double, 4, 3> c = some_corners();
+  mesh.nodes = straight(c);
+  mesh.tets.resize(1, 10);
+  for (int a = 0; a < 10; ++a) mesh.tets(0, a) = a;
+  EXPECT_NO_THROW((void)fp::assemble_tet10(mesh, kAbaqusSteel));
+  mesh.nodes.row(4) = c.row(0) + 0.2 * (c.row(1) - c.row(0));  // folded at corner 0 only
+  try {
+    (void)fp::assemble_tet10(mesh, kAbaqusSteel);
+    FAIL() << "a folded element was assembled";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("element 0"), std::string::npos) << e.what();
+  }
 }

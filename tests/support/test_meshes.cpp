@@ -101,8 +101,8 @@ preprocess::TetMesh read_abaqus_c3d4(const std::filesystem::path& path) {
   return mesh;
 }
 
-Tet10Mesh read_abaqus_c3d10(const std::filesystem::path& path) {
-  Tet10Mesh mesh;
+preprocess::Tet10Mesh read_abaqus_c3d10(const std::filesystem::path& path) {
+  preprocess::Tet10Mesh mesh;
   std::vector<std::array<std::int32_t, 10>> tets;
   read_abaqus<10>(path, "C3D10", mesh.nodes, tets);
   mesh.tets.resize(static_cast<Eigen::Index>(tets.size()), 10);

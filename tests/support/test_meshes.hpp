@@ -6,7 +6,6 @@
 #include "flexbody/preprocess/tet4_element.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
 
-#include <cstdint>
 #include <filesystem>
 #include <string>
 
@@ -26,11 +25,7 @@ namespace flexbody::test {
 [[nodiscard]] preprocess::TetMesh read_abaqus_c3d4(const std::filesystem::path& path);
 
 /// Nodes and C3D10 elements of an Abaqus .inp file, node order as in the file and in tet10_element.hpp.
-struct Tet10Mesh {
-  preprocess::RowMatrixX3d nodes;
-  Eigen::Matrix<std::int32_t, Eigen::Dynamic, 10, Eigen::RowMajor> tets;
-};
-[[nodiscard]] Tet10Mesh read_abaqus_c3d10(const std::filesystem::path& path);
+[[nodiscard]] preprocess::Tet10Mesh read_abaqus_c3d10(const std::filesystem::path& path);
 
 /// A symmetric matrix exported by Abaqus (*_STIF1.mtx, *_MASS1.mtx: "row col value", 1-based), full.
 [[nodiscard]] preprocess::SparseMatrix read_abaqus_matrix(const std::filesystem::path& path, Eigen::Index size);

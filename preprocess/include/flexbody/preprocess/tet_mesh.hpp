@@ -29,6 +29,17 @@ struct TetMesh {
   [[nodiscard]] Eigen::Index dof_count() const { return 3 * nodes.rows(); }
 };
 
+/// A quadratic tetrahedral mesh (issue 15): per element its 4 corners, then the middles of the edges (0,1), (1,2),
+/// (2,0), (0,3), (1,3), (2,3) (format/tet10_element.hpp). Node coordinates in metres, 0-based indices.
+struct Tet10Mesh {
+  RowMatrixX3d nodes;
+  Eigen::Matrix<std::int32_t, Eigen::Dynamic, 10, Eigen::RowMajor> tets;
+
+  [[nodiscard]] Eigen::Index node_count() const { return nodes.rows(); }
+  [[nodiscard]] Eigen::Index element_count() const { return tets.rows(); }
+  [[nodiscard]] Eigen::Index dof_count() const { return 3 * nodes.rows(); }
+};
+
 /// Corner coordinates of tetrahedron e (row a = node a).
 [[nodiscard]] inline Eigen::Matrix<double, 4, 3> element_corners(const TetMesh& mesh, Eigen::Index e) {
   Eigen::Matrix<double, 4, 3> corners;

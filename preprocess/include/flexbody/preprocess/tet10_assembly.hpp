@@ -1,0 +1,26 @@
+#pragma once
+// flexbody/preprocess/tet10_assembly.hpp: quadratic tetrahedral meshes (issue 15) and their K̄ and M_s.
+//
+// A first step: the assembly is serial, by triplets, and the mesh comes from a linear one with straight edges.
+// fbprep's gmsh meshing with curved boundary nodes (--order 2), the body file's quadratic mesh and the stages after
+// assembly do not use it yet.
+
+#include "flexbody/preprocess/material.hpp"
+#include "flexbody/preprocess/tet_mesh.hpp"
+
+namespace flexbody::preprocess {
+
+/// The linear mesh with a node added at the middle of each edge (shared by the elements around the edge): the same
+/// straight-sided elements, quadratic. The corner nodes keep their indices; edge nodes follow in order of first use.
+[[nodiscard]] Tet10Mesh quadratic_mesh(const TetMesh& linear);
+
+struct Tet10Matrices {
+  SparseMatrix stiffness;    ///< K̄ (3 n_n square, node-interleaved, upper triangle) [N/m]
+  SparseMatrix scalar_mass;  ///< M_s (n_n square, upper triangle; M̄ = M_s ⊗ I3), consistent [kg]
+};
+
+/// K̄ (4-point rule) and the consistent M_s of every element (format/tet10_element.hpp). Throws std::invalid_argument
+/// naming the first element whose Jacobian determinant is not positive at a Gauss point or a node.
+[[nodiscard]] Tet10Matrices assemble_tet10(const Tet10Mesh& mesh, const Material& material);
+
+}  // namespace flexbody::preprocess

@@ -97,7 +97,16 @@ Eigen::Matrix<double, 30, 30> tet10_stiffness(const Tet10Nodes& nodes, double la
   return k;
 }
 
-Eigen::Matrix<double, 10, 10> tet10_mass(const Tet10Nodes& nodes, double density) {
+Eigen::Matrix<double, 10, 10> tet10_mass(const Tet10Nodes& nodes, double density, Tet10MassRule rule) {
+  if (rule == Tet10MassRule::four_point) {
+    Eigen::Matrix<double, 10, 10> m = Eigen::Matrix<double, 10, 10>::Zero();
+    for (const Eigen::Vector3d& xi : gauss_points()) {
+      const double det = (nodes.transpose() * reference_derivatives(xi)).determinant();
+      const Eigen::Matrix<double, 10, 1> n = shape_functions(xi);
+      m.noalias() += (density * kGaussWeight * det) * n * n.transpose();
+    }
+    return m;
+  }
   // Collapsed (Duffy) product rule: ξ_1 = u, ξ_2 = v (1 − u), ξ_3 = w (1 − u)(1 − v), dξ = (1 − u)² (1 − v) du dv dw.
   const Legendre5& g = legendre5();
   Eigen::Matrix<double, 10, 10> m = Eigen::Matrix<double, 10, 10>::Zero();

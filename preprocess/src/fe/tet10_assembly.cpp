@@ -33,7 +33,7 @@ Tet10Mesh quadratic_mesh(const TetMesh& linear) {
   return mesh;
 }
 
-Tet10Matrices assemble_tet10(const Tet10Mesh& mesh, const Material& material) {
+Tet10Matrices assemble_tet10(const Tet10Mesh& mesh, const Material& material, format::Tet10MassRule rule) {
   check_material(material);
   const double lambda = lame_lambda(material), mu = shear_modulus(material);
   std::vector<Eigen::Triplet<double, std::int64_t>> k_entries, m_entries;
@@ -46,7 +46,7 @@ Tet10Matrices assemble_tet10(const Tet10Mesh& mesh, const Material& material) {
       throw std::invalid_argument("quadratic element " + std::to_string(e) + " is inverted or folded: its Jacobian "
                                   "determinant is not positive at every Gauss point and node");
     const Eigen::Matrix<double, 30, 30> k = format::tet10_stiffness(x, lambda, mu);
-    const Eigen::Matrix<double, 10, 10> m = format::tet10_mass(x, material.density);
+    const Eigen::Matrix<double, 10, 10> m = format::tet10_mass(x, material.density, rule);
     for (int b = 0; b < 10; ++b)
       for (int a = 0; a < 10; ++a) {
         const std::int64_t nb = mesh.tets(e, b), na = mesh.tets(e, a);

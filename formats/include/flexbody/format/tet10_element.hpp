@@ -25,10 +25,19 @@ inline constexpr std::array<std::array<int, 2>, 6> kTet10Edges{{{0, 1}, {1, 2}, 
 /// linear), Abaqus' rule for C3D10 otherwise.
 [[nodiscard]] Eigen::Matrix<double, 30, 30> tet10_stiffness(const Tet10Nodes& nodes, double lambda, double mu);
 
-/// The scalar consistent mass ρ ∫ N_a N_b dV (10 x 10) [kg]; the vector mass is this ⊗ I3. By a collapsed 5 x 5 x 5
-/// Gauss product rule (degree 9 in each direction): exact for straight-sided elements and for curved ones, whose
-/// Jacobian determinant is cubic.
-[[nodiscard]] Eigen::Matrix<double, 10, 10> tet10_mass(const Tet10Nodes& nodes, double density);
+/// How the consistent mass ρ ∫ N_a N_b dV is integrated.
+enum class Tet10MassRule {
+  /// A collapsed 5 x 5 x 5 Gauss product rule (degree 9 in each direction): exact for straight-sided elements and for
+  /// curved ones, whose Jacobian determinant is cubic.
+  exact,
+  /// The stiffness's 4-point rule of degree 2, which N_a N_b (degree 4) exceeds: what CalculiX's C3D10 does
+  /// (tests/preprocess/calculix_test.cpp), for comparing like with like.
+  four_point,
+};
+
+/// The scalar consistent mass ρ ∫ N_a N_b dV (10 x 10) [kg]; the vector mass is this ⊗ I3.
+[[nodiscard]] Eigen::Matrix<double, 10, 10> tet10_mass(const Tet10Nodes& nodes, double density,
+                                                       Tet10MassRule rule = Tet10MassRule::exact);
 
 /// The Jacobian determinant det ∂x/∂ξ at the 4 Gauss points, then at the 10 nodes [m³ per unit reference volume,
 /// 6 V for a straight element]: an element whose values are not all positive is inverted or folded by its

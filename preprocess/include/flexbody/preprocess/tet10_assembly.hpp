@@ -5,6 +5,7 @@
 // fbprep's gmsh meshing with curved boundary nodes (--order 2), the body file's quadratic mesh and the stages after
 // assembly do not use it yet.
 
+#include "flexbody/format/tet10_element.hpp"
 #include "flexbody/preprocess/material.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
 
@@ -19,8 +20,10 @@ struct Tet10Matrices {
   SparseMatrix scalar_mass;  ///< M_s (n_n square, upper triangle; M̄ = M_s ⊗ I3), consistent [kg]
 };
 
-/// K̄ (4-point rule) and the consistent M_s of every element (format/tet10_element.hpp). Throws std::invalid_argument
-/// naming the first element whose Jacobian determinant is not positive at a Gauss point or a node.
-[[nodiscard]] Tet10Matrices assemble_tet10(const Tet10Mesh& mesh, const Material& material);
+/// K̄ (4-point rule) and the consistent M_s of every element (format/tet10_element.hpp), integrated by `rule`.
+/// Throws std::invalid_argument naming the first element whose Jacobian determinant is not positive at a Gauss point
+/// or a node.
+[[nodiscard]] Tet10Matrices assemble_tet10(const Tet10Mesh& mesh, const Material& material,
+                                           format::Tet10MassRule rule = format::Tet10MassRule::exact);
 
 }  // namespace flexbody::preprocess

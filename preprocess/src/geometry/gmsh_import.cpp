@@ -1,5 +1,6 @@
 #include "flexbody/preprocess/gmsh_import.hpp"
 
+#include "flexbody/format/tet10_element.hpp"
 #include "flexbody/preprocess/mesh_topology.hpp"
 #include "gmsh_session.hpp"
 #include "step_unit.hpp"
@@ -13,6 +14,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <stdexcept>
 #include <system_error>
 #include <unordered_map>
@@ -20,7 +22,9 @@
 namespace flexbody::preprocess {
 namespace {
 
-constexpr int kGmshTet4 = 4;  // gmsh element type of the 4-node tetrahedron
+constexpr int kGmshTet4 = 4;     // gmsh element type of the 4-node tetrahedron
+constexpr int kGmshTet10 = 11;   // and of the 10-node one
+constexpr int kGmshTriangle6 = 9;  // the 6-node triangle of a second-order surface mesh
 // Refuse a mesh size that would give more tetrahedra than this: 2e7 tets are ~1e7 DOFs, several times
 // what fits in 24 GiB, and such a request is nearly always a unit mistake.
 constexpr double kMaxEstimatedElements = 2e7;
@@ -145,63 +149,104 @@ void check_readable(const std::filesystem::path& path) {
   std::fclose(probe);
 }
 
-// The tetrahedra, and for every node tag the node's index in them (-1: not used by a tetrahedron).
+// The tetrahedra, and for every node tag the node's index in them (-1: not used by a tetrahedron). For second-order
+// meshes also the quadratic mesh, whose first nodes are the linear mesh's (the corners, same indices) and whose
+// mid-edge nodes follow; gmsh's 10-node order lists the edges (2,3) and (1,3) the other way round from
+// format/tet10_element.hpp's, so its last two nodes are swapped.
 struct GmshTetrahedra {
   TetMesh mesh;
   std::unordered_map<std::size_t, std::int32_t> index_of_tag;
+  std::optional<Tet10Mesh> quadratic;
 };
 
-GmshTetrahedra tetrahedra_from_gmsh(const std::string& name) {
+GmshTetrahedra tetrahedra_from_gmsh(const std::string& name, int order) {
+  const int type = order == 2 ? kGmshTet10 : kGmshTet4, per = order == 2 ? 10 : 4;
   std::vector<std::size_t> node_tags;
   std::vector<double> coordinates, parametric;
   gmsh::model::mesh::getNodes(node_tags, coordinates, parametric, -1, -1, /*includeBoundary=*/true, false);
   std::vector<std::size_t> element_tags, element_nodes;
-  gmsh::model::mesh::getElementsByType(kGmshTet4, element_tags, element_nodes);
+  gmsh::model::mesh::getElementsByType(type, element_tags, element_nodes);
   if (element_tags.empty()) {
     std::vector<int> types;
     gmsh::model::mesh::getElementTypes(types);
-    const bool quadratic = std::find(types.begin(), types.end(), 11) != types.end();
-    throw std::runtime_error(fmt::format("{}: the mesh has no linear tetrahedra{}", name,
-                                         quadratic ? " (it has quadratic ones; use --order 1 meshes)" : ""));
+    const int other = order == 2 ? kGmshTet4 : kGmshTet10;
+    const bool has_other = std::find(types.begin(), types.end(), other) != types.end();
+    throw std::runtime_error(fmt::format("{}: the mesh has no {} tetrahedra{}", name, order == 2 ? "quadratic" : "linear",
+                                         has_other ? fmt::format(" (it has {} ones; use --order {} meshes)",
+                                                                 order == 2 ? "linear" : "quadratic", order) : ""));
+  }
+  // Corners get indices in the order of gmsh's node list (as linear meshes always had), mid-edge nodes after them.
+  enum : char { unused = 0, corner = 1, middle = 2 };
+  std::unordered_map<std::size_t, char> role;
+  role.reserve(node_tags.size());
+  for (std::size_t k = 0; k < element_nodes.size(); ++k) {
+    char& r = role[element_nodes[k]];
+    r = std::max<char>(r, static_cast<int>(k % static_cast<std::size_t>(per)) < 4 ? corner : middle);
   }
   std::unordered_map<std::size_t, std::int32_t> index;
-  index.reserve(node_tags.size());
-  TetMesh mesh;
-  mesh.nodes.resize(static_cast<Eigen::Index>(node_tags.size()), 3);
-  for (std::size_t k = 0; k < node_tags.size(); ++k) {
-    index.emplace(node_tags[k], static_cast<std::int32_t>(k));
-    for (int c = 0; c < 3; ++c) mesh.nodes(static_cast<Eigen::Index>(k), c) = coordinates[3 * k + c];
+  std::int32_t corners = 0, middles = 0;
+  for (const std::size_t tag : node_tags) {  // a tag listed twice keeps its first index
+    const auto it = role.find(tag);
+    if (it != role.end() && it->second == corner && index.emplace(tag, corners).second) ++corners;
   }
-  mesh.tets.resize(static_cast<Eigen::Index>(element_tags.size()), 4);
-  for (std::size_t e = 0; e < element_tags.size(); ++e)
-    for (int a = 0; a < 4; ++a) {
-      const auto it = index.find(element_nodes[4 * e + a]);
-      if (it == index.end())
-        throw std::runtime_error(fmt::format("{}: tetrahedron {} refers to missing node {}", name, element_tags[e],
-                                             element_nodes[4 * e + a]));
-      mesh.tets(static_cast<Eigen::Index>(e), a) = it->second;
-    }
-  const std::vector<std::int32_t> renumbered = remove_unused_nodes(mesh);
-  for (auto& [tag, k] : index) k = renumbered[static_cast<std::size_t>(k)];
-  return {std::move(mesh), std::move(index)};
+  for (const std::size_t tag : node_tags) {
+    const auto it = role.find(tag);
+    if (it != role.end() && it->second == middle && index.emplace(tag, corners + middles).second) ++middles;
+  }
+  RowMatrixX3d nodes(corners + middles, 3);  // gmsh may list a node twice (with its boundary entities): same place
+  for (std::size_t k = 0; k < node_tags.size(); ++k) {
+    const auto it = index.find(node_tags[k]);
+    if (it == index.end()) continue;
+    for (int c = 0; c < 3; ++c) nodes(it->second, c) = coordinates[3 * k + static_cast<std::size_t>(c)];
+  }
+  const auto elements = static_cast<Eigen::Index>(element_tags.size());
+  auto index_of = [&](Eigen::Index e, int local) {
+    const std::size_t tag = element_nodes[static_cast<std::size_t>(per * e + local)];
+    const auto it = index.find(tag);
+    if (it == index.end())
+      throw std::runtime_error(fmt::format("{}: tetrahedron {} refers to missing node {}", name,
+                                           element_tags[static_cast<std::size_t>(e)], tag));
+    return it->second;
+  };
+  GmshTetrahedra out;
+  out.mesh.nodes = nodes.topRows(corners);
+  out.mesh.tets.resize(elements, 4);
+  for (Eigen::Index e = 0; e < elements; ++e)
+    for (int a = 0; a < 4; ++a) out.mesh.tets(e, a) = index_of(e, a);
+  if (order == 2) {
+    constexpr int kFromGmsh[10] = {0, 1, 2, 3, 4, 5, 6, 7, 9, 8};  // our node k is gmsh's node kFromGmsh[k]
+    Tet10Mesh quadratic;
+    quadratic.nodes = std::move(nodes);
+    quadratic.tets.resize(elements, 10);
+    for (Eigen::Index e = 0; e < elements; ++e)
+      for (int k = 0; k < 10; ++k) quadratic.tets(e, k) = index_of(e, kFromGmsh[k]);
+    out.quadratic = std::move(quadratic);
+  }
+  for (auto& [tag, k] : index)
+    if (k >= corners) k = -1;  // the surfaces' triangles are read by their corners
+  out.index_of_tag = std::move(index);
+  return out;
 }
 
 constexpr int kGmshTriangle3 = 2;
 
-// Every surface entity's triangles in the tetrahedral mesh's numbering, with its physical groups.
-std::vector<CadSurface> cad_surfaces(const std::unordered_map<std::size_t, std::int32_t>& index_of_tag) {
+// Every surface entity's triangles in the tetrahedral mesh's numbering, with its physical groups. In a second-order
+// mesh its 6-node triangles, by their corners (the linear mesh's).
+std::vector<CadSurface> cad_surfaces(const std::unordered_map<std::size_t, std::int32_t>& index_of_tag, int order) {
+  const int type = order == 2 ? kGmshTriangle6 : kGmshTriangle3;
+  const std::size_t per = order == 2 ? 6 : 3;
   gmsh::vectorpair entities;
   gmsh::model::getEntities(entities, 2);
   std::vector<CadSurface> surfaces;
   for (const auto& [dim, tag] : entities) {
     std::vector<std::size_t> element_tags, node_tags;
-    gmsh::model::mesh::getElementsByType(kGmshTriangle3, element_tags, node_tags, tag);
+    gmsh::model::mesh::getElementsByType(type, element_tags, node_tags, tag);
     std::vector<std::array<std::int32_t, 3>> kept;
     for (std::size_t t = 0; t < element_tags.size(); ++t) {
       std::array<std::int32_t, 3> tri{};
       bool ok = true;
       for (int a = 0; a < 3; ++a) {
-        const auto it = index_of_tag.find(node_tags[3 * t + a]);
+        const auto it = index_of_tag.find(node_tags[per * t + static_cast<std::size_t>(a)]);
         ok = ok && it != index_of_tag.end() && it->second >= 0;
         if (ok) tri[a] = it->second;
       }
@@ -274,8 +319,9 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
   ImportedMesh result;
   result.format = input_format_of(path);
   check_readable(path);
-  if (options.order != 1)
-    throw std::invalid_argument(fmt::format("--order {}: only linear tetrahedra (--order 1) are implemented", options.order));
+  if (options.order != 1 && options.order != 2)
+    throw std::invalid_argument(fmt::format("--order {}: the element order is 1 (linear tetrahedra) or 2 (quadratic)",
+                                            options.order));
   if (!(options.mesh_size >= 0.0) || !std::isfinite(options.mesh_size))
     throw std::invalid_argument(fmt::format("--mesh-size must be a positive length, got {}", options.mesh_size));
   const UnitDecision unit = decide_unit(path, result.format, options.unit, options.unit_source);
@@ -328,14 +374,22 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
     if (options.progress) options.progress(fmt::format("meshing {} volume(s), element size {:.4g} m", volumes.size(),
                                                        result.mesh_size_m));
     detail::SilencedStdStreams quiet;
-    detail::gmsh_call(name + ": meshing failed", [] { gmsh::model::mesh::generate(3); });
+    detail::gmsh_call(name + ": meshing failed", [&] {
+      gmsh::model::mesh::generate(3);
+      if (options.order == 2) {  // mid-edge nodes of boundary edges placed on the CAD surfaces (curved elements)
+        gmsh::option::setNumber("Mesh.SecondOrderLinear", 0);
+        gmsh::model::mesh::setOrder(2);
+      }
+    });
   });
   detail::gmsh_call(name, [&] {
-    GmshTetrahedra tetrahedra = tetrahedra_from_gmsh(name);
+    GmshTetrahedra tetrahedra = tetrahedra_from_gmsh(name, options.order);
     result.mesh = std::move(tetrahedra.mesh);
-    result.surfaces = cad_surfaces(tetrahedra.index_of_tag);
+    result.quadratic = std::move(tetrahedra.quadratic);
+    result.surfaces = cad_surfaces(tetrahedra.index_of_tag, options.order);
   });
   result.mesh.nodes *= unit.gmsh_to_metres;
+  if (result.quadratic) result.quadratic->nodes *= unit.gmsh_to_metres;
   measure(result.surfaces, result.mesh.nodes);
 
   const MeshComponents components = connected_components(result.mesh);
@@ -357,6 +411,19 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
           "where gmsh and OpenCASCADE work to fixed absolute tolerances: write a part this small in mm and pass "
           "--unit mm", e.what(), across));
     throw;
+  }
+  if (result.quadratic) {  // curved elements: det ∂x/∂ξ > 0 at every Gauss point and node (tet10_element.hpp)
+    Eigen::Index folded = 0, first = -1;
+    for (Eigen::Index e = 0; e < result.quadratic->element_count(); ++e) {
+      format::Tet10Nodes x;
+      for (int a = 0; a < 10; ++a) x.row(a) = result.quadratic->nodes.row(result.quadratic->tets(e, a));
+      if (!(format::tet10_jacobian_determinants(x).minCoeff() > 0.0) && folded++ == 0) first = e;
+    }
+    if (folded > 0)
+      throw std::runtime_error(fmt::format("{}: {} of {} quadratic tetrahedra are folded by their curved edges (Jacobian "
+                                           "determinant not positive at a Gauss point or node; the first is element "
+                                           "{}): use a smaller --mesh-size where the surface curves", name, folded,
+                                           result.quadratic->element_count(), first));
   }
   return result;
 }

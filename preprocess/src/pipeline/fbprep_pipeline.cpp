@@ -96,6 +96,10 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.material = options.material;
 
   // 1. Geometry and mesh.
+  if (options.mesh.order != 1)
+    throw std::invalid_argument(fmt::format("element order {}: fbprep's pipeline takes linear tetrahedra (order 1) only; "
+                                            "quadratic ones are meshed and assembled by the library but not yet reduced "
+                                            "or written (issue 15)", options.mesh.order));
   StageTimer mesh_timer(summary, "mesh");
   GmshImportOptions mesh_options = options.mesh;
   mesh_options.progress = options.progress;

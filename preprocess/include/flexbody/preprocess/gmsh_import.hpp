@@ -30,14 +30,18 @@ struct GmshImportOptions {
   /// Target element size in the unit the geometry is read in (0: one twenty-fifth of the
   /// bounding-box diagonal).
   double mesh_size = 0.0;
-  /// Element order; 1 (linear tetrahedra) is the only one implemented.
+  /// Element order: 1 (linear tetrahedra) or 2 (quadratic, ImportedMesh::quadratic; fbprep's pipeline does not take
+  /// them yet, issue 15).
   int order = 1;
   /// Called with a short message before each long step.
   std::function<void(const std::string&)> progress;
 };
 
 struct ImportedMesh {
-  TetMesh mesh;  ///< nodes in metres, in the input's frame
+  TetMesh mesh;  ///< nodes in metres, in the input's frame; with order 2 the quadratic mesh's corners
+  /// With order 2: the 10-node tetrahedra, their mid-edge nodes on the CAD surfaces where the edge lies on one
+  /// (curved elements), nodes numbered as `mesh`'s first, each element's Jacobian checked positive.
+  std::optional<Tet10Mesh> quadratic;
   InputFormat format = InputFormat::step;
   LengthUnit unit = LengthUnit::metre;  ///< the unit the geometry was read in (and every input length)
   std::string unit_reason;              ///< why that unit (for the report)
@@ -52,7 +56,7 @@ struct ImportedMesh {
   std::vector<CadSurface> surfaces;
 };
 
-/// Imports `path` with gmsh and returns its linear tetrahedra in metres. Throws std::runtime_error
+/// Imports `path` with gmsh and returns its tetrahedra in metres. Throws std::runtime_error
 /// with one line naming the file and the problem: unreadable file, no volume, several disconnected
 /// solids, inverted or zero-volume elements, a .msh without tetrahedra, no unit for a BREP, .geo or
 /// .msh; std::invalid_argument for a unit that cannot be applied (IGES, a STEP unit fbprep cannot read).

@@ -100,7 +100,8 @@ int prep_command(int argc, char** argv) {
     if (given("--fmax") && !(std::isfinite(fmax) && fmax > 0.0))
       throw std::invalid_argument(fmt::format("--fmax must be a positive frequency in Hz, got {}", fmax));
     if (order != 1)
-      throw std::invalid_argument(fmt::format("--order {}: only linear tetrahedra (--order 1) are implemented", order));
+      throw std::invalid_argument(fmt::format("--order {}: fbprep takes linear tetrahedra only (--order 1); quadratic ones "
+                                              "are not yet reduced or written (issue 15)", order));
     if (!from_spec || given("--mesh-size")) {
       options.mesh.mesh_size = mesh_size;
       record("mesh_size", fmt::format("{}", mesh_size));

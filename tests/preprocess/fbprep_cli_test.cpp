@@ -336,7 +336,7 @@ TEST(FbprepCli, RefusesBadInputsWithOneLine) {
   expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,nu=0.3", "rho is missing");
   expect_refusal(dir, "input-cube.geo --unit furlong", "--unit 'furlong' is not one of mm, cm, m, in");
   expect_refusal(dir, "input-cube.geo --unit m --eigensolver lapack", "'lapack' is unknown; use arpack or spectra");
-  expect_refusal(dir, "input-cube.geo --unit m --order 2", "only linear tetrahedra (--order 1) are implemented");
+  expect_refusal(dir, "input-cube.geo --unit m --order 2", "fbprep takes linear tetrahedra only (--order 1)");
   expect_refusal(dir, "input-cube.txt --unit m", "unsupported file type '.txt'");
   expect_refusal(dir, "input-cube.geo --unit m --modes 100000", "--modes 100000: at most");
   // A bracket in mm read as metres with a size meant in mm: a unit mistake, refused before meshing.

@@ -37,7 +37,7 @@ fp::ImportedMesh cylinder(int order) {
 
 // The quadratic mesh's corners are the linear mesh's nodes; every mid-edge node on the lateral surface lies on the
 // cylinder (to gmsh's geometric tolerance), where a straight edge's middle would lie inside it by up to
-// r (1 − cos(h/2r)) ≈ 2 mm here; and the curved mesh's volume (the mass of ρ = 1) is within 5e-5 of πr²L, where the
+// r (1 − cos(h/2r)) ≈ 1 mm here; and the curved mesh's volume (the mass of ρ = 1) is within 5e-5 of πr²L, where the
 // linear mesh lacks its chords' segments (measured: 2.0e-2 linear, 3.1e-5 quadratic; mid-edge nodes 7e-18 m off).
 TEST(GmshOrder2, MidEdgeNodesLieOnTheCurvedSurface) {
   const fp::ImportedMesh linear = cylinder(1);

@@ -172,8 +172,9 @@ GmshTetrahedra tetrahedra_from_gmsh(const std::string& name, int order) {
     const int other = order == 2 ? kGmshTet4 : kGmshTet10;
     const bool has_other = std::find(types.begin(), types.end(), other) != types.end();
     throw std::runtime_error(fmt::format("{}: the mesh has no {} tetrahedra{}", name, order == 2 ? "quadratic" : "linear",
-                                         has_other ? fmt::format(" (it has {} ones; use --order {} meshes)",
-                                                                 order == 2 ? "linear" : "quadratic", order) : ""));
+                                         has_other ? fmt::format(" (it has {} ones: ask for order {} to read them)",
+                                                                 order == 2 ? "linear" : "quadratic", order == 2 ? 1 : 2)
+                                                   : ""));
   }
   // Corners get indices in the order of gmsh's node list (as linear meshes always had), mid-edge nodes after them.
   enum : char { unused = 0, corner = 1, middle = 2 };
@@ -181,7 +182,11 @@ GmshTetrahedra tetrahedra_from_gmsh(const std::string& name, int order) {
   role.reserve(node_tags.size());
   for (std::size_t k = 0; k < element_nodes.size(); ++k) {
     char& r = role[element_nodes[k]];
-    r = std::max<char>(r, static_cast<int>(k % static_cast<std::size_t>(per)) < 4 ? corner : middle);
+    const char now = static_cast<int>(k % static_cast<std::size_t>(per)) < 4 ? corner : middle;
+    if (r != unused && r != now)  // only a malformed .msh can do this
+      throw std::runtime_error(fmt::format("{}: node {} is a corner of one tetrahedron and a mid-edge node of another",
+                                           name, element_nodes[k]));
+    r = now;
   }
   std::unordered_map<std::size_t, std::int32_t> index;
   std::int32_t corners = 0, middles = 0;
@@ -422,8 +427,9 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
     if (folded > 0)
       throw std::runtime_error(fmt::format("{}: {} of {} quadratic tetrahedra are folded by their curved edges (Jacobian "
                                            "determinant not positive at a Gauss point or node; the first is element "
-                                           "{}): use a smaller --mesh-size where the surface curves", name, folded,
-                                           result.quadratic->element_count(), first));
+                                           "{}){}", name, folded, result.quadratic->element_count(), first,
+                                           result.meshed_here ? ": use a smaller --mesh-size where the surface curves"
+                                                              : ""));
   }
   return result;
 }

@@ -125,8 +125,8 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
     if (mesh["order"]) {
       options.mesh.order = r.count(mesh["order"], "mesh order");
       if (options.mesh.order != 1)
-        r.fail(mesh["order"], fmt::format("mesh order {}: only linear tetrahedra (order 1) are implemented",
-                                          options.mesh.order));
+        r.fail(mesh["order"], fmt::format("mesh order {}: fbprep takes linear tetrahedra only (order 1); quadratic ones "
+                                          "are not yet reduced or written (issue 15)", options.mesh.order));
     }
     recorded.emplace_back("mesh_size", fmt::format("{}", options.mesh.mesh_size));
   }

@@ -179,14 +179,19 @@ BodyMesh read_mesh(const Location& root) {
   BodyMesh mesh;
   const detail::Table<double> nodes = detail::read_double_matrix(group, "nodes");
   expect_shape(group, "nodes", nodes, std::nullopt, 3, "n_n");
+  mesh.element_order = detail::read_int_attribute(group, "element_order");
+  if (mesh.element_order != 1 && mesh.element_order != 2)
+    group.fail(group.child("element_order") + " is " + std::to_string(mesh.element_order) +
+               ", expected 1 (linear 4-node tetrahedra) or 2 (quadratic 10-node tetrahedra)");
   const detail::Table<std::int32_t> tets = detail::read_int_matrix(group, "tets");
-  expect_shape(group, "tets", tets, std::nullopt, 4, "n_e");
+  expect_shape(group, "tets", tets, std::nullopt,
+               static_cast<std::size_t>(BodyMesh::nodes_per_element(mesh.element_order)),
+               mesh.element_order == 2 ? "n_e (element_order 2)" : "n_e (element_order 1)");
   const detail::Table<std::int32_t> triangles = detail::read_int_matrix(group, "surface_triangles");
   expect_shape(group, "surface_triangles", triangles, std::nullopt, 3, "n_t");
   mesh.nodes = to_matrix<RowMatrixX3d>(nodes);
-  mesh.tets = to_matrix<RowMatrixX4i>(tets);
+  mesh.tets = to_matrix<RowMatrixXi>(tets);
   mesh.surface_triangles = to_matrix<RowMatrixX3i>(triangles);
-  mesh.element_order = detail::read_int_attribute(group, "element_order");
   return mesh;
 }
 

@@ -72,7 +72,8 @@ void write_mass(const Location& root, const MassProperties& mass) {
 void write_mesh(const Location& root, const BodyMesh& mesh) {
   const Location group = detail::create_group(root, "mesh");
   detail::write_matrix(group, "nodes", rows_of(mesh.nodes), 3, mesh.nodes.data(), "m");
-  detail::write_matrix(group, "tets", rows_of(mesh.tets), 4, mesh.tets.data(), "");
+  detail::write_matrix(group, "tets", rows_of(mesh.tets), static_cast<std::size_t>(mesh.tets.cols()), mesh.tets.data(),
+                       "");
   detail::write_matrix(group, "surface_triangles", rows_of(mesh.surface_triangles), 3,
                        mesh.surface_triangles.data(), "");
   detail::write_int_attribute(group, "element_order", mesh.element_order);

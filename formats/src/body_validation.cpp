@@ -33,9 +33,14 @@ void check_structure(const BodyData& body, const std::string& context) {
   const Eigen::Index n_n = mesh.nodes.rows();
   if (n_n < 4) fail(context, "/mesh/nodes has " + std::to_string(n_n) + " rows, expected at least 4 nodes");
   if (mesh.tets.rows() < 1) fail(context, "/mesh/tets has no rows, expected at least 1 tetrahedron");
-  if (mesh.element_order != 1) {
+  if (mesh.element_order != 1 && mesh.element_order != 2) {
     fail(context, "/mesh/element_order is " + std::to_string(mesh.element_order) +
-                      ", expected 1 (linear 4-node tetrahedra, the only kind this format stores)");
+                      ", expected 1 (linear 4-node tetrahedra) or 2 (quadratic 10-node tetrahedra)");
+  }
+  if (mesh.tets.cols() != BodyMesh::nodes_per_element(mesh.element_order)) {
+    fail(context, "/mesh/tets has " + std::to_string(mesh.tets.cols()) + " columns, expected " +
+                      std::to_string(BodyMesh::nodes_per_element(mesh.element_order)) + " for element_order " +
+                      std::to_string(mesh.element_order));
   }
   check_indices(mesh.tets, n_n, "/mesh/tets", context);
   check_indices(mesh.surface_triangles, n_n, "/mesh/surface_triangles", context);

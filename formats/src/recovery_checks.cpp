@@ -3,6 +3,8 @@
 #include "body_checks.hpp"
 #include "check_helpers.hpp"
 
+#include "flexbody/format/tet10_element.hpp"
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -41,16 +43,16 @@ void check_recovery_finite(const BodyData& body, const std::string& context) {
   for (const RecoveryRegion& r : body.recovery) check_values(r.stress_modes, "/recovery/" + r.name + "/stress_modes", context);
 }
 
-// A stress mode is the nodal average of the constant stresses of linear tetrahedra under the displacement field
-// Ῡ'(:, f) e_d, so it cannot exceed what the stiffest element can make of that field: in an element with heights h_i
-// (|∇N_i| = 1/h_i), every entry of ∇u is at most Σ_i |u_i| / h_i ≤ 4 U_f / h_min (U_f = max_i |Ῡ'(i, f)|), and every
-// stress component at most (3 |λ| + 2 μ) times that (|λ|: λ < 0 for ν < 0). An entry above this bound (by more than rounding) was not computed
-// from this mesh, material and fields: a damaged file (issue 13: byte flips that stay finite made non-finite von
-// Mises stresses in ParaView).
-void check_recovery_ranges(const BodyData& body, const std::string& context) {
-  if (body.recovery.empty()) return;
-  const double e = body.material.youngs_modulus, nu = body.material.poisson_ratio;
-  const double lambda = std::abs(e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))), mu = e / (2.0 * (1.0 + nu));
+// A stress mode is the nodal average of element stresses under the displacement field Ῡ'(:, f) e_d, so it cannot
+// exceed what the stiffest element can make of that field. Every entry of ∇u at a node of an element is at most
+// U_f Σ_b |g_b| with U_f = max_i |Ῡ'(i, f)| and g_b the entry's weight of node b: for a linear tetrahedron with heights
+// h_i (|∇N_i| = 1/h_i) at most 4 U_f / h_min; for a quadratic one the extrapolated gradients of
+// format/tet10_element.hpp, summed. Every stress component is at most (3 |λ| + 2 μ) times that (|λ|: λ < 0 for
+// ν < 0). An entry above this bound (by more than rounding) was not computed from this mesh, material and fields: a
+// damaged file (issue 13: byte flips that stay finite made non-finite von Mises stresses in ParaView).
+namespace {
+
+double largest_linear_gradient(const BodyData& body, const std::string& context) {
   double smallest_height = std::numeric_limits<double>::infinity();
   const RowMatrixX3d& x = body.mesh.nodes;
   for (Eigen::Index t = 0; t < body.mesh.tets.rows(); ++t) {
@@ -65,11 +67,36 @@ void check_recovery_ranges(const BodyData& body, const std::string& context) {
       if (twice_area > 0.0) smallest_height = std::min(smallest_height, six_volume / twice_area);
     }
   }
+  return 4.0 / smallest_height;
+}
+
+double largest_quadratic_gradient(const BodyData& body, const std::string& context) {
+  double largest = 0.0;
+  for (Eigen::Index t = 0; t < body.mesh.tets.rows(); ++t) {
+    Tet10Nodes x;
+    for (int a = 0; a < 10; ++a) x.row(a) = body.mesh.nodes.row(body.mesh.tets(t, a));
+    const Tet10RecoveryGradients g = tet10_recovery_gradients(x);
+    if (!(g.volume > 0.0))
+      fail(context, "/mesh/tets" + index(t) + " is inverted or folded (its Jacobian is not positive at a Gauss point), "
+                    "so no stress of /recovery can be checked against it");
+    for (const auto& at_node : g.at_node) largest = std::max(largest, at_node.cwiseAbs().colwise().sum().maxCoeff());
+  }
+  return largest;
+}
+
+}  // namespace
+
+void check_recovery_ranges(const BodyData& body, const std::string& context) {
+  if (body.recovery.empty()) return;
+  const double e = body.material.youngs_modulus, nu = body.material.poisson_ratio;
+  const double lambda = std::abs(e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))), mu = e / (2.0 * (1.0 + nu));
+  const double largest_gradient = body.mesh.element_order == 2 ? largest_quadratic_gradient(body, context)
+                                                               : largest_linear_gradient(body, context);
   const Eigen::Index n_f = body.gcms.field_count();
   for (const RecoveryRegion& r : body.recovery)
     for (Eigen::Index c = 0; c < r.stress_modes.cols() && c < 3 * n_f; ++c) {
       const double largest_field = body.gcms.fields.col(c / 3).cwiseAbs().maxCoeff();
-      const double bound = (3.0 * lambda + 2.0 * mu) * 4.0 * largest_field / smallest_height * (1.0 + 1e-9);
+      const double bound = (3.0 * lambda + 2.0 * mu) * largest_gradient * largest_field * (1.0 + 1e-9);
       for (Eigen::Index row = 0; row < r.stress_modes.rows(); ++row)
         if (!(std::abs(r.stress_modes(row, c)) <= bound))
           fail(context, "/recovery/" + r.name + "/stress_modes" + index(row) + index(c) + " is " +

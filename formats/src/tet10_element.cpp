@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -121,6 +122,33 @@ Eigen::Matrix<double, 10, 10> tet10_mass(const Tet10Nodes& nodes, double density
         m.noalias() += (density * weight * jacobian.determinant()) * n * n.transpose();
       }
   return m;
+}
+
+Tet10RecoveryGradients tet10_recovery_gradients(const Tet10Nodes& nodes) {
+  // Gauss point p has L_p = a, the other L_i = b: the values there of f = Σ_i c_i L_i are P c with P = b 11ᵀ + (a − b) I,
+  // so the corner values are c = P⁻¹ f, P⁻¹ = (I − b 11ᵀ) / (a − b) (a + 3 b = 1).
+  Tet10RecoveryGradients out;
+  std::array<Eigen::Matrix<double, 10, 3>, 4> at_gauss;
+  const std::array<Eigen::Vector3d, 4> points = gauss_points();
+  for (std::size_t p = 0; p < 4; ++p) {
+    const Tet10Gradients g = tet10_gradients(nodes, points[p]);
+    if (!(g.determinant > 0.0)) {
+      out.volume = std::min(0.0, g.determinant);
+      return out;
+    }
+    at_gauss[p] = g.gradients;
+    out.volume += kGaussWeight * g.determinant;
+  }
+  const double diagonal = (1.0 - kGaussB) / (kGaussA - kGaussB), off = -kGaussB / (kGaussA - kGaussB);
+  for (std::size_t a = 0; a < 4; ++a) {
+    out.at_node[a].setZero();
+    for (std::size_t p = 0; p < 4; ++p) out.at_node[a] += (p == a ? diagonal : off) * at_gauss[p];
+  }
+  for (std::size_t e = 0; e < 6; ++e) {
+    const auto [i, j] = kTet10Edges[e];
+    out.at_node[4 + e] = 0.5 * (out.at_node[static_cast<std::size_t>(i)] + out.at_node[static_cast<std::size_t>(j)]);
+  }
+  return out;
 }
 
 Eigen::Matrix<double, 14, 1> tet10_jacobian_determinants(const Tet10Nodes& nodes) {

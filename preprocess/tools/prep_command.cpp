@@ -39,7 +39,8 @@ int prep_command(int argc, char** argv) {
                                       "for IGES. --mesh-size and a spec's lengths are in it");
   app.add_option("--mesh-size", mesh_size, "largest element size in the input's unit (default: bounding-box "
                                            "diagonal / 25; a .msh is used as it is)");
-  app.add_option("--order", order, "element order: 1 (linear tetrahedra)");
+  app.add_option("--order", order, "element order: 1 (linear tetrahedra, 4 nodes) or 2 (quadratic, 10 nodes, "
+                                  "curved on the CAD surfaces; default 1)");
   app.add_option("--material", material_text, "steel|aluminium|titanium or E=210e9,nu=0.3,rho=7850 (SI)");
   app.add_option("--modes", modes, "number of elastic free-free modes (rigid-body modes never count)");
   app.add_option("--fmax", fmax, "all elastic modes up to this frequency [Hz]; with --modes, --modes caps");
@@ -99,15 +100,15 @@ int prep_command(int argc, char** argv) {
       throw std::invalid_argument(fmt::format("--modes must be at least 1, got {}", modes));
     if (given("--fmax") && !(std::isfinite(fmax) && fmax > 0.0))
       throw std::invalid_argument(fmt::format("--fmax must be a positive frequency in Hz, got {}", fmax));
-    if (order != 1)
-      throw std::invalid_argument(fmt::format("--order {}: fbprep takes linear tetrahedra only (--order 1); quadratic ones "
-                                              "are not yet reduced or written (issue 15)", order));
+    if (given("--order") && order != 1 && order != 2)
+      throw std::invalid_argument(fmt::format("--order {}: the element order is 1 (linear tetrahedra) or 2 (quadratic, "
+                                              "10 nodes)", order));
     if (!from_spec || given("--mesh-size")) {
       options.mesh.mesh_size = mesh_size;
       record("mesh_size", fmt::format("{}", mesh_size));
     }
-    options.mesh.order = order;
-    record("element_order", std::to_string(order));
+    if (!from_spec || given("--order")) options.mesh.order = order;  // like every flag, it replaces the spec's
+    record("element_order", std::to_string(options.mesh.order));
     if (!from_spec || given("--material")) {
       options.material = fp::parse_material(material_text);
       record("material", material_text);

@@ -67,8 +67,11 @@ TEST(Validate, TooSmallMesh) {
 
 TEST(Validate, ElementOrder) {
   BodyData body = make_body();
-  body.mesh.element_order = 2;
-  expect_invalid(body, "/mesh/element_order is 2, expected 1");
+  body.mesh.element_order = 3;
+  expect_invalid(body, "/mesh/element_order is 3, expected 1 (linear 4-node tetrahedra) or 2");
+  body = make_body();
+  body.mesh.element_order = 2;  // with 4 nodes per element
+  expect_invalid(body, "/mesh/tets has 4 columns, expected 10 for element_order 2");
 }
 
 TEST(Validate, ModeShapes) {

@@ -86,6 +86,24 @@ TEST(BodySpec, CommandLineFlagsOverrideTheSpec) {
   EXPECT_EQ(json["interfaces"].size(), 2u);  // the rest of the spec still holds
 }
 
+// mesh: {order: 2} gives quadratic tetrahedra (issue 15); --order on the command line replaces it like every flag.
+TEST(BodySpec, ElementOrderFromTheSpecAndItsOverride) {
+  const auto dir = beam_folder();
+  std::string spec = kBeamSpec;
+  spec.replace(spec.find("mesh: {size: 0.025}"), 19, "mesh: {size: 0.05, order: 2}");
+  write_text(dir / "part" / "beam.yaml", spec);
+  const CliRun quadratic = run_fbprep(dir, "part/beam.yaml -o q.fbh5 --json");
+  ASSERT_EQ(quadratic.exit_code, 0) << quadratic.err;
+  EXPECT_EQ(nlohmann::json::parse(quadratic.out)["element_order"], 2);
+  const CliRun linear = run_fbprep(dir, "part/beam.yaml -o l.fbh5 --order 1 --json");
+  ASSERT_EQ(linear.exit_code, 0) << linear.err;
+  EXPECT_EQ(nlohmann::json::parse(linear.out)["element_order"], 1);
+  bool recorded = false;
+  for (const auto& [name, value] : flexbody::format::read_body_file(dir / "q.fbh5").provenance.options)
+    recorded = recorded || (name == "element_order" && value == "2");
+  EXPECT_TRUE(recorded);
+}
+
 TEST(BodySpec, RefusalsNameTheLine) {
   const std::string head = "input: beam.geo\nunit: m\n";
   expect_spec_error(head + "colour: red\n", 3, "unknown key 'colour' in the body spec");
@@ -93,6 +111,7 @@ TEST(BodySpec, RefusalsNameTheLine) {
   expect_spec_error(head + "material: {E: 210e9, nu: 0.6, rho: 7850}\n", 3, "material: nu must lie in (-1, 0.5), got 0.6");
   expect_spec_error(head + "mesh: {size: -1}\n", 3, "mesh size must be positive, got -1");
   expect_spec_error(head + "mesh: {size: 0.02}\nmesh: {size: 0.03}\n", 4, "key 'mesh' is repeated in the body spec");
+  expect_spec_error(head + "mesh: {order: 3}\n", 3, "mesh order 3: the element order is 1 (linear tetrahedra) or 2");
   expect_spec_error("unit: m\n", 1, "the body spec needs 'input'");
   expect_spec_error("input: beam.geo\nunit: furlong\n", 2, "unit 'furlong' is not one of mm, cm, m, in");
   expect_spec_error(head + "reduction: {modes: many}\n", 3, "reduction modes must be a number, got 'many'");

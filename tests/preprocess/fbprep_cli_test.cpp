@@ -196,7 +196,7 @@ TEST(FbprepCli, ExportVtuWritesTheModesForParaView) {
     Eigen::MatrixXd displacements(3 * n, 3);
     for (Eigen::Index i = 0; i < n; ++i)
       for (int m = 0; m < 3; ++m) displacements.col(m).segment<3>(3 * i) = body.modes.upsilon.block<1, 3>(i, 3 * m).transpose();
-    const Eigen::MatrixXd stresses = flexbody::preprocess::nodal_stresses({body.mesh.nodes, body.mesh.tets}, body.material,
+    const Eigen::MatrixXd stresses = flexbody::preprocess::nodal_stresses(flexbody::preprocess::TetMesh{body.mesh.nodes, body.mesh.tets}, body.material,
                                                                           displacements);
     const std::string name = fmt::format("stress_02_{:.6g}Hz", body.modes.frequencies_hz(1));
     const std::vector<unsigned char> bytes = base64_decode(vtu_array(vtu, name));
@@ -222,6 +222,39 @@ TEST(FbprepCli, ExportVtuWritesTheModesForParaView) {
   EXPECT_NE(vtu_array(vtu, fmt::format("field_{:03d}", body.gcms.field_count())), "");
   EXPECT_NE(vtu_array(vtu, "interface"), "");
   EXPECT_EQ(fbprep(dir, "export-vtu absent.fbh5 -o paraview").exit_code, 1);
+}
+
+// --order 2 end to end through the command line (issue 15): the report's --json gives the element order and counts
+// the mid-edge nodes in nodes and DOFs; inspect reads the order back; export-vtu writes VTK quadratic tetrahedra (cell
+// type 24, 10 points each, the body file's node order) so ParaView draws the curved faces.
+TEST(FbprepCli, QuadraticTetrahedraEndToEnd) {
+  const auto dir = flexbody::test::scratch_dir();
+  const CliRun prep = fbprep(dir, fmt::format("'{}' -o q.fbh5 --order 2 --modes 3 --mesh-size 8 --json",
+                                              bracket_step().string()));
+  ASSERT_EQ(prep.exit_code, 0) << prep.err;
+  const auto summary = nlohmann::json::parse(prep.out);
+  EXPECT_EQ(summary["element_order"], 2);
+  EXPECT_EQ(summary["dofs"].get<long>(), 3 * summary["nodes"].get<long>());
+  EXPECT_GT(summary["nodes"].get<long>(), 4 * summary["elements"].get<long>() / 3);  // corners alone: ~n_e / 5
+  const double jacobian = summary["mesh_quality"]["min_jacobian_ratio"];
+  EXPECT_GT(jacobian, 0.0);
+  EXPECT_LE(jacobian, 1.0);
+  const auto body = flexbody::format::read_body_file(dir / "q.fbh5");
+  EXPECT_EQ(body.mesh.element_order, 2);
+  EXPECT_EQ(body.mesh.nodes.rows(), summary["nodes"].get<long>());
+  const CliRun inspect = fbprep(dir, "inspect q.fbh5 --json");
+  ASSERT_EQ(inspect.exit_code, 0) << inspect.err;
+  EXPECT_EQ(nlohmann::json::parse(inspect.out)["element_order"], 2);
+  EXPECT_EQ(nlohmann::json::parse(inspect.out)["dofs"].get<long>(), 3 * body.mesh.nodes.rows());
+  const CliRun vtu_run = fbprep(dir, "export-vtu q.fbh5 -o paraview");
+  ASSERT_EQ(vtu_run.exit_code, 0) << vtu_run.err;
+  const std::string vtu = slurp(dir / "paraview" / "q.vtu");
+  const std::vector<unsigned char> types = base64_decode(vtu_array(vtu, "types"));
+  ASSERT_EQ(types.size(), 8 + static_cast<std::size_t>(body.mesh.tets.rows()));
+  EXPECT_TRUE(std::all_of(types.begin() + 8, types.end(), [](unsigned char t) { return t == 24; }));
+  const std::vector<std::int64_t> connectivity = flexbody::test::vtu_values<std::int64_t>(vtu, "connectivity");
+  ASSERT_EQ(connectivity.size(), static_cast<std::size_t>(body.mesh.tets.size()));
+  EXPECT_TRUE(std::equal(connectivity.begin(), connectivity.end(), body.mesh.tets.data()));
 }
 
 TEST(FbprepCli, BundledBracketSpecPutsMarkersOnTheBoreAxes) {
@@ -336,7 +369,7 @@ TEST(FbprepCli, RefusesBadInputsWithOneLine) {
   expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,nu=0.3", "rho is missing");
   expect_refusal(dir, "input-cube.geo --unit furlong", "--unit 'furlong' is not one of mm, cm, m, in");
   expect_refusal(dir, "input-cube.geo --unit m --eigensolver lapack", "'lapack' is unknown; use arpack or spectra");
-  expect_refusal(dir, "input-cube.geo --unit m --order 2", "fbprep takes linear tetrahedra only (--order 1)");
+  expect_refusal(dir, "input-cube.geo --unit m --order 3", "--order 3: the element order is 1 (linear tetrahedra) or 2");
   expect_refusal(dir, "input-cube.txt --unit m", "unsupported file type '.txt'");
   expect_refusal(dir, "input-cube.geo --unit m --modes 100000", "--modes 100000: at most");
   // A bracket in mm read as metres with a size meant in mm: a unit mistake, refused before meshing.
@@ -362,7 +395,7 @@ TEST(FbprepCli, BadOptionValuesExitWith2AndFailuresWith1) {
   const auto dir = flexbody::test::scratch_dir();
   write(dir / "input-cube.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 1, 1, 1};\n");
   for (const char* options : {"--unit furlong", "--unit m --material steel2", "--unit m --eigensolver lapack",
-                              "--unit m --order 2", "--unit m --modes -1", "--unit m --bogus"}) {
+                              "--unit m --order 3", "--unit m --modes -1", "--unit m --bogus"}) {
     SCOPED_TRACE(options);
     EXPECT_EQ(fbprep(dir, fmt::format("input-cube.geo {} -o out.fbh5", options)).exit_code, 2);
   }

@@ -1,5 +1,6 @@
 #include "flexbody/preprocess/stress_recovery.hpp"
 
+#include "flexbody/format/tet10_element.hpp"
 #include "flexbody/preprocess/tet4_element.hpp"
 
 #include <fmt/format.h>
@@ -11,6 +12,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace flexbody::preprocess {
@@ -25,11 +27,48 @@ constexpr std::int64_t kNoElement = std::numeric_limits<std::int64_t>::max();
 // Node-to-element incidence (compressed rows), elements ascending for each node.
 struct Incidence {
   std::vector<std::int64_t> start;     // n_n + 1 offsets
-  std::vector<std::int32_t> elements;  // 4 n_e element indices
+  std::vector<std::int32_t> elements;  // (nodes per element) n_e element indices
 };
 
+// Nodes per element of a mesh type.
+template <class Mesh>
+constexpr int kNodesPerElement = std::is_same_v<Mesh, Tet10Mesh> ? 10 : 4;
+
+// What one element gives the node at its local position `local`: the element's volume (<= 0: inverted or folded)
+// and the gradient weights of its nodes at that node, row b: ∇u = Σ_b u_b ⊗ gradients.row(b). Linear tetrahedra: the
+// constant gradients; quadratic ones: the gradients extrapolated from the Gauss points (format/tet10_element.hpp).
+template <class Mesh>
+struct ElementAtNode {
+  double volume = 0.0;
+  Eigen::Matrix<double, kNodesPerElement<Mesh>, 3> gradients;
+};
+
+ElementAtNode<TetMesh> element_at_node(const TetMesh& mesh, Eigen::Index e, int /*local*/) {
+  const Tet4Geometry geometry = tet4_geometry(element_corners(mesh, e));
+  return {geometry.volume, geometry.gradients};
+}
+
+ElementAtNode<Tet10Mesh> element_at_node(const Tet10Mesh& mesh, Eigen::Index e, int local) {
+  format::Tet10Nodes x;
+  for (int a = 0; a < 10; ++a) x.row(a) = mesh.nodes.row(mesh.tets(e, a));
+  const format::Tet10RecoveryGradients g = format::tet10_recovery_gradients(x);
+  return {g.volume, g.at_node[static_cast<std::size_t>(local)]};
+}
+
+std::string element_problem(const TetMesh& mesh, Eigen::Index e) {
+  return fmt::format("tetrahedron {} has volume {} m^3 (inverted or degenerate)", e,
+                     tet4_geometry(element_corners(mesh, e)).volume);
+}
+
+std::string element_problem(const Tet10Mesh& /*mesh*/, Eigen::Index e) {
+  return fmt::format("quadratic tetrahedron {} is inverted or folded (its Jacobian determinant is not positive at a "
+                     "Gauss point)", e);
+}
+
 // Checks the mesh (finite coordinates, node indices in range) and returns its incidence.
-Incidence checked_incidence(const TetMesh& mesh, const char* function) {
+template <class Mesh>
+Incidence checked_incidence(const Mesh& mesh, const char* function) {
+  constexpr int per = kNodesPerElement<Mesh>;
   const Eigen::Index n_n = mesh.node_count(), n_e = mesh.element_count();
   if (!mesh.nodes.allFinite())
     for (Eigen::Index i = 0; i < n_n; ++i)
@@ -40,7 +79,7 @@ Incidence checked_incidence(const TetMesh& mesh, const char* function) {
   Incidence incidence;
   incidence.start.assign(static_cast<std::size_t>(n_n) + 1, 0);
   for (Eigen::Index e = 0; e < n_e; ++e)
-    for (int a = 0; a < 4; ++a) {
+    for (int a = 0; a < per; ++a) {
       const std::int32_t i = mesh.tets(e, a);
       if (i < 0 || i >= n_n)
         throw std::invalid_argument(
@@ -51,11 +90,12 @@ Incidence checked_incidence(const TetMesh& mesh, const char* function) {
   incidence.elements.resize(static_cast<std::size_t>(incidence.start.back()));
   std::vector<std::int64_t> fill(incidence.start.begin(), incidence.start.end() - 1);
   for (Eigen::Index e = 0; e < n_e; ++e)
-    for (int a = 0; a < 4; ++a) incidence.elements[fill[mesh.tets(e, a)]++] = static_cast<std::int32_t>(e);
+    for (int a = 0; a < per; ++a) incidence.elements[fill[mesh.tets(e, a)]++] = static_cast<std::int32_t>(e);
   return incidence;
 }
 
-void check_output_nodes(const TetMesh& mesh, const Incidence& incidence, const Eigen::VectorXi& nodes,
+template <class Mesh>
+void check_output_nodes(const Mesh& mesh, const Incidence& incidence, const Eigen::VectorXi& nodes,
                         const char* function) {
   for (Eigen::Index j = 0; j < nodes.size(); ++j) {
     const int i = nodes(j);
@@ -85,8 +125,10 @@ struct ChunkOperators {
 
   // Builds the operators of output_nodes(begin .. end - 1); returns the smallest element around them whose
   // volume is not positive (those are skipped), or kNoElement.
-  std::int64_t build(const TetMesh& mesh, const Incidence& incidence, const Eigen::VectorXi& output_nodes,
+  template <class Mesh>
+  std::int64_t build(const Mesh& mesh, const Incidence& incidence, const Eigen::VectorXi& output_nodes,
                      Eigen::Index begin, Eigen::Index end) {
+    constexpr int per = kNodesPerElement<Mesh>;
     start.assign(1, 0);
     node.clear();
     weight.clear();
@@ -97,13 +139,15 @@ struct ChunkOperators {
       double total_volume = 0.0;
       for (std::int64_t s = incidence.start[i]; s < incidence.start[i + 1]; ++s) {
         const std::int32_t e = incidence.elements[s];
-        const Tet4Geometry geometry = tet4_geometry(element_corners(mesh, e));
-        if (!(geometry.volume > 0.0)) {
+        int local = 0;
+        while (mesh.tets(e, local) != i) ++local;
+        const ElementAtNode<Mesh> element = element_at_node(mesh, e, local);
+        if (!(element.volume > 0.0)) {
           bad = std::min<std::int64_t>(bad, e);
           continue;
         }
-        total_volume += geometry.volume;
-        for (int a = 0; a < 4; ++a) {
+        total_volume += element.volume;
+        for (int a = 0; a < per; ++a) {
           const std::int32_t b = mesh.tets(e, a);
           std::size_t k = first;
           while (k < node.size() && node[k] != b) ++k;
@@ -111,7 +155,7 @@ struct ChunkOperators {
             node.push_back(b);
             weight.emplace_back(Eigen::Vector3d::Zero());
           }
-          weight[k] += geometry.volume * geometry.gradients.row(a).transpose();
+          weight[k] += element.volume * element.gradients.row(a).transpose();
         }
       }
       for (std::size_t k = first; k < node.size(); ++k) weight[k] /= total_volume;
@@ -124,8 +168,8 @@ struct ChunkOperators {
 // Runs apply(operators, begin, end) for every chunk of output nodes in parallel (each output row is written by
 // the one task that owns its chunk, in a fixed order: results independent of the thread count), then throws if
 // an element around an output node has a non-positive volume.
-template <typename Apply>
-void for_each_chunk(const TetMesh& mesh, const Incidence& incidence, const Eigen::VectorXi& output_nodes,
+template <class Mesh, typename Apply>
+void for_each_chunk(const Mesh& mesh, const Incidence& incidence, const Eigen::VectorXi& output_nodes,
                     const char* function, Apply&& apply) {
   const Eigen::Index chunks = (output_nodes.size() + kChunk - 1) / kChunk;
   std::int64_t bad = kNoElement;
@@ -139,9 +183,7 @@ void for_each_chunk(const TetMesh& mesh, const Incidence& incidence, const Eigen
       apply(operators, begin, end);
     }
   }
-  if (bad != kNoElement)
-    throw std::invalid_argument(fmt::format("{}: tetrahedron {} has volume {} m^3 (inverted or degenerate)", function,
-                                            bad, tet4_geometry(element_corners(mesh, bad)).volume));
+  if (bad != kNoElement) throw std::invalid_argument(fmt::format("{}: {}", function, element_problem(mesh, bad)));
 }
 
 // Writes one Voigt stress vector at `out`.
@@ -149,7 +191,10 @@ void put(double* out, const std::array<double, kStressComponents>& stress) { std
 
 }  // namespace
 
-Eigen::MatrixXd nodal_stresses(const TetMesh& mesh, const Material& material, const Eigen::MatrixXd& displacements) {
+namespace {
+
+template <class Mesh>
+Eigen::MatrixXd stresses_of(const Mesh& mesh, const Material& material, const Eigen::MatrixXd& displacements) {
   static constexpr const char* kFunction = "nodal_stresses";
   check_material(material);
   const Incidence incidence = checked_incidence(mesh, kFunction);
@@ -188,8 +233,9 @@ Eigen::MatrixXd nodal_stresses(const TetMesh& mesh, const Material& material, co
   return stresses;
 }
 
-Eigen::MatrixXd nodal_stress_modes(const TetMesh& mesh, const Material& material, const Eigen::MatrixXd& fields,
-                                   const Eigen::VectorXi& region_nodes) {
+template <class Mesh>
+Eigen::MatrixXd stress_modes_of(const Mesh& mesh, const Material& material, const Eigen::MatrixXd& fields,
+                                const Eigen::VectorXi& region_nodes) {
   static constexpr const char* kFunction = "nodal_stress_modes";
   check_material(material);
   const Incidence incidence = checked_incidence(mesh, kFunction);
@@ -221,6 +267,26 @@ Eigen::MatrixXd nodal_stress_modes(const TetMesh& mesh, const Material& material
     }
   });
   return modes;
+}
+
+}  // namespace
+
+Eigen::MatrixXd nodal_stresses(const TetMesh& mesh, const Material& material, const Eigen::MatrixXd& displacements) {
+  return stresses_of(mesh, material, displacements);
+}
+
+Eigen::MatrixXd nodal_stresses(const Tet10Mesh& mesh, const Material& material, const Eigen::MatrixXd& displacements) {
+  return stresses_of(mesh, material, displacements);
+}
+
+Eigen::MatrixXd nodal_stress_modes(const TetMesh& mesh, const Material& material, const Eigen::MatrixXd& fields,
+                                   const Eigen::VectorXi& region_nodes) {
+  return stress_modes_of(mesh, material, fields, region_nodes);
+}
+
+Eigen::MatrixXd nodal_stress_modes(const Tet10Mesh& mesh, const Material& material, const Eigen::MatrixXd& fields,
+                                   const Eigen::VectorXi& region_nodes) {
+  return stress_modes_of(mesh, material, fields, region_nodes);
 }
 
 double von_mises(const Eigen::Matrix<double, 6, 1>& s) {

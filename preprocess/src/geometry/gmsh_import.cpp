@@ -149,7 +149,7 @@ void check_readable(const std::filesystem::path& path) {
   std::fclose(probe);
 }
 
-// The tetrahedra, and for every node tag the node's index in them (-1: not used by a tetrahedron). For second-order
+// The tetrahedra, and for every node tag the node's index in them (absent: not used by a tetrahedron). For second-order
 // meshes also the quadratic mesh, whose first nodes are the linear mesh's (the corners, same indices) and whose
 // mid-edge nodes follow; gmsh's 10-node order lists the edges (2,3) and (1,3) the other way round from
 // format/tet10_element.hpp's, so its last two nodes are swapped.
@@ -227,16 +227,15 @@ GmshTetrahedra tetrahedra_from_gmsh(const std::string& name, int order) {
       for (int k = 0; k < 10; ++k) quadratic.tets(e, k) = index_of(e, kFromGmsh[k]);
     out.quadratic = std::move(quadratic);
   }
-  for (auto& [tag, k] : index)
-    if (k >= corners) k = -1;  // the surfaces' triangles are read by their corners
   out.index_of_tag = std::move(index);
   return out;
 }
 
 constexpr int kGmshTriangle3 = 2;
 
-// Every surface entity's triangles in the tetrahedral mesh's numbering, with its physical groups. In a second-order
-// mesh its 6-node triangles, by their corners (the linear mesh's).
+// Every surface entity's triangles in the tetrahedral mesh's numbering, with its physical groups. A second-order
+// mesh's 6-node triangles (gmsh lists the corners, then the edges (0,1), (1,2), (2,0)) are split into their four
+// triangles, as the body file's surface is (mesh_topology.hpp).
 std::vector<CadSurface> cad_surfaces(const std::unordered_map<std::size_t, std::int32_t>& index_of_tag, int order) {
   const int type = order == 2 ? kGmshTriangle6 : kGmshTriangle3;
   const std::size_t per = order == 2 ? 6 : 3;
@@ -248,21 +247,26 @@ std::vector<CadSurface> cad_surfaces(const std::unordered_map<std::size_t, std::
     gmsh::model::mesh::getElementsByType(type, element_tags, node_tags, tag);
     std::vector<std::array<std::int32_t, 3>> kept;
     for (std::size_t t = 0; t < element_tags.size(); ++t) {
-      std::array<std::int32_t, 3> tri{};
+      std::array<std::int32_t, 6> face{};
       bool ok = true;
-      for (int a = 0; a < 3; ++a) {
-        const auto it = index_of_tag.find(node_tags[per * t + static_cast<std::size_t>(a)]);
+      for (std::size_t a = 0; a < per; ++a) {
+        const auto it = index_of_tag.find(node_tags[per * t + a]);
         ok = ok && it != index_of_tag.end() && it->second >= 0;
-        if (ok) tri[a] = it->second;
+        if (ok) face[a] = it->second;
       }
-      if (ok) kept.push_back(tri);
+      if (!ok) continue;
+      if (order == 2) {
+        for (const auto& triangle : split_quadratic_triangle(face)) kept.push_back(triangle);
+      } else {
+        kept.push_back({face[0], face[1], face[2]});
+      }
     }
     if (kept.empty()) continue;  // a surface inside no tetrahedron's boundary, or without a mesh
     CadSurface surface;
     surface.tag = tag;
     surface.triangles.resize(static_cast<Eigen::Index>(kept.size()), 3);
     for (std::size_t t = 0; t < kept.size(); ++t)
-      for (int a = 0; a < 3; ++a) surface.triangles(static_cast<Eigen::Index>(t), a) = kept[t][a];
+      for (int a = 0; a < 3; ++a) surface.triangles(static_cast<Eigen::Index>(t), a) = kept[t][static_cast<std::size_t>(a)];
     surfaces.push_back(std::move(surface));
   }
   gmsh::vectorpair groups;
@@ -395,7 +399,7 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
   });
   result.mesh.nodes *= unit.gmsh_to_metres;
   if (result.quadratic) result.quadratic->nodes *= unit.gmsh_to_metres;
-  measure(result.surfaces, result.mesh.nodes);
+  measure(result.surfaces, result.quadratic ? result.quadratic->nodes : result.mesh.nodes);
 
   const MeshComponents components = connected_components(result.mesh);
   if (components.count > 1)

@@ -1,5 +1,6 @@
 #include "flexbody/preprocess/mesh_topology.hpp"
 
+#include "flexbody/format/tet10_element.hpp"
 #include "flexbody/preprocess/tet4_element.hpp"
 
 #include <Eigen/Dense>
@@ -10,6 +11,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 
 namespace flexbody::preprocess {
 namespace {
@@ -168,6 +170,58 @@ MeshQuality mesh_quality(const TetMesh& mesh) {
       }
   }
   q.mean_radius_ratio = mesh.element_count() > 0 ? sum / static_cast<double>(mesh.element_count()) : 0.0;
+  return q;
+}
+
+std::array<std::array<std::int32_t, 3>, 4> split_quadratic_triangle(const std::array<std::int32_t, 6>& f) {
+  return {{{f[0], f[3], f[5]}, {f[3], f[1], f[4]}, {f[5], f[4], f[2]}, {f[3], f[4], f[5]}}};
+}
+
+TetMesh corner_mesh(const Tet10Mesh& mesh) { return TetMesh{mesh.nodes, mesh.tets.leftCols<4>()}; }
+
+RowMatrixX3i boundary_triangles(const Tet10Mesh& mesh) {
+  // The corner faces on the boundary, then each edge's middle node (from any element that has the edge).
+  const RowMatrixX3i faces = boundary_triangles(corner_mesh(mesh));
+  auto key = [](std::int64_t i, std::int64_t j) { return i < j ? (i << 32) | j : (j << 32) | i; };
+  std::unordered_map<std::int64_t, std::int32_t> middle;
+  middle.reserve(static_cast<std::size_t>(3 * faces.rows()));
+  for (Eigen::Index t = 0; t < faces.rows(); ++t)
+    for (int k = 0; k < 3; ++k) middle.emplace(key(faces(t, k), faces(t, (k + 1) % 3)), -1);
+  for (Eigen::Index e = 0; e < mesh.element_count(); ++e)
+    for (int k = 0; k < 6; ++k) {
+      const auto [i, j] = format::kTet10Edges[static_cast<std::size_t>(k)];
+      const auto it = middle.find(key(mesh.tets(e, i), mesh.tets(e, j)));
+      if (it != middle.end()) it->second = mesh.tets(e, 4 + k);
+    }
+  RowMatrixX3i triangles(4 * faces.rows(), 3);
+  for (Eigen::Index t = 0; t < faces.rows(); ++t) {
+    std::array<std::int32_t, 6> face{};
+    for (int k = 0; k < 3; ++k) {
+      face[static_cast<std::size_t>(k)] = faces(t, k);
+      face[static_cast<std::size_t>(3 + k)] = middle.at(key(faces(t, k), faces(t, (k + 1) % 3)));
+    }
+    const auto split = split_quadratic_triangle(face);
+    for (int s = 0; s < 4; ++s)
+      for (int k = 0; k < 3; ++k) triangles(4 * t + s, k) = split[static_cast<std::size_t>(s)][static_cast<std::size_t>(k)];
+  }
+  return triangles;
+}
+
+MeshQuality mesh_quality(const Tet10Mesh& mesh) {
+  MeshQuality q = mesh_quality(corner_mesh(mesh));
+  q.volume_m3 = 0.0;
+  q.min_jacobian_ratio = 1.0;
+  for (Eigen::Index e = 0; e < mesh.element_count(); ++e) {
+    format::Tet10Nodes x;
+    for (int a = 0; a < 10; ++a) x.row(a) = mesh.nodes.row(mesh.tets(e, a));
+    const Eigen::Matrix<double, 14, 1> det = format::tet10_jacobian_determinants(x);
+    q.volume_m3 += det.head<4>().sum() / 24.0;  // the 4-point rule's weights, 1/24 each
+    const double ratio = det.maxCoeff() > 0.0 ? det.minCoeff() / det.maxCoeff() : det.minCoeff();
+    if (ratio < q.min_jacobian_ratio) {
+      q.min_jacobian_ratio = ratio;
+      q.worst_jacobian_element = e;
+    }
+  }
   return q;
 }
 

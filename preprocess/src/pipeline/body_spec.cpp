@@ -124,9 +124,9 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
     if (mesh["size"]) options.mesh.mesh_size = r.positive(mesh["size"], "mesh size");
     if (mesh["order"]) {
       options.mesh.order = r.count(mesh["order"], "mesh order");
-      if (options.mesh.order != 1)
-        r.fail(mesh["order"], fmt::format("mesh order {}: fbprep takes linear tetrahedra only (order 1); quadratic ones "
-                                          "are not yet reduced or written (issue 15)", options.mesh.order));
+      if (options.mesh.order != 1 && options.mesh.order != 2)
+        r.fail(mesh["order"], fmt::format("mesh order {}: the element order is 1 (linear tetrahedra) or 2 (quadratic, "
+                                          "10 nodes)", options.mesh.order));
     }
     recorded.emplace_back("mesh_size", fmt::format("{}", options.mesh.mesh_size));
   }

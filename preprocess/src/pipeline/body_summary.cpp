@@ -134,7 +134,7 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
   const auto& mesh = body.mesh;
   r += "\nMesh (body frame: origin at the centre of mass)\n";
   line("nodes", fmt::format("{} ({} DOFs)", mesh.nodes.rows(), 3 * mesh.nodes.rows()));
-  line("tetrahedra", fmt::format("{} (order {})", mesh.tets.rows(), mesh.element_order));
+  line("tetrahedra", fmt::format("{} (order {}: {} nodes each)", mesh.tets.rows(), mesh.element_order, mesh.tets.cols()));
   line("surface triangles", std::to_string(mesh.surface_triangles.rows()));
   line("bounding box", vector3(mesh.nodes.colwise().minCoeff().transpose()) + " .. " +
                            vector3(mesh.nodes.colwise().maxCoeff().transpose()) + " m");
@@ -219,7 +219,9 @@ std::string body_json(const format::BodyData& body, const std::filesystem::path&
   j["inertia_kgm2"] = {{inertia(0, 0), inertia(0, 1), inertia(0, 2)},
                        {inertia(1, 0), inertia(1, 1), inertia(1, 2)},
                        {inertia(2, 0), inertia(2, 1), inertia(2, 2)}};
+  j["element_order"] = body.mesh.element_order;
   j["nodes"] = body.mesh.nodes.rows();
+  j["dofs"] = 3 * body.mesh.nodes.rows();
   j["elements"] = body.mesh.tets.rows();
   j["surface_triangles"] = body.mesh.surface_triangles.rows();
   j["modes_kind"] = capped(body.modes.kind);

@@ -6,6 +6,7 @@
 #include "flexbody/preprocess/gcms_constants.hpp"
 #include "flexbody/preprocess/mass_properties.hpp"
 #include "flexbody/preprocess/stress_recovery.hpp"
+#include "flexbody/preprocess/tet10_assembly.hpp"
 
 #include <fmt/chrono.h>
 #include <fmt/format.h>
@@ -96,10 +97,6 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.material = options.material;
 
   // 1. Geometry and mesh.
-  if (options.mesh.order != 1)
-    throw std::invalid_argument(fmt::format("element order {}: fbprep's pipeline takes linear tetrahedra (order 1) only; "
-                                            "quadratic ones are meshed and assembled by the library but not yet reduced "
-                                            "or written (issue 15)", options.mesh.order));
   StageTimer mesh_timer(summary, "mesh");
   GmshImportOptions mesh_options = options.mesh;
   mesh_options.progress = options.progress;
@@ -113,11 +110,15 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.volumes = imported.volumes;
   summary.meshed_here = imported.meshed_here;
   summary.mesh_size_m = imported.mesh_size_m;
-  TetMesh& mesh = imported.mesh;
-  summary.nodes = mesh.node_count();
-  summary.elements = mesh.element_count();
-  summary.dofs = mesh.dof_count();
-  summary.quality = mesh_quality(mesh);
+  // Quadratic tetrahedra (--order 2) number their corners first; every stage below takes all nodes.
+  const std::optional<Tet10Mesh>& quadratic = imported.quadratic;
+  const RowMatrixX3d& input_nodes = quadratic ? quadratic->nodes : imported.mesh.nodes;
+  const Eigen::Index node_count = input_nodes.rows();
+  summary.element_order = quadratic ? 2 : 1;
+  summary.nodes = node_count;
+  summary.elements = imported.mesh.element_count();
+  summary.dofs = 3 * node_count;
+  summary.quality = quadratic ? mesh_quality(*quadratic) : mesh_quality(imported.mesh);
   mesh_timer.stop();
 
   // Errors of the numerical stages name the input they came from.
@@ -139,18 +140,31 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   if (options.progress) options.progress(fmt::format("assembling K and M ({} DOFs)", summary.dofs));
   SparseMatrix stiffness, scalar_mass;
   in_stage("assembly", [&] {
+    if (quadratic) {  // K̄ by the 4-point rule, the exact consistent M_s (tet10_assembly.hpp)
+      Tet10Matrices matrices = assemble_tet10(*quadratic, options.material);
+      stiffness = std::move(matrices.stiffness);
+      scalar_mass = std::move(matrices.scalar_mass);
+      return;
+    }
+    const TetMesh& mesh = imported.mesh;
     const NodeGraph graph = NodeGraph::build(mesh);  // graph and geometry die here: memory for the modes
     const std::vector<Tet4Geometry> geometry = element_geometries(mesh);
     stiffness = assemble_stiffness(mesh, graph, geometry, options.material);
     scalar_mass = assemble_scalar_mass(mesh, graph, geometry, options.material.density, MassScheme::consistent);
   });
-  summary.mass = mass_properties(scalar_mass, mesh.nodes);
+  summary.mass = mass_properties(scalar_mass, input_nodes);
   fe_timer.stop();
 
   format::BodyData body;
-  body.mesh.nodes = mesh.nodes.rowwise() - summary.mass.center_of_mass_input.transpose();
-  body.mesh.tets = mesh.tets;
-  body.mesh.surface_triangles = boundary_triangles(mesh);
+  body.mesh.nodes = input_nodes.rowwise() - summary.mass.center_of_mass_input.transpose();
+  if (quadratic) {
+    body.mesh.tets = quadratic->tets;
+    body.mesh.element_order = 2;
+    body.mesh.surface_triangles = boundary_triangles(*quadratic);
+  } else {
+    body.mesh.tets = imported.mesh.tets;
+    body.mesh.surface_triangles = boundary_triangles(imported.mesh);
+  }
   summary.surface_triangles = body.mesh.surface_triangles.rows();
 
   // Interfaces are selected now (Craig-Bampton needs their nodes); their markers follow the GCMS fields.
@@ -160,11 +174,11 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     for (const LoadPointRequest& p : options.load_points) in_metres.push_back({p.name, p.select, "rbe3", "load point"});
     for (InterfaceRequest& request : in_metres) request.select = scaled(request.select, metres_per(imported.unit));
     std::vector<SelectedInterface> chosen =
-        select_interfaces(in_metres, mesh.nodes, body.mesh.surface_triangles, imported.surfaces);
+        select_interfaces(in_metres, input_nodes, body.mesh.surface_triangles, imported.surfaces);
     // A patch whose nodes lie on a line has no defined rotation (and would leave Craig-Bampton's interior
     // singular): refuse it now, before the modes, naming the interface.
     for (const SelectedInterface& s : chosen)
-      (void)interface_marker(s.name, s.coupling, s.patch, body.mesh.nodes, Eigen::MatrixXd(mesh.node_count(), 0));
+      (void)interface_marker(s.name, s.coupling, s.patch, body.mesh.nodes, Eigen::MatrixXd(node_count, 0));
     return chosen;
   });
 
@@ -261,7 +275,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   // 5. Stress recovery: stress modes of the fields at the output regions' nodes.
   StageTimer recovery_timer(summary, "recovery");
   std::vector<OutputRegionRequest> regions;
-  const double whole_body_bytes = 8.0 * 6.0 * static_cast<double>(mesh.node_count()) * 3.0 *
+  const double whole_body_bytes = 8.0 * 6.0 * static_cast<double>(node_count) * 3.0 *
                                   static_cast<double>(body.gcms.field_count());
   if (options.output_regions) {
     regions = *options.output_regions;
@@ -284,13 +298,15 @@ PrepSummary run_fbprep(const PrepOptions& options) {
       region.name = request.name;
       if (request.select) {
         region.nodes = select_surface_patch(fmt::format("output region '{}'", request.name),
-                                            scaled(*request.select, metres_per(imported.unit)), mesh.nodes,
+                                            scaled(*request.select, metres_per(imported.unit)), input_nodes,
                                             body.mesh.surface_triangles, imported.surfaces)
                            .nodes;
       } else {
-        region.nodes = Eigen::VectorXi::LinSpaced(mesh.node_count(), 0, static_cast<int>(mesh.node_count() - 1));
+        region.nodes = Eigen::VectorXi::LinSpaced(node_count, 0, static_cast<int>(node_count - 1));
       }
-      region.stress_modes = nodal_stress_modes(mesh, options.material, body.gcms.fields, region.nodes);
+      region.stress_modes = quadratic
+                                ? nodal_stress_modes(*quadratic, options.material, body.gcms.fields, region.nodes)
+                                : nodal_stress_modes(imported.mesh, options.material, body.gcms.fields, region.nodes);
       recovery.push_back(std::move(region));
     }
     return recovery;

@@ -50,15 +50,19 @@ std::string PrepSummary::full_report() const {
   line("sha256", input_sha256);
   line("length unit", fmt::format("{}: {}", unit, unit_reason));
   if (meshed_here) line("volumes", std::to_string(volumes));
-  r += "\nMesh (linear tetrahedra)\n";
+  r += element_order == 2 ? "\nMesh (quadratic tetrahedra, 10 nodes)\n" : "\nMesh (linear tetrahedra)\n";
   line("source", meshed_here ? fmt::format("gmsh, element size {:.4g} m", mesh_size_m) : "tetrahedra read from the .msh");
   line("nodes", fmt::format("{}", nodes));
   line("elements", fmt::format("{}", elements));
   line("DOFs", fmt::format("{}", dofs));
-  line("surface triangles", fmt::format("{}", surface_triangles));
-  line("radius ratio", fmt::format("min {:.3f} (element {}), mean {:.3f}; {} below 0.1, {} below 0.3",
+  line("surface triangles", element_order == 2 ? fmt::format("{} (each 6-node face as 4)", surface_triangles)
+                                              : fmt::format("{}", surface_triangles));
+  line("radius ratio", fmt::format("min {:.3f} (element {}), mean {:.3f}; {} below 0.1, {} below 0.3{}",
                                    quality.min_radius_ratio, quality.worst_element, quality.mean_radius_ratio,
-                                   quality.below_0_1, quality.below_0_3));
+                                   quality.below_0_1, quality.below_0_3, element_order == 2 ? " (of the corners)" : ""));
+  if (element_order == 2)
+    line("Jacobian ratio", fmt::format("min {:.3f} (element {}): min/max of det J over Gauss points and nodes",
+                                       quality.min_jacobian_ratio, quality.worst_jacobian_element));
   line("edge length", fmt::format("{:.4g} .. {:.4g} m", quality.min_edge_m, quality.max_edge_m));
   line("volume", fmt::format("{:.6g} m^3", quality.volume_m3));
   r += "\nMaterial\n";
@@ -150,6 +154,7 @@ std::string PrepSummary::json() const {
   j["unit_overrides_declared"] = unit_overrides_declared;
   j["volumes"] = volumes;
   j["mesh_size_m"] = mesh_size_m;
+  j["element_order"] = element_order;
   j["nodes"] = nodes;
   j["elements"] = elements;
   j["dofs"] = dofs;
@@ -162,7 +167,9 @@ std::string PrepSummary::json() const {
                        {"below_0_3", quality.below_0_3},
                        {"min_edge_m", quality.min_edge_m},
                        {"max_edge_m", quality.max_edge_m},
-                       {"volume_m3", quality.volume_m3}};
+                       {"volume_m3", quality.volume_m3},
+                       {"min_jacobian_ratio", quality.min_jacobian_ratio},
+                       {"worst_jacobian_element", quality.worst_jacobian_element}};
   j["material"] = {{"name", material.name},
                    {"E_pa", material.youngs_modulus},
                    {"nu", material.poisson_ratio},

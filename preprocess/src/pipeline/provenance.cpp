@@ -1,4 +1,4 @@
-// Provenance helpers: the input's SHA-256 and the process' memory high-water mark.
+// Provenance helpers: fbprep's version, the input's SHA-256 and the process' memory high-water mark.
 #include "flexbody/preprocess/fbprep_pipeline.hpp"
 
 #include <openssl/evp.h>
@@ -13,6 +13,8 @@
 #include <stdexcept>
 
 namespace flexbody::preprocess {
+
+const char* const kFbprepVersion = FLEXBODY_PACKAGE_VERSION;  // set from project(VERSION) by CMake
 
 std::string sha256_of_file(const std::filesystem::path& path) {
   std::ifstream file(path, std::ios::binary);

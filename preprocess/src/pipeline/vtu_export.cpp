@@ -35,14 +35,17 @@ void write_body_vtu(const format::BodyData& body, const std::filesystem::path& p
   format::VtuWriter out(path, n_n, n_e);
   std::vector<double> vectors(static_cast<std::size_t>(3 * n_n)), tensors(static_cast<std::size_t>(6 * n_n)),
       mises(static_cast<std::size_t>(n_n));
-  const TetMesh tet_mesh{mesh.nodes, mesh.tets};
+  const bool quadratic = mesh.element_order == 2;
+  const TetMesh tet_mesh = quadratic ? TetMesh{} : TetMesh{mesh.nodes, mesh.tets};
+  const Tet10Mesh tet10_mesh = quadratic ? Tet10Mesh{mesh.nodes, mesh.tets} : Tet10Mesh{};
   for (Eigen::Index first = 0; first < body.modes.count(); first += kStressModeBlock) {
     const Eigen::Index block = std::min(kStressModeBlock, body.modes.count() - first);
     Eigen::MatrixXd displacements(3 * n_n, block);  // node-interleaved columns of Ῡ
     for (Eigen::Index c = 0; c < block; ++c)
       for (Eigen::Index i = 0; i < n_n; ++i)
         for (int k = 0; k < 3; ++k) displacements(3 * i + k, c) = body.modes.upsilon(i, 3 * (first + c) + k);
-    const Eigen::MatrixXd stresses = nodal_stresses(tet_mesh, body.material, displacements);
+    const Eigen::MatrixXd stresses = quadratic ? nodal_stresses(tet10_mesh, body.material, displacements)
+                                               : nodal_stresses(tet_mesh, body.material, displacements);
     for (Eigen::Index c = 0; c < block; ++c) {
       const int m = static_cast<int>(first + c);
       const double frequency = body.modes.frequencies_hz(m);
@@ -70,7 +73,9 @@ void write_body_vtu(const format::BodyData& body, const std::filesystem::path& p
   out.point_array("interface", owner);
   std::vector<double> points(mesh.nodes.data(), mesh.nodes.data() + mesh.nodes.size());  // row-major x, y, z
   out.points(points);
-  out.cells(std::vector<std::int64_t>(mesh.tets.data(), mesh.tets.data() + mesh.tets.size()), 4, format::kVtkTetra);
+  // Quadratic tetrahedra as VTK's (type 24, the same node order): ParaView draws their curved faces.
+  out.cells(std::vector<std::int64_t>(mesh.tets.data(), mesh.tets.data() + mesh.tets.size()),
+            static_cast<int>(mesh.tets.cols()), quadratic ? format::kVtkQuadraticTetra : format::kVtkTetra);
   out.commit();
 }
 

@@ -19,6 +19,8 @@ namespace flexbody::format {
 using RowMatrixX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 using RowMatrixX4i = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 4, Eigen::RowMajor>;
 using RowMatrixX3i = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 3, Eigen::RowMajor>;
+/// Element connectivity with as many columns as the element has nodes (4 or 10).
+using RowMatrixXi = Eigen::Matrix<std::int32_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 /// The schema version this library writes: sealed files without a global heap (SCHEMA.md, "Seal").
 inline constexpr int kFormatVersion = 4;
@@ -60,10 +62,17 @@ struct MassProperties {
 /// The finite-element mesh in the body frame: origin at the centre of mass, axes parallel to the
 /// input's. Input-frame coordinates are nodes + center_of_mass_input.
 struct BodyMesh {
-  RowMatrixX3d nodes;              ///< n_n x 3 [m], body frame
-  RowMatrixX4i tets;               ///< n_e x 4, 0-based node indices, positive orientation
-  RowMatrixX3i surface_triangles;  ///< n_t x 3, 0-based, counter-clockwise seen from outside
-  int element_order = 1;           ///< 1: linear tetrahedra (4 nodes)
+  RowMatrixX3d nodes;  ///< n_n x 3 [m], body frame
+  /// n_e x 4 (element_order 1) or n_e x 10 (element_order 2: the corners, then the middles of the edges (0,1), (1,2),
+  /// (2,0), (0,3), (1,3), (2,3), format/tet10_element.hpp), 0-based node indices, positive orientation.
+  RowMatrixXi tets;
+  /// n_t x 3, 0-based, counter-clockwise seen from outside. For element_order 2 each 6-node boundary face is split
+  /// into its 4 corner-and-middle triangles (SCHEMA.md).
+  RowMatrixX3i surface_triangles;
+  int element_order = 1;  ///< 1: linear tetrahedra (4 nodes), 2: quadratic (10 nodes)
+
+  /// Nodes per element: 4 or 10.
+  [[nodiscard]] static constexpr int nodes_per_element(int order) { return order == 2 ? 10 : 4; }
 };
 
 /// The reduction basis.

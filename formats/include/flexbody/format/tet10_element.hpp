@@ -51,4 +51,16 @@ struct Tet10Gradients {
 };
 [[nodiscard]] Tet10Gradients tet10_gradients(const Tet10Nodes& nodes, const Eigen::Vector3d& xi);
 
+/// What stress recovery uses of one element (issue 15): the displacement gradient at each of its nodes, extrapolated
+/// from the 4 Gauss points as Abaqus and CalculiX do, ∇u(node a) = Σ_b u_b ⊗ at_node[a].row(b). The 4 Gauss-point
+/// values are fitted by the linear function of the barycentric coordinates through them and that function is
+/// evaluated at the node (at a mid-edge node: the mean of its two corners). In a straight-sided element the gradient
+/// is linear, so this is the exact gradient at the node; in a curved one it is the usual extrapolation.
+struct Tet10RecoveryGradients {
+  std::array<Eigen::Matrix<double, 10, 3>, 10> at_node{};  ///< at_node[a](b, k) = extrapolated ∂N_b/∂x_k [1/m]
+  double volume = 0.0;  ///< Σ_g w_g det J_g [m³] (the 4-point rule: exact for straight-sided elements)
+};
+/// Throws nothing; volume <= 0 marks an element whose Jacobian is not positive at a Gauss point (at_node then zero).
+[[nodiscard]] Tet10RecoveryGradients tet10_recovery_gradients(const Tet10Nodes& nodes);
+
 }  // namespace flexbody::format

@@ -15,6 +15,8 @@ namespace flexbody::format {
 /// VTK cell type numbers used here.
 inline constexpr std::uint8_t kVtkTriangle = 5;
 inline constexpr std::uint8_t kVtkTetra = 10;
+/// VTK_QUADRATIC_TETRA: 10 nodes, corners then edges (0,1), (1,2), (2,0), (0,3), (1,3), (2,3), as the body file's.
+inline constexpr std::uint8_t kVtkQuadraticTetra = 24;
 
 /// One .vtu file, written in the order VTK expects: point arrays, then the points, then the cells, then
 /// commit(). It is written to a temporary beside the target and renamed on commit(), so a failed or

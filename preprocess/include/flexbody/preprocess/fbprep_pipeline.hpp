@@ -27,8 +27,8 @@
 
 namespace flexbody::preprocess {
 
-/// The fbprep version written into every body file (created_by).
-inline constexpr const char* kFbprepVersion = "0.6.1";  // the package version (CMakeLists.txt)
+/// The fbprep version written into every body file (created_by): the package version of CMakeLists.txt.
+extern const char* const kFbprepVersion;
 
 /// An output region for stress recovery: the nodes of the selected surface patch, or every node.
 struct OutputRegionRequest {
@@ -86,6 +86,8 @@ struct PrepSummary {
   int volumes = 0;
   bool meshed_here = true;
   double mesh_size_m = 0.0;
+  int element_order = 1;  ///< 1: linear tetrahedra, 2: quadratic (10 nodes; nodes and DOFs count the mid-edge nodes)
+  /// Surface triangles: with element order 2, four per 6-node boundary face (formats/SCHEMA.md, Mesh).
   Eigen::Index nodes = 0, elements = 0, dofs = 0, surface_triangles = 0;
   MeshQuality quality;
   Material material;

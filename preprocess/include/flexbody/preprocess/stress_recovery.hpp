@@ -1,5 +1,5 @@
 #pragma once
-// flexbody/preprocess/stress_recovery.hpp: nodal stresses of linear tetrahedra, of displacement fields and of
+// flexbody/preprocess/stress_recovery.hpp: nodal stresses of linear (and quadratic) tetrahedra, of displacement fields and of
 // the GCMS fields (the stress modes S of an output region, formats/SCHEMA.md section Recovery).
 //
 // A linear tetrahedron has constant strain: for a displacement u, H_e = Σ_a u_a ⊗ ∇N_a (∇N_a from
@@ -51,6 +51,15 @@ inline constexpr int kStressComponents = 6;
 
 /// Von Mises equivalent stress [Pa] of one Voigt stress vector (order above):
 /// sqrt(½ [(σxx − σyy)² + (σyy − σzz)² + (σzz − σxx)²] + 3 (σxy² + σxz² + σyz²)).
+/// The same for quadratic tetrahedra (issue 15): each element's stress at its node is extrapolated from its 4 Gauss
+/// points (format::tet10_recovery_gradients: exact in straight-sided elements, whose stress is linear), then averaged
+/// over the elements around the node weighted by their volumes. A quadratic displacement field gives its exact
+/// (linear) stress at every node of a straight-sided mesh.
+[[nodiscard]] Eigen::MatrixXd nodal_stresses(const Tet10Mesh& mesh, const Material& material,
+                                             const Eigen::MatrixXd& displacements);
+[[nodiscard]] Eigen::MatrixXd nodal_stress_modes(const Tet10Mesh& mesh, const Material& material,
+                                                 const Eigen::MatrixXd& fields, const Eigen::VectorXi& region_nodes);
+
 [[nodiscard]] double von_mises(const Eigen::Matrix<double, 6, 1>& stress);
 
 }  // namespace flexbody::preprocess

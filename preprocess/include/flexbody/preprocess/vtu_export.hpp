@@ -10,7 +10,7 @@
 namespace flexbody::preprocess {
 
 /// Writes `path` (atomically: a temporary beside it, then rename) with the tetrahedra in the body frame
-/// [m] and, as point data:
+/// [m] (quadratic ones as VTK quadratic tetrahedra, cell type 24) and, as point data:
 /// - per mode, its displacement vector ("mode_01_123.456Hz", M-normalised as stored: [kg^-1/2], scale with
 ///   Warp By Vector), its nodal stress as a symmetric tensor ("stress_01_123.456Hz", 6 components in ParaView's
 ///   SymmetricTensor order XX, YY, ZZ, XY, YZ, XZ; nodal_stresses of stress_recovery.hpp with body.material, per

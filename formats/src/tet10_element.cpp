@@ -134,6 +134,7 @@ Tet10RecoveryGradients tet10_recovery_gradients(const Tet10Nodes& nodes) {
     const Tet10Gradients g = tet10_gradients(nodes, points[p]);
     if (!(g.determinant > 0.0)) {
       out.volume = std::min(0.0, g.determinant);
+      for (auto& at_node : out.at_node) at_node.setZero();
       return out;
     }
     at_gauss[p] = g.gradients;

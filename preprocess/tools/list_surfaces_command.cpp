@@ -22,10 +22,12 @@ int list_surfaces_command(int argc, char** argv) {
   app.name("fbprep list-surfaces");
   std::string input, unit_text;
   double mesh_size = 0.0;
+  int order = 1;
   bool json = false;
   app.add_option("INPUT", input, "STEP/STP, IGES/IGS, BREP, gmsh .geo or .msh")->required();
   app.add_option("--unit", unit_text, "unit of INPUT's coordinates, as for fbprep");
   app.add_option("--mesh-size", mesh_size, "element size in the input's unit, as for fbprep");
+  app.add_option("--order", order, "element order 1 or 2, as for fbprep (a .msh of quadratic tetrahedra needs 2)");
   app.add_flag("--json", json, "print one JSON object on stdout instead of the table");
   try {
     app.parse(argc, argv);
@@ -44,6 +46,7 @@ int list_surfaces_command(int argc, char** argv) {
       throw std::invalid_argument(fmt::format("--mesh-size must be a positive number (the largest element size in the "
                                               "input's unit; leave it out for the default), got {}", mesh_size));
     options.mesh_size = mesh_size;
+    options.order = order;
     const preprocess::ImportedMesh imported = preprocess::import_tet_mesh(input, options);
     if (json) {
       nlohmann::ordered_json j;

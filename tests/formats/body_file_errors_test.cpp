@@ -210,6 +210,16 @@ TEST_F(ReadErrors, PhysicalRangeViolation) {
   expect_read_error(path, {"nu.fbh5: /material/poisson_ratio is 1, expected -1 < nu < 0.5"});
 }
 
+// element_order says how many nodes each row of /mesh/tets has (SCHEMA.md, Mesh): a linear file whose attribute claims
+// quadratic elements is refused by the dataset's shape, and an order the format does not know by name.
+TEST_F(ReadErrors, ElementOrderMustMatchTheTetsColumns) {
+  const auto path = good_file("order.fbh5");
+  set_int_attribute(path, "/mesh", "element_order", 2);
+  expect_read_error(path, {"/mesh/tets has shape 2 x 4, expected n_e (element_order 2) x 10"});
+  set_int_attribute(path, "/mesh", "element_order", 3);
+  expect_read_error(path, {"/mesh/element_order is 3, expected 1 (linear 4-node tetrahedra) or 2"});
+}
+
 TEST_F(ReadErrors, MissingGcmsMatrix) {
   const auto path = good_file("no_g.fbh5");
   delete_link(path, "/gcms/G");

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+
+#include <set>
 #include <nlohmann/json.hpp>
 
 namespace {
@@ -86,11 +88,13 @@ TEST(BodySpec, CommandLineFlagsOverrideTheSpec) {
   EXPECT_EQ(json["interfaces"].size(), 2u);  // the rest of the spec still holds
 }
 
-// mesh: {order: 2} gives quadratic tetrahedra (issue 15); --order on the command line replaces it like every flag.
+// mesh: {order: 2} gives quadratic tetrahedra (issue 15); --order on the command line replaces it like every flag; an
+// output region may be the whole surface.
 TEST(BodySpec, ElementOrderFromTheSpecAndItsOverride) {
   const auto dir = beam_folder();
   std::string spec = kBeamSpec;
   spec.replace(spec.find("mesh: {size: 0.025}"), 19, "mesh: {size: 0.05, order: 2}");
+  spec += "output_regions:\n  skin: {select: surface}\n";
   write_text(dir / "part" / "beam.yaml", spec);
   const CliRun quadratic = run_fbprep(dir, "part/beam.yaml -o q.fbh5 --json");
   ASSERT_EQ(quadratic.exit_code, 0) << quadratic.err;
@@ -98,10 +102,18 @@ TEST(BodySpec, ElementOrderFromTheSpecAndItsOverride) {
   const CliRun linear = run_fbprep(dir, "part/beam.yaml -o l.fbh5 --order 1 --json");
   ASSERT_EQ(linear.exit_code, 0) << linear.err;
   EXPECT_EQ(nlohmann::json::parse(linear.out)["element_order"], 1);
+  const flexbody::format::BodyData body = flexbody::format::read_body_file(dir / "q.fbh5");
   bool recorded = false;
-  for (const auto& [name, value] : flexbody::format::read_body_file(dir / "q.fbh5").provenance.options)
+  for (const auto& [name, value] : body.provenance.options)
     recorded = recorded || (name == "element_order" && value == "2");
   EXPECT_TRUE(recorded);
+  // select: surface takes every boundary node (corners and mid-edge nodes), no other.
+  std::set<int> boundary(body.mesh.surface_triangles.data(),
+                         body.mesh.surface_triangles.data() + body.mesh.surface_triangles.size());
+  ASSERT_EQ(body.recovery.size(), 1u);
+  EXPECT_EQ(body.recovery[0].name, "skin");
+  EXPECT_EQ(std::set<int>(body.recovery[0].nodes.data(), body.recovery[0].nodes.data() + body.recovery[0].nodes.size()),
+            boundary);
 }
 
 TEST(BodySpec, RefusalsNameTheLine) {
@@ -131,7 +143,7 @@ TEST(BodySpec, RefusalsNameTheLine) {
   expect_spec_error(head + "interfaces:\n  a: " + tip + "}\nload_points:\n  a: " + tip + "}\n", 6,
                     "load point 'a': the name is already an interface or load point");
   expect_spec_error(head + "output_regions:\n  top: {select: everywhere}\n", 4,
-                    "output region 'top' select must be a selector map or 'all' (every node), got 'everywhere'");
+                    "output region 'top' select must be a selector map, 'all' (every node) or 'surface' (every boundary node), got 'everywhere'");
   expect_spec_error(head + "output_regions:\n  \"a,b\": {select: all}\n", 4,
                     "output region 'a,b': the name is not allowed");
   expect_spec_error(head + "interfaces:\n  root: {select: {surfaces: [0]}}\n", 4,

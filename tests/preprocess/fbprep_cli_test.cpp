@@ -293,6 +293,23 @@ TEST(FbprepCli, ListSurfacesFindsTheBores) {
   }
   EXPECT_EQ(bores, 1);
   EXPECT_EQ(fbprep(dir, "list-surfaces absent.step").exit_code, 1);
+  // With --order 2 the surfaces are those fbprep --order 2 selects from: each 6-node triangle as four, its mid-edge
+  // nodes on the bore, so the chords are half as long and the faceted area's shortfall a quarter, ~0.4 %.
+  const CliRun quadratic = fbprep(dir, fmt::format("list-surfaces '{}' --mesh-size 3 --order 2 --json",
+                                                   bracket_step().string()));
+  ASSERT_EQ(quadratic.exit_code, 0) << quadratic.err;
+  bores = 0;
+  const auto quadratic_json = nlohmann::json::parse(quadratic.out);
+  for (const auto& s : quadratic_json["surfaces"]) {
+    const Eigen::Vector3d c(s["centroid_m"][0].get<double>(), s["centroid_m"][1].get<double>(),
+                            s["centroid_m"][2].get<double>());
+    if ((c - Eigen::Vector3d(0.045, 0.020, 0.004)).norm() > 1e-4) continue;
+    ++bores;
+    const double cylinder = 2 * std::numbers::pi * 0.005 * 0.008;
+    EXPECT_LT(s["area_m2"].get<double>(), cylinder);
+    EXPECT_GT(s["area_m2"].get<double>(), 0.99 * cylinder);
+  }
+  EXPECT_EQ(bores, 1);
 }
 
 TEST(FbprepCli, GeoInMillimetresGivesTheSameBodyAsTheStep) {

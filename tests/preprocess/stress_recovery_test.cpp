@@ -326,7 +326,8 @@ TEST(StressRecovery, QuadraticTetrahedraRecoverTheExactStressOfAQuadraticField) 
 // Curved elements (interior mid-edge nodes moved off their edges' middles by up to 15 % of the cell) still represent a
 // linear displacement exactly (isoparametric), and the extrapolation reproduces a constant stress (its rows sum to
 // 1): the patch test of the curved mesh. Also: the stress modes of scalar fields equal nodal_stresses of those fields
-// along x, y, z, bit for bit, and a folded element around an output node is refused.
+// along x, y, z (to rounding, 1e-12: the two sum the same terms in different orders), and a folded element around an
+// output node is refused.
 TEST(StressRecovery, CurvedQuadraticTetrahedraPassThePatchTest) {
   fp::Tet10Mesh mesh = fp::quadratic_mesh(flexbody::test::box_mesh(0.3, 0.2, 0.1, 3, 3, 3));
   std::mt19937 rng(5);

@@ -6,6 +6,7 @@
 #include "flexbody/preprocess/free_free_modes.hpp"
 #include "flexbody/preprocess/interfaces.hpp"
 #include "flexbody/preprocess/mass_properties.hpp"
+#include "flexbody/preprocess/tet10_assembly.hpp"
 #include "flexbody/runtime/full_order.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
@@ -68,6 +69,36 @@ TEST(FullOrderFromFile, AssemblesTheMatricesFbprepAssembled) {
   EXPECT_LT(relative_difference(model.sparse->stiffness, fp::full_from_upper(b.fe.stiffness)), 1e-14);
   EXPECT_LT(relative_difference(model.sparse->mass, fp::full_from_upper(b.fe.scalar_mass)), 1e-14);
   EXPECT_NEAR(model.mass, kSteel.density * 0.3 * 0.05 * 0.04, 1e-12 * model.mass);
+}
+
+// Quadratic tetrahedra (issue 15): the runtime assembles the body file's 10-node elements with fbprep's element
+// integrals (K̄ by the 4-point rule, the exact consistent mass), so its K̄ and M_s are preprocess::assemble_tet10's to
+// round-off; the mass is the box's. A folded element is refused by name.
+TEST(FullOrderFromFile, AssemblesQuadraticTetrahedraAsFbprepDoes) {
+  const fp::Tet10Mesh mesh = fp::quadratic_mesh(flexbody::test::box_mesh(0.3, 0.05, 0.04, 6, 2, 2));
+  const fp::Tet10Matrices fe = fp::assemble_tet10(mesh, kSteel);
+  flexbody::format::BodyData data;
+  data.mass = fp::mass_properties(fe.scalar_mass, mesh.nodes);
+  data.material = {"steel", kSteel.youngs_modulus, kSteel.poisson_ratio, kSteel.density};
+  data.mesh.nodes = mesh.nodes.rowwise() - data.mass.center_of_mass_input.transpose();
+  data.mesh.tets = mesh.tets;
+  data.mesh.element_order = 2;
+  const fr::BodyModel model = fr::full_order_model(data, "box");
+  ASSERT_TRUE(model.sparse);
+  EXPECT_EQ(model.sparse->stiffness.rows(), mesh.dof_count());
+  EXPECT_LT(relative_difference(model.sparse->stiffness, fp::full_from_upper(fe.stiffness)), 1e-14);
+  EXPECT_LT(relative_difference(model.sparse->mass, fp::full_from_upper(fe.scalar_mass)), 1e-14);
+  EXPECT_NEAR(model.mass, kSteel.density * 0.3 * 0.05 * 0.04, 1e-12 * model.mass);
+
+  flexbody::format::BodyData folded = data;
+  folded.mesh.nodes.row(folded.mesh.tets(5, 4)) = folded.mesh.nodes.row(folded.mesh.tets(5, 2));
+  try {
+    static_cast<void>(fr::full_order_model(folded, "box.fbh5"));
+    ADD_FAILURE() << "a folded element was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("box.fbh5: quadratic tetrahedron"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("is inverted or folded"), std::string::npos) << e.what();
+  }
 }
 
 TEST(FullOrderFromFile, RefusesBadMeshesAndOverlappingRbe2Sets) {

@@ -251,7 +251,7 @@ std::vector<CadSurface> cad_surfaces(const std::unordered_map<std::size_t, std::
       bool ok = true;
       for (std::size_t a = 0; a < per; ++a) {
         const auto it = index_of_tag.find(node_tags[per * t + a]);
-        ok = ok && it != index_of_tag.end() && it->second >= 0;
+        ok = ok && it != index_of_tag.end();
         if (ok) face[a] = it->second;
       }
       if (!ok) continue;
@@ -329,8 +329,8 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
   result.format = input_format_of(path);
   check_readable(path);
   if (options.order != 1 && options.order != 2)
-    throw std::invalid_argument(fmt::format("--order {}: the element order is 1 (linear tetrahedra) or 2 (quadratic)",
-                                            options.order));
+    throw std::invalid_argument(fmt::format("element order {}: the element order is 1 (linear tetrahedra) or 2 "
+                                            "(quadratic)", options.order));
   if (!(options.mesh_size >= 0.0) || !std::isfinite(options.mesh_size))
     throw std::invalid_argument(fmt::format("--mesh-size must be a positive length, got {}", options.mesh_size));
   const UnitDecision unit = decide_unit(path, result.format, options.unit, options.unit_source);

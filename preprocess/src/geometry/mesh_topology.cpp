@@ -217,7 +217,7 @@ MeshQuality mesh_quality(const Tet10Mesh& mesh) {
     const Eigen::Matrix<double, 14, 1> det = format::tet10_jacobian_determinants(x);
     q.volume_m3 += det.head<4>().sum() / 24.0;  // the 4-point rule's weights, 1/24 each
     const double ratio = det.maxCoeff() > 0.0 ? det.minCoeff() / det.maxCoeff() : det.minCoeff();
-    if (ratio < q.min_jacobian_ratio) {
+    if (ratio < q.min_jacobian_ratio || q.worst_jacobian_element < 0) {
       q.min_jacobian_ratio = ratio;
       q.worst_jacobian_element = e;
     }

@@ -235,9 +235,10 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
       OutputRegionRequest request;
       request.name = name;
       if (select.IsScalar()) {
-        if (select.Scalar() != "all")
-          r.fail(select, fmt::format("{} select must be a selector map or 'all' (every node), got '{}'", where,
-                                     select.Scalar()));
+        if (select.Scalar() != "all" && select.Scalar() != "surface")
+          r.fail(select, fmt::format("{} select must be a selector map, 'all' (every node) or 'surface' (every boundary "
+                                     "node), got '{}'", where, select.Scalar()));
+        request.surface = select.Scalar() == "surface";
       } else {
         request.select = read_selector(r, select, where);
       }

@@ -275,8 +275,16 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   // 5. Stress recovery: stress modes of the fields at the output regions' nodes.
   StageTimer recovery_timer(summary, "recovery");
   std::vector<OutputRegionRequest> regions;
-  const double whole_body_bytes = 8.0 * 6.0 * static_cast<double>(node_count) * 3.0 *
-                                  static_cast<double>(body.gcms.field_count());
+  const double bytes_per_node = 8.0 * 6.0 * 3.0 * static_cast<double>(body.gcms.field_count());
+  const Eigen::VectorXi surface_nodes = [&] {  // ascending, unique
+    std::vector<int> used(body.mesh.surface_triangles.data(),
+                          body.mesh.surface_triangles.data() + body.mesh.surface_triangles.size());
+    std::sort(used.begin(), used.end());
+    used.erase(std::unique(used.begin(), used.end()), used.end());
+    return Eigen::VectorXi(Eigen::Map<const Eigen::VectorXi>(used.data(), static_cast<Eigen::Index>(used.size())));
+  }();
+  const double whole_body_bytes = bytes_per_node * static_cast<double>(node_count);
+  const double surface_bytes = bytes_per_node * static_cast<double>(surface_nodes.size());
   if (options.output_regions) {
     regions = *options.output_regions;
     summary.output_regions_reason = regions.empty() ? "none: the body spec asks for none" : "as the body spec names them";
@@ -284,10 +292,16 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     regions.push_back({"body", std::nullopt});
     summary.output_regions_reason = fmt::format("the whole body by default (its stress modes take {:.3g} MB, at most "
                                                 "{:.0f})", whole_body_bytes / 1e6, kDefaultRecoveryBytes / 1e6);
+  } else if (surface_bytes <= kDefaultRecoveryBytes) {
+    regions.push_back({"surface", std::nullopt, true});
+    summary.output_regions_reason = fmt::format(
+        "the surface by default (its stress modes take {:.3g} MB; the whole body's would take {:.3g}, at most {:.0f})",
+        surface_bytes / 1e6, whole_body_bytes / 1e6, kDefaultRecoveryBytes / 1e6);
   } else {
-    summary.output_regions_reason = fmt::format("none: the whole body's stress modes would take {:.3g} MB (default "
-                                                "limit {:.0f}); name output_regions in the body spec",
-                                                whole_body_bytes / 1e6, kDefaultRecoveryBytes / 1e6);
+    summary.output_regions_reason = fmt::format("none: the surface's stress modes would take {:.3g} MB, the whole "
+                                                "body's {:.3g} (default limit {:.0f}); name output_regions in the body "
+                                                "spec", surface_bytes / 1e6, whole_body_bytes / 1e6,
+                                                kDefaultRecoveryBytes / 1e6);
   }
   if (options.progress && !regions.empty())
     options.progress(fmt::format("stress modes for {} output region{}", regions.size(), regions.size() == 1 ? "" : "s"));
@@ -301,6 +315,8 @@ PrepSummary run_fbprep(const PrepOptions& options) {
                                             scaled(*request.select, metres_per(imported.unit)), input_nodes,
                                             body.mesh.surface_triangles, imported.surfaces)
                            .nodes;
+      } else if (request.surface) {
+        region.nodes = surface_nodes;
       } else {
         region.nodes = Eigen::VectorXi::LinSpaced(node_count, 0, static_cast<int>(node_count - 1));
       }

@@ -79,9 +79,12 @@ BodyModel full_order_model(const SparseMatrix& stiffness, const SparseMatrix& sc
 
 BodyModel full_order_model(const format::BodyData& body, const std::string& source) {
   const format::BodyMesh& mesh = body.mesh;
-  if (mesh.element_order != 1)
-    throw std::invalid_argument(source + ": the full-order body needs linear tetrahedra (element order " +
+  if (mesh.element_order != 1 && mesh.element_order != 2)
+    throw std::invalid_argument(source + ": the full-order body needs linear or quadratic tetrahedra (element order " +
                                 std::to_string(mesh.element_order) + ")");
+  if (mesh.tets.cols() != format::BodyMesh::nodes_per_element(mesh.element_order))
+    throw std::invalid_argument(source + ": element order " + std::to_string(mesh.element_order) + " with " +
+                                std::to_string(mesh.tets.cols()) + " nodes per tetrahedron");
   const format::Material& material = body.material;
   if (!(material.youngs_modulus > 0.0) || !(material.density > 0.0) || !(material.poisson_ratio > -1.0) ||
       !(material.poisson_ratio < 0.5))
@@ -89,7 +92,7 @@ BodyModel full_order_model(const format::BodyData& body, const std::string& sour
   const Eigen::Index n_n = mesh.nodes.rows();
   const auto outside = [n_n](Eigen::Index i) { return i < 0 || i >= n_n; };
   for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e)
-    for (int a = 0; a < 4; ++a)
+    for (Eigen::Index a = 0; a < mesh.tets.cols(); ++a)
       if (outside(mesh.tets(e, a)))
         throw std::invalid_argument(source + ": tetrahedron " + std::to_string(e) + " names node " +
                                     std::to_string(mesh.tets(e, a)) + ", outside the mesh's " + std::to_string(n_n));

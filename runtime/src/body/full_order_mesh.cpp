@@ -1,5 +1,6 @@
 #include "full_order_mesh.hpp"
 
+#include "flexbody/format/tet10_element.hpp"
 #include "flexbody/format/tet4_element.hpp"
 
 #include <Eigen/Dense>
@@ -7,10 +8,46 @@
 #include <stdexcept>
 
 namespace flexbody::runtime {
+namespace {
+
+// K̄ and M_s of quadratic tetrahedra: fbprep's element integrals (format/tet10_element.hpp; the exact consistent mass,
+// as preprocess/tet10_assembly.hpp), both triangles.
+AssembledMesh assemble_quadratic(const format::BodyMesh& mesh, const format::Material& material, double lambda,
+                                 double mu, const std::string& source) {
+  const Eigen::Index n_n = mesh.nodes.rows(), n_e = mesh.tets.rows();
+  std::vector<Eigen::Triplet<double>> k_entries, m_entries;
+  k_entries.reserve(static_cast<std::size_t>(900 * n_e));
+  m_entries.reserve(static_cast<std::size_t>(100 * n_e));
+  for (Eigen::Index t = 0; t < n_e; ++t) {
+    format::Tet10Nodes x;
+    for (int a = 0; a < 10; ++a) x.row(a) = mesh.nodes.row(mesh.tets(t, a));
+    if (!(format::tet10_jacobian_determinants(x).minCoeff() > 0.0))
+      throw std::invalid_argument(source + ": quadratic tetrahedron " + std::to_string(t) + " is inverted or folded "
+                                  "(its Jacobian determinant is not positive at every Gauss point and node)");
+    const Eigen::Matrix<double, 30, 30> k = format::tet10_stiffness(x, lambda, mu);
+    const Eigen::Matrix<double, 10, 10> m = format::tet10_mass(x, material.density);
+    for (int b = 0; b < 10; ++b)
+      for (int a = 0; a < 10; ++a) {
+        const Eigen::Index row = mesh.tets(t, b), col = mesh.tets(t, a);
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) k_entries.emplace_back(3 * row + r, 3 * col + c, k(3 * b + r, 3 * a + c));
+        m_entries.emplace_back(row, col, m(b, a));
+      }
+  }
+  AssembledMesh out;
+  out.stiffness.resize(3 * n_n, 3 * n_n);
+  out.stiffness.setFromTriplets(k_entries.begin(), k_entries.end());
+  out.scalar_mass.resize(n_n, n_n);
+  out.scalar_mass.setFromTriplets(m_entries.begin(), m_entries.end());
+  return out;
+}
+
+}  // namespace
 
 AssembledMesh assemble_mesh(const format::BodyMesh& mesh, const format::Material& material, const std::string& source) {
   const double e = material.youngs_modulus, nu = material.poisson_ratio;
   const double lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = e / (2.0 * (1.0 + nu));  // Lamé's parameters
+  if (mesh.element_order == 2) return assemble_quadratic(mesh, material, lambda, mu, source);
   const Eigen::Index n_n = mesh.nodes.rows(), n_e = mesh.tets.rows();
   std::vector<Eigen::Triplet<double>> k_entries, m_entries;
   k_entries.reserve(static_cast<std::size_t>(144 * n_e));

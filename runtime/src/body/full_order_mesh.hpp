@@ -17,9 +17,9 @@ struct AssembledMesh {
   Eigen::SparseMatrix<double> scalar_mass;  ///< consistent M_s (n_n square, both triangles) [kg]
 };
 
-/// K̄ and M_s of the mesh's linear tetrahedra for the material, summed element by element as fbprep does
-/// (preprocess/assembly.hpp) from the same element integrals (format/tet4_element.hpp). Throws std::invalid_argument
-/// naming the element for one that is inverted or flat.
+/// K̄ and M_s of the mesh's linear or quadratic tetrahedra for the material, summed element by element as fbprep does
+/// (preprocess/assembly.hpp, tet10_assembly.hpp) from the same element integrals (format/tet4_element.hpp,
+/// tet10_element.hpp). Throws std::invalid_argument naming the element for one that is inverted, flat or folded.
 [[nodiscard]] AssembledMesh assemble_mesh(const format::BodyMesh& mesh, const format::Material& material,
                                           const std::string& source);
 

@@ -30,14 +30,16 @@ namespace flexbody::preprocess {
 /// The fbprep version written into every body file (created_by): the package version of CMakeLists.txt.
 extern const char* const kFbprepVersion;
 
-/// An output region for stress recovery: the nodes of the selected surface patch, or every node.
+/// An output region for stress recovery: the nodes of the selected surface patch, every node, or every boundary node.
 struct OutputRegionRequest {
   std::string name;
-  std::optional<Selector> select;  ///< input frame, the input's length unit; nullopt: the whole body
+  std::optional<Selector> select;  ///< input frame, the input's length unit; nullopt: the whole body or its surface
+  bool surface = false;            ///< without a selector: the boundary's nodes (a spec's `select: surface`)
 };
 
 /// Without output regions in the request, the whole body is one ("body") if its stress modes take at
-/// most this many bytes (6 n_n x 3 n_f doubles), and there are none otherwise.
+/// most this many bytes (6 n_n x 3 n_f doubles); else its boundary nodes ("surface", what ParaView pictures draw) if
+/// theirs do; and there are none otherwise.
 inline constexpr double kDefaultRecoveryBytes = 64e6;
 
 /// How the reduction basis is made.

@@ -30,8 +30,7 @@ struct GmshImportOptions {
   /// Target element size in the unit the geometry is read in (0: one twenty-fifth of the
   /// bounding-box diagonal).
   double mesh_size = 0.0;
-  /// Element order: 1 (linear tetrahedra) or 2 (quadratic, ImportedMesh::quadratic; fbprep's pipeline does not take
-  /// them yet, issue 15).
+  /// Element order: 1 (linear tetrahedra) or 2 (quadratic, ImportedMesh::quadratic).
   int order = 1;
   /// Called with a short message before each long step.
   std::function<void(const std::string&)> progress;

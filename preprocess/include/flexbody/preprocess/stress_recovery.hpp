@@ -49,8 +49,6 @@ inline constexpr int kStressComponents = 6;
 [[nodiscard]] Eigen::MatrixXd nodal_stress_modes(const TetMesh& mesh, const Material& material,
                                                  const Eigen::MatrixXd& fields, const Eigen::VectorXi& region_nodes);
 
-/// Von Mises equivalent stress [Pa] of one Voigt stress vector (order above):
-/// sqrt(½ [(σxx − σyy)² + (σyy − σzz)² + (σzz − σxx)²] + 3 (σxy² + σxz² + σyz²)).
 /// The same for quadratic tetrahedra (issue 15): each element's stress at its node is extrapolated from its 4 Gauss
 /// points (format::tet10_recovery_gradients: exact in straight-sided elements, whose stress is linear), then averaged
 /// over the elements around the node weighted by their volumes. A quadratic displacement field gives its exact
@@ -60,6 +58,8 @@ inline constexpr int kStressComponents = 6;
 [[nodiscard]] Eigen::MatrixXd nodal_stress_modes(const Tet10Mesh& mesh, const Material& material,
                                                  const Eigen::MatrixXd& fields, const Eigen::VectorXi& region_nodes);
 
+/// Von Mises equivalent stress [Pa] of one Voigt stress vector (order above):
+/// sqrt(½ [(σxx − σyy)² + (σyy − σzz)² + (σzz − σxx)²] + 3 (σxy² + σxz² + σyz²)).
 [[nodiscard]] double von_mises(const Eigen::Matrix<double, 6, 1>& stress);
 
 }  // namespace flexbody::preprocess

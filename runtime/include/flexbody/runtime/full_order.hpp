@@ -29,11 +29,12 @@ namespace flexbody::runtime {
                                          const Eigen::SparseMatrix<double>& scalar_mass,
                                          const format::RowMatrixX3d& nodes, const std::string& source = "full order");
 
-/// The full-order body of a body file: K̄ and the consistent M_s of its tetrahedra (format/tet4_element.hpp) from
+/// The full-order body of a body file: K̄ and the consistent M_s of its linear or quadratic tetrahedra
+/// (format/tet4_element.hpp, tet10_element.hpp: fbprep's element integrals) from
 /// /mesh and /material, its rbe2 interfaces as affine node sets and all its interfaces as markers (y_row and the
 /// rigid-fit rotation R in the body's fields). It has no output regions: stresses are recovered from modes, and the
-/// file's stress modes have no full-order counterpart. Throws std::invalid_argument naming `source` for a mesh that is
-/// not of linear tetrahedra, an inverted or flat element, or rbe2 interfaces that share nodes.
+/// file's stress modes have no full-order counterpart. Throws std::invalid_argument naming `source` for an element order
+/// other than 1 and 2, an inverted, flat or folded element, or rbe2 interfaces that share nodes.
 [[nodiscard]] BodyModel full_order_model(const format::BodyData& body, const std::string& source = "body");
 
 /// The full-order body with stiffness-proportional damping D̂ = β K̄ [β in s] of its deformation: mode m of the mesh

@@ -9,7 +9,9 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 #include <gtest/gtest.h>
+#include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -269,4 +271,46 @@ TEST(Tet10Element, AssemblyRefusesAFoldedElement) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("element 0"), std::string::npos) << e.what();
   }
+}
+
+// The parallel assembly (element colours, the elements of a colour in parallel, into the node graph's pattern) gives
+// the same bits with 1 and 2 threads, and the element matrices' plain sum (triplets, both triangles) to round-off
+// (1e-14 of each matrix's norm: the sums differ only in their order).
+TEST(Tet10Element, ParallelAssemblyIsTheSumOfTheElementMatrices) {
+  const fp::Tet10Mesh mesh = fp::quadratic_mesh(flexbody::test::box_mesh(0.3, 0.05, 0.04, 12, 3, 2));
+  const fp::Material steel{"steel", 210e9, 0.3, 7850.0};
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const fp::Tet10Matrices one = fp::assemble_tet10(mesh, steel);
+  omp_set_num_threads(std::max(2, threads));
+  const fp::Tet10Matrices two = fp::assemble_tet10(mesh, steel);
+  omp_set_num_threads(threads);
+  ASSERT_EQ(one.stiffness.nonZeros(), two.stiffness.nonZeros());
+  EXPECT_TRUE(std::equal(one.stiffness.valuePtr(), one.stiffness.valuePtr() + one.stiffness.nonZeros(),
+                         two.stiffness.valuePtr()));
+  EXPECT_TRUE(std::equal(one.scalar_mass.valuePtr(), one.scalar_mass.valuePtr() + one.scalar_mass.nonZeros(),
+                         two.scalar_mass.valuePtr()));
+
+  std::vector<Eigen::Triplet<double>> k_entries, m_entries;
+  const double lambda = fp::lame_lambda(steel), mu = fp::shear_modulus(steel);
+  for (Eigen::Index e = 0; e < mesh.element_count(); ++e) {
+    fmt10::Tet10Nodes x;
+    for (int a = 0; a < 10; ++a) x.row(a) = mesh.nodes.row(mesh.tets(e, a));
+    const Eigen::Matrix<double, 30, 30> k = fmt10::tet10_stiffness(x, lambda, mu);
+    const Eigen::Matrix<double, 10, 10> m = fmt10::tet10_mass(x, steel.density);
+    for (int b = 0; b < 10; ++b)
+      for (int a = 0; a < 10; ++a) {
+        m_entries.emplace_back(mesh.tets(e, b), mesh.tets(e, a), m(b, a));
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c)
+            k_entries.emplace_back(3 * mesh.tets(e, b) + r, 3 * mesh.tets(e, a) + c, k(3 * b + r, 3 * a + c));
+      }
+  }
+  Eigen::SparseMatrix<double> k_sum(mesh.dof_count(), mesh.dof_count()), m_sum(mesh.node_count(), mesh.node_count());
+  k_sum.setFromTriplets(k_entries.begin(), k_entries.end());
+  m_sum.setFromTriplets(m_entries.begin(), m_entries.end());
+  const Eigen::SparseMatrix<double> k_full = fp::full_from_upper(one.stiffness).cast<double>();
+  const Eigen::SparseMatrix<double> m_full = fp::full_from_upper(one.scalar_mass).cast<double>();
+  EXPECT_LT((k_full - k_sum).norm(), 1e-14 * k_sum.norm());
+  EXPECT_LT((m_full - m_sum).norm(), 1e-14 * m_sum.norm());
 }

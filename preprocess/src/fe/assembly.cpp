@@ -3,14 +3,14 @@
 #include <algorithm>
 
 namespace flexbody::preprocess {
-namespace {
 
-// Index of node i within the sorted upper column of node j.
 std::int64_t position_in_column(const NodeGraph& graph, std::int64_t j, std::int32_t i) {
   const auto first = graph.rows.begin() + graph.column_start[j];
   const auto last = graph.rows.begin() + graph.column_start[j + 1];
   return std::lower_bound(first, last, i) - first;
 }
+
+namespace {
 
 // An empty compressed matrix with the given column pointers and row indices.
 SparseMatrix make_pattern(std::int64_t size, const std::vector<std::int64_t>& column_start,
@@ -44,12 +44,13 @@ void for_each_upper_contribution(const TetMesh& mesh, const NodeGraph& graph, Ad
 
 }  // namespace
 
-SparseMatrix assemble_stiffness(const TetMesh& mesh, const NodeGraph& graph,
-                                const std::vector<Tet4Geometry>& geometry, const Material& material) {
-  const std::int64_t n_nodes = mesh.node_count();
-  const double lambda = lame_lambda(material);
-  const double mu = shear_modulus(material);
+SparseMatrix scalar_pattern(const NodeGraph& graph) {
+  const std::vector<std::int64_t> rows(graph.rows.begin(), graph.rows.end());
+  return make_pattern(static_cast<std::int64_t>(graph.column_start.size()) - 1, graph.column_start, rows);
+}
 
+SparseMatrix vector_pattern(const NodeGraph& graph) {
+  const std::int64_t n_nodes = static_cast<std::int64_t>(graph.column_start.size()) - 1;
   // DOF pattern of the upper triangle. Node column j has degree d_j (itself last); DOF column 3j+c
   // holds rows 3i..3i+2 for each neighbour i < j, then rows 3j..3j+c of the diagonal block. So the
   // entry (3i+r, 3j+c) of the k-th neighbour sits at start(3j+c) + 3k + r in both cases.
@@ -70,8 +71,15 @@ SparseMatrix assemble_stiffness(const TetMesh& mesh, const NodeGraph& graph,
         for (int r = 0; r <= last_row; ++r) rows[column_start[3 * j + c] + 3 * k + r] = 3 * i + r;
       }
   }
-  SparseMatrix stiffness = make_pattern(3 * n_nodes, column_start, rows);
-  std::vector<std::int64_t>().swap(rows);
+  return make_pattern(3 * n_nodes, column_start, rows);
+}
+
+SparseMatrix assemble_stiffness(const TetMesh& mesh, const NodeGraph& graph,
+                                const std::vector<Tet4Geometry>& geometry, const Material& material) {
+  const double lambda = lame_lambda(material);
+  const double mu = shear_modulus(material);
+  SparseMatrix stiffness = vector_pattern(graph);
+  const std::int64_t* column_start = stiffness.outerIndexPtr();
   double* values = stiffness.valuePtr();
 
   for_each_upper_contribution(mesh, graph, [&](std::int64_t j, std::int64_t e, int a, int b, std::int32_t i,
@@ -86,8 +94,7 @@ SparseMatrix assemble_stiffness(const TetMesh& mesh, const NodeGraph& graph,
 SparseMatrix assemble_scalar_mass(const TetMesh& mesh, const NodeGraph& graph,
                                   const std::vector<Tet4Geometry>& geometry, double density,
                                   MassScheme scheme) {
-  std::vector<std::int64_t> rows(graph.rows.begin(), graph.rows.end());
-  SparseMatrix mass = make_pattern(mesh.node_count(), graph.column_start, rows);
+  SparseMatrix mass = scalar_pattern(graph);
   double* values = mass.valuePtr();
   for_each_upper_contribution(mesh, graph, [&](std::int64_t j, std::int64_t e, int a, int b, std::int32_t,
                                                std::int64_t k) {

@@ -5,7 +5,11 @@
 
 namespace flexbody::preprocess {
 
-NodeGraph NodeGraph::build(const TetMesh& mesh) {
+namespace {
+
+template <class Mesh>
+NodeGraph build_graph(const Mesh& mesh) {
+  constexpr int per = static_cast<int>(decltype(mesh.tets)::ColsAtCompileTime);
   const std::int64_t n_nodes = mesh.node_count();
   const std::int64_t n_elements = mesh.element_count();
   NodeGraph graph;
@@ -13,12 +17,12 @@ NodeGraph NodeGraph::build(const TetMesh& mesh) {
   // Node-to-element incidence (CSR), entries in element order.
   graph.incidence_start.assign(n_nodes + 1, 0);
   for (std::int64_t e = 0; e < n_elements; ++e)
-    for (int a = 0; a < 4; ++a)
+    for (int a = 0; a < per; ++a)
       if (mesh.tets(e, a) < 0 || mesh.tets(e, a) >= n_nodes)
         throw std::invalid_argument("mesh: tetrahedron " + std::to_string(e) + " refers to node " +
                                     std::to_string(mesh.tets(e, a)) + " of " + std::to_string(n_nodes));
   for (std::int64_t e = 0; e < n_elements; ++e)
-    for (int a = 0; a < 4; ++a) ++graph.incidence_start[mesh.tets(e, a) + 1];
+    for (int a = 0; a < per; ++a) ++graph.incidence_start[mesh.tets(e, a) + 1];
   for (std::int64_t i = 0; i < n_nodes; ++i) {
     if (graph.incidence_start[i + 1] == 0)  // the assembly's column layout needs every node in an element
       throw std::invalid_argument("mesh: node " + std::to_string(i) + " belongs to no element (remove_unused_nodes)");
@@ -27,7 +31,7 @@ NodeGraph NodeGraph::build(const TetMesh& mesh) {
   graph.incidence.resize(graph.incidence_start.back());
   std::vector<std::int64_t> fill(graph.incidence_start.begin(), graph.incidence_start.end() - 1);
   for (std::int64_t e = 0; e < n_elements; ++e)
-    for (int a = 0; a < 4; ++a) graph.incidence[fill[mesh.tets(e, a)]++] = 4 * e + a;
+    for (int a = 0; a < per; ++a) graph.incidence[fill[mesh.tets(e, a)]++] = per * e + a;
 
   // Upper adjacency: neighbours i <= j of each node j, sorted and unique.
   std::vector<std::vector<std::int32_t>> neighbours(n_nodes);
@@ -35,8 +39,8 @@ NodeGraph NodeGraph::build(const TetMesh& mesh) {
   for (std::int64_t j = 0; j < n_nodes; ++j) {
     auto& list = neighbours[j];
     for (std::int64_t k = graph.incidence_start[j]; k < graph.incidence_start[j + 1]; ++k) {
-      const std::int64_t e = graph.incidence[k] / 4;
-      for (int b = 0; b < 4; ++b)
+      const std::int64_t e = graph.incidence[k] / per;
+      for (int b = 0; b < per; ++b)
         if (mesh.tets(e, b) <= j) list.push_back(mesh.tets(e, b));
     }
     std::sort(list.begin(), list.end());
@@ -52,6 +56,11 @@ NodeGraph NodeGraph::build(const TetMesh& mesh) {
   }
   return graph;
 }
+
+}  // namespace
+
+NodeGraph NodeGraph::build(const TetMesh& mesh) { return build_graph(mesh); }
+NodeGraph NodeGraph::build(const Tet10Mesh& mesh) { return build_graph(mesh); }
 
 std::vector<Tet4Geometry> element_geometries(const TetMesh& mesh) {
   std::vector<Tet4Geometry> geometry(mesh.element_count());

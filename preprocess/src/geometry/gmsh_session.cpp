@@ -1,6 +1,7 @@
 #include "gmsh_session.hpp"
 
 #include <gmsh.h>
+#include <omp.h>
 
 #include <cstdio>
 #include <fcntl.h>
@@ -40,7 +41,7 @@ SilencedStdStreams::~SilencedStdStreams() {
   }
 }
 
-GmshSession::GmshSession() {
+GmshSession::GmshSession() : threads_(omp_get_max_threads()) {
   gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
   gmsh::option::setNumber("General.Terminal", 0);
   gmsh::option::setNumber("General.Verbosity", 2);  // errors and warnings only
@@ -51,6 +52,7 @@ GmshSession::~GmshSession() {
     gmsh::finalize();
   } catch (...) {  // never throw from a destructor
   }
+  omp_set_num_threads(threads_);
 }
 
 }  // namespace flexbody::preprocess::detail

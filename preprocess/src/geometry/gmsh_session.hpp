@@ -1,6 +1,8 @@
 #pragma once
 // A gmsh session for one import: initializes gmsh quietly, silences OpenCASCADE's own printing, and
-// turns gmsh's errors (thrown as std::string by gmsh 4.8) into std::runtime_error.
+// turns gmsh's errors (thrown as std::string by gmsh 4.8) into std::runtime_error. gmsh sets OpenMP's thread count
+// to its General.NumThreads (1) when it starts: the session gives the process its count back when it ends, or every
+// OpenMP loop after the import (assembly, stress recovery, Eigen's products) would run on one thread.
 
 #include <stdexcept>
 #include <string>
@@ -28,6 +30,9 @@ class GmshSession {
   ~GmshSession();
   GmshSession(const GmshSession&) = delete;
   GmshSession& operator=(const GmshSession&) = delete;
+
+ private:
+  int threads_;  ///< omp_get_max_threads() before gmsh changed it
 };
 
 /// Calls `f` with gmsh's error type translated: std::runtime_error("<context>: <gmsh's message>").

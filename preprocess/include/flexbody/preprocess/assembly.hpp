@@ -19,10 +19,19 @@ struct NodeGraph {
   std::vector<std::int64_t> column_start;  ///< n_n + 1 offsets into `rows`
   std::vector<std::int32_t> rows;          ///< neighbours i <= j of each node j, sorted
   std::vector<std::int64_t> incidence_start;  ///< n_n + 1 offsets into `incidence`
-  std::vector<std::int64_t> incidence;        ///< 4 e + a for element e whose local node a is j
+  std::vector<std::int64_t> incidence;        ///< p e + a for element e whose local node a is j (p nodes per element)
 
   [[nodiscard]] static NodeGraph build(const TetMesh& mesh);
+  [[nodiscard]] static NodeGraph build(const Tet10Mesh& mesh);  ///< quadratic tetrahedra: p = 10
 };
+
+/// The empty upper-triangle patterns the graph gives: the scalar one (n_n square, as M_s) and the node-interleaved
+/// one (3 n_n square, as K̄: DOF column 3 j + c holds rows 3 i .. 3 i + 2 of each neighbour i < j, then rows 3 j ..
+/// 3 j + c, so entry (3 i + r, 3 j + c) of the k-th neighbour sits at outerIndexPtr()[3 j + c] + 3 k + r).
+[[nodiscard]] SparseMatrix scalar_pattern(const NodeGraph& graph);
+[[nodiscard]] SparseMatrix vector_pattern(const NodeGraph& graph);
+/// Index k of node i (<= j) within the sorted upper column of node j.
+[[nodiscard]] std::int64_t position_in_column(const NodeGraph& graph, std::int64_t j, std::int32_t i);
 
 /// Volumes and gradients of every element (computed in parallel).
 [[nodiscard]] std::vector<Tet4Geometry> element_geometries(const TetMesh& mesh);

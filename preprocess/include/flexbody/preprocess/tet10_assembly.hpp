@@ -1,9 +1,10 @@
 #pragma once
 // flexbody/preprocess/tet10_assembly.hpp: quadratic tetrahedral meshes (issue 15) and their K̄ and M_s.
 //
-// The assembly is serial, by triplets (about 520 of 24 bytes per element while it runs). fbprep's meshes come from gmsh
-// (gmsh_import.hpp, order 2, curved on the CAD); quadratic_mesh makes straight-sided ones from linear meshes (tests,
-// benchmarks).
+// The assembly writes into the graph's upper-triangle patterns (assembly.hpp) element colour by element colour, the
+// elements of a colour in parallel (OpenMP): no extra memory beyond the matrices, and the same bits for any thread
+// count. fbprep's meshes come from gmsh (gmsh_import.hpp, order 2, curved on the CAD); quadratic_mesh makes
+// straight-sided ones from linear meshes (tests, benchmarks).
 
 #include "flexbody/format/tet10_element.hpp"
 #include "flexbody/preprocess/material.hpp"
@@ -21,8 +22,8 @@ struct Tet10Matrices {
 };
 
 /// K̄ (4-point rule) and the consistent M_s of every element (format/tet10_element.hpp), integrated by `rule`.
-/// Throws std::invalid_argument naming the first element whose Jacobian determinant is not positive at a Gauss point
-/// or a node.
+/// Throws std::invalid_argument naming an element whose Jacobian determinant is not positive at a Gauss point or a
+/// node (the first one in the first colour that has one), or a node index out of range, or a node of no element.
 [[nodiscard]] Tet10Matrices assemble_tet10(const Tet10Mesh& mesh, const Material& material,
                                            format::Tet10MassRule rule = format::Tet10MassRule::exact);
 

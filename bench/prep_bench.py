@@ -67,7 +67,9 @@ def ccx_num(v):
 
 
 def write_inp(fbh5, inp, n_modes):
-    """Write the mesh and material of a body file as a CalculiX *FREQUENCY job (N + 6 rigid modes)."""
+    """Write the mesh and material of a body file as a CalculiX *FREQUENCY job (N + 6 rigid modes).
+
+    Linear tetrahedra as C3D4, quadratic ones (element_order 2) as C3D10: the body file's node order is Abaqus'."""
     with h5py.File(fbh5, "r") as f:
         nodes, tets = f["/mesh/nodes"][...], f["/mesh/tets"][...]
         mat = {k: float(f["/material"].attrs[k]) for k in ("youngs_modulus", "poisson_ratio", "density")}
@@ -75,7 +77,7 @@ def write_inp(fbh5, inp, n_modes):
         out.write("*NODE, NSET=NALL\n")
         out.writelines(f"{i}, {ccx_num(x)}, {ccx_num(y)}, {ccx_num(z)}\n"
                        for i, (x, y, z) in enumerate(nodes.tolist(), 1))
-        out.write("*ELEMENT, TYPE=C3D4, ELSET=EALL\n")
+        out.write(f"*ELEMENT, TYPE={'C3D10' if tets.shape[1] == 10 else 'C3D4'}, ELSET=EALL\n")
         eids = np.arange(1, len(tets) + 1)
         np.savetxt(out, np.column_stack([eids, tets.astype(np.int64) + 1]), fmt="%d", delimiter=", ")
         out.write(f"*MATERIAL, NAME=M\n*ELASTIC\n{ccx_num(mat['youngs_modulus'])}, "

@@ -23,7 +23,7 @@ TIMOSHENKO_PAIR = 263.46  # Hz, the 1 x 0.05 x 0.05 m steel beam's first free-fr
 PARTS = {
     # name: (input, unit, {order: sizes in the input's unit}), the bracket's last quadratic size is its reference
     "beam": (REPO / "tests/data/gmsh-beam/beam_1m.geo", "m",
-             {1: [0.05, 0.025, 0.0125, 0.00625, 0.004], 2: [0.05, 0.025, 0.0125, 0.0083]}),
+             {1: [0.05, 0.025, 0.0125, 0.00625, 0.004, 0.003], 2: [0.05, 0.025, 0.0125, 0.0083]}),
     "bracket": (REPO / "meshes/bracket.step", None,
                 {1: [6, 4, 3, 2, 1.5, 1.2], 2: [8, 6, 4, 3, 2.5, 1.6]}),
 }

@@ -66,7 +66,12 @@ def sweep(args):
             for size in (order_sizes[:2] if args.quick else order_sizes):
                 work = args.out / "work" / f"{name}-{order}-{size:g}"
                 work.mkdir(parents=True, exist_ok=True)
-                fb = run_fbprep(args.fbprep, part, unit, order, size, args.modes, work)
+                try:
+                    fb = run_fbprep(args.fbprep, part, unit, order, size, args.modes, work)
+                except RuntimeError as e:  # e.g. out of memory at the largest size: keep the other runs
+                    print(f"{name} order {order} h {size:g}: {e}", flush=True)
+                    shutil.rmtree(work)
+                    continue
                 ccx = {"status": "skipped"}
                 if fb["dofs"] <= args.ccx_max_dofs and shutil.which("ccx"):
                     ccx = run_ccx(work, args.modes, args.ccx_timeout)
@@ -83,10 +88,14 @@ def rows_of(runs):
         part_runs = [r for r in runs if r["part"] == name]
         if not part_runs:
             continue
+        finest = None  # the run that is its part's reference, if one is
         if name == "beam":
             reference = TIMOSHENKO_PAIR
         else:  # the finest quadratic run
-            finest = max((r for r in part_runs if r["order"] == 2), key=lambda r: r["fbprep"]["dofs"])
+            quadratic = [r for r in part_runs if r["order"] == 2]
+            if not quadratic:
+                continue
+            finest = max(quadratic, key=lambda r: r["fbprep"]["dofs"])
             reference = compared(name, finest["fbprep"]["frequencies_hz"])
         for r in part_runs:
             fb, t, ccx = r["fbprep"], r["fbprep"]["timings_s"], r["ccx"]
@@ -96,7 +105,7 @@ def rows_of(runs):
                    "recovery_s": t["recovery"], "write_s": t["write"], "peak_mb": fb["rss_mb"], "f1_hz": f[0],
                    "compared_hz": compared(name, f), "error": compared(name, f) / reference - 1.0, "ccx_s": None, "ccx_error": None,
                    "ccx_vs_fbprep": None}
-            if name == "bracket" and r is finest:
+            if r is finest:
                 row["error"] = None  # the reference itself
             if ccx["status"] == "ok":
                 g = ccx["frequencies_hz"]

@@ -92,3 +92,37 @@ TEST(GmshOrder2, TheImportLeavesOpenMpItsThreadCount) {
   EXPECT_EQ(omp_get_max_threads(), 3);
   omp_set_num_threads(before);
 }
+
+// A .msh whose quadratic tetrahedron is folded by a mid-edge node (gmsh's node 5, the middle of edge (0,1), put on
+// corner 2): its corners are a valid tetrahedron, so only the Jacobian at the Gauss points and nodes catches it, and
+// the import refuses the file naming the element.
+TEST(GmshOrder2, AFoldedQuadraticTetrahedronIsRefused) {
+  const auto dir = flexbody::test::scratch_dir();
+  std::ofstream(dir / "folded.msh") << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+                                       "$Nodes\n1 10 1 10\n3 1 0 10\n1\n2\n3\n4\n5\n6\n7\n8\n9\n10\n"
+                                       "0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                       "0 1 0\n0.5 0.5 0\n0 0.5 0\n0 0 0.5\n0 0.5 0.5\n0.5 0 0.5\n"
+                                       "$EndNodes\n$Elements\n1 1 1 1\n3 1 11 1\n1 1 2 3 4 5 6 7 8 9 10\n"
+                                       "$EndElements\n";
+  fp::GmshImportOptions options;
+  options.unit = fp::LengthUnit::metre;
+  options.order = 2;
+  try {
+    (void)fp::import_tet_mesh(dir / "folded.msh", options);
+    FAIL() << "a folded element was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("folded.msh: 1 of 1 quadratic tetrahedra are folded by their curved edges"),
+              std::string::npos) << e.what();
+  }
+  // The same file with the node at its edge's middle is a valid straight element.
+  std::ofstream(dir / "straight.msh") << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+                                         "$Nodes\n1 10 1 10\n3 1 0 10\n1\n2\n3\n4\n5\n6\n7\n8\n9\n10\n"
+                                         "0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                         "0.5 0 0\n0.5 0.5 0\n0 0.5 0\n0 0 0.5\n0 0.5 0.5\n0.5 0 0.5\n"
+                                         "$EndNodes\n$Elements\n1 1 1 1\n3 1 11 1\n1 1 2 3 4 5 6 7 8 9 10\n"
+                                         "$EndElements\n";
+  const fp::ImportedMesh straight = fp::import_tet_mesh(dir / "straight.msh", options);
+  ASSERT_TRUE(straight.quadratic.has_value());
+  EXPECT_EQ(straight.quadratic->node_count(), 10);
+  EXPECT_NEAR(fp::mesh_quality(*straight.quadratic).min_jacobian_ratio, 1.0, 1e-12);
+}

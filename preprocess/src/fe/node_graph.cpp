@@ -25,7 +25,7 @@ NodeGraph build_graph(const Mesh& mesh) {
     for (int a = 0; a < per; ++a) ++graph.incidence_start[mesh.tets(e, a) + 1];
   for (std::int64_t i = 0; i < n_nodes; ++i) {
     if (graph.incidence_start[i + 1] == 0)  // the assembly's column layout needs every node in an element
-      throw std::invalid_argument("mesh: node " + std::to_string(i) + " belongs to no element (remove_unused_nodes)");
+      throw std::invalid_argument("mesh: node " + std::to_string(i) + " belongs to no element (remove the unused nodes)");
     graph.incidence_start[i + 1] += graph.incidence_start[i];
   }
   graph.incidence.resize(graph.incidence_start.back());

@@ -42,9 +42,14 @@ SilencedStdStreams::~SilencedStdStreams() {
 }
 
 GmshSession::GmshSession() : threads_(omp_get_max_threads()) {
-  gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
-  gmsh::option::setNumber("General.Terminal", 0);
-  gmsh::option::setNumber("General.Verbosity", 2);  // errors and warnings only
+  try {
+    gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
+    gmsh::option::setNumber("General.Terminal", 0);
+    gmsh::option::setNumber("General.Verbosity", 2);  // errors and warnings only
+  } catch (...) {  // no destructor runs for a constructor that throws
+    omp_set_num_threads(threads_);
+    throw;
+  }
 }
 
 GmshSession::~GmshSession() {

@@ -2,8 +2,8 @@
 // flexbody/preprocess/tet10_assembly.hpp: quadratic tetrahedral meshes (issue 15) and their K̄ and M_s.
 //
 // The assembly writes into the graph's upper-triangle patterns (assembly.hpp) element colour by element colour, the
-// elements of a colour in parallel (OpenMP): no extra memory beyond the matrices, and the same bits for any thread
-// count. fbprep's meshes come from gmsh (gmsh_import.hpp, order 2, curved on the CAD); quadratic_mesh makes
+// elements of a colour in parallel (OpenMP): no triplet lists (the node graph and the colour lists live while it
+// runs), and the same bits for any thread count. fbprep's meshes come from gmsh (gmsh_import.hpp, order 2, curved on the CAD); quadratic_mesh makes
 // straight-sided ones from linear meshes (tests, benchmarks).
 
 #include "flexbody/format/tet10_element.hpp"

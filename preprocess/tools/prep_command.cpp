@@ -27,7 +27,7 @@ int prep_command(int argc, char** argv) {
   app.footer("Other commands:\n  fbprep inspect FILE.fbh5 [--json]   check a body file and print what it holds\n"
              "  fbprep export-vtu FILE.fbh5 -o DIR  mesh, mode shapes, fields, interfaces for ParaView\n"
              "  fbprep list-surfaces INPUT          CAD surface tags, areas, centroids (for body specs)");
-  std::string input, output, unit_text, material_text = "steel", solver_text = "arpack";
+  std::string input, output, unit_text, material_text = "steel", solver_text = "arpack", mesher_text = "delaunay";
   double mesh_size = 0.0, fmax = 0.0;
   int order = 1, modes = 0;
   bool json = false, quiet = false;
@@ -41,6 +41,7 @@ int prep_command(int argc, char** argv) {
                                            "diagonal / 25; a .msh is used as it is)");
   app.add_option("--order", order, "element order: 1 (linear tetrahedra, 4 nodes) or 2 (quadratic, 10 nodes, "
                                   "curved on the CAD surfaces; default 1)");
+  app.add_option("--mesher", mesher_text, "gmsh's 3D algorithm: delaunay (default) or hxt (parallel)");
   app.add_option("--material", material_text, "steel|aluminium|titanium or E=210e9,nu=0.3,rho=7850 (SI)");
   app.add_option("--modes", modes, "number of elastic free-free modes (rigid-body modes never count)");
   app.add_option("--fmax", fmax, "all elastic modes up to this frequency [Hz]; with --modes, --modes caps");
@@ -109,6 +110,12 @@ int prep_command(int argc, char** argv) {
     }
     if (!from_spec || given("--order")) options.mesh.order = order;  // like every flag, it replaces the spec's
     record("element_order", std::to_string(options.mesh.order));
+    if (!from_spec || given("--mesher")) {
+      const std::optional<fp::MeshAlgorithm> mesher = fp::mesh_algorithm_from_string(mesher_text);
+      if (!mesher) throw std::invalid_argument("--mesher '" + mesher_text + "' is not one of delaunay, hxt");
+      options.mesh.algorithm = *mesher;
+    }
+    record("mesher", std::string(fp::to_string(options.mesh.algorithm)));
     if (!from_spec || given("--material")) {
       options.material = fp::parse_material(material_text);
       record("material", material_text);

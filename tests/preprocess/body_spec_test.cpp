@@ -124,6 +124,7 @@ TEST(BodySpec, RefusalsNameTheLine) {
   expect_spec_error(head + "mesh: {size: -1}\n", 3, "mesh size must be positive, got -1");
   expect_spec_error(head + "mesh: {size: 0.02}\nmesh: {size: 0.03}\n", 4, "key 'mesh' is repeated in the body spec");
   expect_spec_error(head + "mesh: {order: 3}\n", 3, "mesh order 3: the element order is 1 (linear tetrahedra) or 2");
+  expect_spec_error(head + "mesh: {algorithm: tetgen}\n", 3, "mesh algorithm 'tetgen' is unknown; use delaunay or hxt");
   expect_spec_error("unit: m\n", 1, "the body spec needs 'input'");
   expect_spec_error("input: beam.geo\nunit: furlong\n", 2, "unit 'furlong' is not one of mm, cm, m, in");
   expect_spec_error(head + "reduction: {modes: many}\n", 3, "reduction modes must be a number, got 'many'");

@@ -312,6 +312,16 @@ std::string_view to_string(InputFormat format) {
   return "?";
 }
 
+std::string_view to_string(MeshAlgorithm algorithm) {
+  return algorithm == MeshAlgorithm::hxt ? "hxt" : "delaunay";
+}
+
+std::optional<MeshAlgorithm> mesh_algorithm_from_string(std::string_view text) {
+  if (text == "delaunay") return MeshAlgorithm::delaunay;
+  if (text == "hxt") return MeshAlgorithm::hxt;
+  return std::nullopt;
+}
+
 InputFormat input_format_of(const std::filesystem::path& path) {
   const std::string ext = lowercase(path.extension().string());
   if (ext == ".step" || ext == ".stp") return InputFormat::step;
@@ -380,8 +390,12 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
     gmsh::option::setNumber("Mesh.MeshSizeMax", size);
     gmsh::option::setNumber("Mesh.ElementOrder", 1);
     gmsh::option::setNumber("Mesh.Optimize", 1);
-    if (options.progress) options.progress(fmt::format("meshing {} volume(s), element size {:.4g} m", volumes.size(),
-                                                       result.mesh_size_m));
+    if (options.algorithm == MeshAlgorithm::hxt) {  // parallel Delaunay refinement on the process' threads
+      gmsh::option::setNumber("Mesh.Algorithm3D", 10);
+      gmsh::option::setNumber("Mesh.MaxNumThreads3D", session.threads());
+    }
+    if (options.progress) options.progress(fmt::format("meshing {} volume(s), element size {:.4g} m ({})", volumes.size(),
+                                                       result.mesh_size_m, to_string(options.algorithm)));
     detail::SilencedStdStreams quiet;
     detail::gmsh_call(name + ": meshing failed", [&] {
       gmsh::model::mesh::generate(3);

@@ -30,6 +30,8 @@ class GmshSession {
   ~GmshSession();
   GmshSession(const GmshSession&) = delete;
   GmshSession& operator=(const GmshSession&) = delete;
+  /// OpenMP's thread count before gmsh set it to 1: what a parallel gmsh algorithm may use.
+  [[nodiscard]] int threads() const { return threads_; }
 
  private:
   int threads_;  ///< omp_get_max_threads() before gmsh changed it

@@ -120,13 +120,19 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
                                                   options.material.density));
   }
   if (const YAML::Node mesh = root["mesh"]) {
-    r.expect_map(mesh, "mesh", {"size", "order"});
+    r.expect_map(mesh, "mesh", {"size", "order", "algorithm"});
     if (mesh["size"]) options.mesh.mesh_size = r.positive(mesh["size"], "mesh size");
     if (mesh["order"]) {
       options.mesh.order = r.count(mesh["order"], "mesh order");
       if (options.mesh.order != 1 && options.mesh.order != 2)
         r.fail(mesh["order"], fmt::format("mesh order {}: the element order is 1 (linear tetrahedra) or 2 (quadratic, "
                                           "10 nodes)", options.mesh.order));
+    }
+    if (mesh["algorithm"]) {
+      const std::string text = mesh["algorithm"].Scalar();
+      const std::optional<MeshAlgorithm> algorithm = mesh_algorithm_from_string(text);
+      if (!algorithm) r.fail(mesh["algorithm"], fmt::format("mesh algorithm '{}' is unknown; use delaunay or hxt", text));
+      options.mesh.algorithm = *algorithm;
     }
     recorded.emplace_back("mesh_size", fmt::format("{}", options.mesh.mesh_size));
   }

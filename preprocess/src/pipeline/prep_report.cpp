@@ -51,7 +51,8 @@ std::string PrepSummary::full_report() const {
   line("length unit", fmt::format("{}: {}", unit, unit_reason));
   if (meshed_here) line("volumes", std::to_string(volumes));
   r += element_order == 2 ? "\nMesh (quadratic tetrahedra, 10 nodes)\n" : "\nMesh (linear tetrahedra)\n";
-  line("source", meshed_here ? fmt::format("gmsh, element size {:.4g} m", mesh_size_m) : "tetrahedra read from the .msh");
+  line("source", meshed_here ? fmt::format("gmsh ({}), element size {:.4g} m", to_string(mesher), mesh_size_m)
+                             : "tetrahedra read from the .msh");
   line("nodes", fmt::format("{}", nodes));
   line("elements", fmt::format("{}", elements));
   line("DOFs", fmt::format("{}", dofs));
@@ -154,6 +155,7 @@ std::string PrepSummary::json() const {
   j["unit_overrides_declared"] = unit_overrides_declared;
   j["volumes"] = volumes;
   j["mesh_size_m"] = mesh_size_m;
+  j["mesher"] = meshed_here ? nlohmann::ordered_json(std::string(to_string(mesher))) : nlohmann::ordered_json(nullptr);
   j["element_order"] = element_order;
   j["nodes"] = nodes;
   j["elements"] = elements;

@@ -88,6 +88,7 @@ struct PrepSummary {
   int volumes = 0;
   bool meshed_here = true;
   double mesh_size_m = 0.0;
+  MeshAlgorithm mesher = MeshAlgorithm::delaunay;  ///< gmsh's 3D algorithm (when meshed_here)
   int element_order = 1;  ///< 1: linear tetrahedra, 2: quadratic (10 nodes; nodes and DOFs count the mid-edge nodes)
   /// Surface triangles: with element order 2, four per 6-node boundary face (formats/SCHEMA.md, Mesh).
   Eigen::Index nodes = 0, elements = 0, dofs = 0, surface_triangles = 0;

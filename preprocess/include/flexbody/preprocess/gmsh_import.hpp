@@ -17,6 +17,13 @@ enum class InputFormat { step, iges, brep, geo, msh };
 /// From the file extension (case-insensitive); throws std::invalid_argument for anything else.
 [[nodiscard]] InputFormat input_format_of(const std::filesystem::path& path);
 
+/// gmsh's 3D meshing algorithm: its default Delaunay (single-threaded) or HXT (Mesh.Algorithm3D = 10, parallel on
+/// OpenMP's threads).
+enum class MeshAlgorithm { delaunay, hxt };
+[[nodiscard]] std::string_view to_string(MeshAlgorithm algorithm);  ///< "delaunay", "hxt"
+/// From "delaunay" or "hxt"; nullopt for anything else.
+[[nodiscard]] std::optional<MeshAlgorithm> mesh_algorithm_from_string(std::string_view text);
+
 struct GmshImportOptions {
   /// Length unit of the input's coordinates, as the user gives it. It wins over what a STEP file
   /// declares (a file written with a wrong declared unit is common: gmsh's writer always declares mm);
@@ -32,6 +39,8 @@ struct GmshImportOptions {
   double mesh_size = 0.0;
   /// Element order: 1 (linear tetrahedra) or 2 (quadratic, ImportedMesh::quadratic).
   int order = 1;
+  /// The 3D algorithm (ignored for a .msh, whose tetrahedra are used as they are).
+  MeshAlgorithm algorithm = MeshAlgorithm::delaunay;
   /// Called with a short message before each long step.
   std::function<void(const std::string&)> progress;
 };

@@ -47,7 +47,7 @@ def run_measured(cmd, cwd, timeout=None, env=None):
 def run_fbprep(args, size, solver, work):
     """Run fbprep on the part at one mesh size with one eigensolver; return its JSON plus our timings."""
     cmd = [str(args.fbprep), str(args.part), "-o", str(work / f"{solver}.fbh5"), "--mesh-size",
-           str(size), "--modes", str(args.modes), "--eigensolver", solver, "--json", "--quiet"]
+           str(size), "--modes", str(args.modes), "--eigensolver", solver, "--mesher", args.mesher, "--json", "--quiet"]
     rc, wall, rss, out = run_measured(cmd, work)
     if rc != 0:
         raise RuntimeError(f"fbprep failed ({rc}): {(work / 'stderr.txt').read_text().strip()}")
@@ -204,6 +204,7 @@ def main():
     p.add_argument("--sizes", default="3.5,2.2,1.5,1.0,0.75,0.6,0.48", help="mesh sizes [mm], comma list")
     p.add_argument("--modes", type=int, default=26, help="elastic modes")
     p.add_argument("--eigensolvers", default="arpack", help="comma list of --eigensolver values")
+    p.add_argument("--mesher", default="delaunay", choices=["delaunay", "hxt"], help="fbprep --mesher")
     p.add_argument("--ccx-max-dofs", type=int, default=300000, help="skip ccx above this many DOFs")
     p.add_argument("--ccx-timeout", type=float, default=900, help="ccx time limit [s]")
     p.add_argument("--out", type=Path, default=REPO / "bench/results")

@@ -10,6 +10,17 @@
 namespace flexbody::runtime {
 namespace {
 
+// K̄ (3 n_n square) and M_s (n_n square) summed from their element triplets.
+AssembledMesh from_triplets(Eigen::Index n_n, const std::vector<Eigen::Triplet<double>>& k_entries,
+                            const std::vector<Eigen::Triplet<double>>& m_entries) {
+  AssembledMesh out;
+  out.stiffness.resize(3 * n_n, 3 * n_n);
+  out.stiffness.setFromTriplets(k_entries.begin(), k_entries.end());
+  out.scalar_mass.resize(n_n, n_n);
+  out.scalar_mass.setFromTriplets(m_entries.begin(), m_entries.end());
+  return out;
+}
+
 // K̄ and M_s of quadratic tetrahedra: fbprep's element integrals (format/tet10_element.hpp; the exact consistent mass,
 // as preprocess/tet10_assembly.hpp), both triangles.
 AssembledMesh assemble_quadratic(const format::BodyMesh& mesh, const format::Material& material, double lambda,
@@ -34,12 +45,7 @@ AssembledMesh assemble_quadratic(const format::BodyMesh& mesh, const format::Mat
         m_entries.emplace_back(row, col, m(b, a));
       }
   }
-  AssembledMesh out;
-  out.stiffness.resize(3 * n_n, 3 * n_n);
-  out.stiffness.setFromTriplets(k_entries.begin(), k_entries.end());
-  out.scalar_mass.resize(n_n, n_n);
-  out.scalar_mass.setFromTriplets(m_entries.begin(), m_entries.end());
-  return out;
+  return from_triplets(n_n, k_entries, m_entries);
 }
 
 }  // namespace
@@ -69,12 +75,7 @@ AssembledMesh assemble_mesh(const format::BodyMesh& mesh, const format::Material
                                format::tet4_mass_entry(material.density, g.volume, a, b, format::MassScheme::consistent));
       }
   }
-  AssembledMesh out;
-  out.stiffness.resize(3 * n_n, 3 * n_n);
-  out.stiffness.setFromTriplets(k_entries.begin(), k_entries.end());
-  out.scalar_mass.resize(n_n, n_n);
-  out.scalar_mass.setFromTriplets(m_entries.begin(), m_entries.end());
-  return out;
+  return from_triplets(n_n, k_entries, m_entries);
 }
 
 Eigen::SparseMatrix<double, Eigen::RowMajor> affine_node_sets(const format::RowMatrixX3d& nodes,

@@ -13,7 +13,7 @@ import h5py
 import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
-COLUMNS = ["size_mm", "solver", "dofs", "mesh_s", "assembly_s", "analyze_s", "factorize_s", "solve_s", "modes_s",
+COLUMNS = ["size_mm", "solver", "mesher", "dofs", "mesh_s", "assembly_s", "analyze_s", "factorize_s", "solve_s", "modes_s",
            "gcms_s", "total_s", "fbprep_peak_mb", "solves", "max_residual", "ccx_s", "ccx_peak_mb",
            "f1_rel_diff", "max_rel_diff"]
 
@@ -129,7 +129,7 @@ def machine_info():
 def row_of(size, solver, fb, ccx):
     """Flatten one fbprep run and the ccx run of its size into a table row."""
     t = fb["timings_s"]
-    row = {"size_mm": size, "solver": solver, "dofs": fb["dofs"], "mesh_s": t.get("mesh"),
+    row = {"size_mm": size, "solver": solver, "mesher": fb.get("mesher"), "dofs": fb["dofs"], "mesh_s": t.get("mesh"),
            "assembly_s": t.get("assembly"), "analyze_s": t.get("analyze"), "factorize_s": t.get("factorize"), "solve_s": t.get("solve"),
            "modes_s": t.get("modes"), "gcms_s": t.get("gcms"), "total_s": t.get("total"), "fbprep_peak_mb": fb["rss_mb"],
            "solves": fb.get("solves"), "max_residual": fb["max_relative_residual"],
@@ -156,7 +156,7 @@ def fmt(v):
 
 def print_table(rows):
     """Print rows as an aligned text table."""
-    cells = [COLUMNS] + [[fmt(r[c]) for c in COLUMNS] for r in rows]
+    cells = [COLUMNS] + [[fmt(r.get(c)) for c in COLUMNS] for r in rows]
     widths = [max(len(c[i]) for c in cells) for i in range(len(COLUMNS))]
     for c in cells:
         print("  ".join(s.rjust(w) for s, w in zip(c, widths)), flush=True)

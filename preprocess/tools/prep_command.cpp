@@ -41,7 +41,7 @@ int prep_command(int argc, char** argv) {
                                            "diagonal / 25; a .msh is used as it is)");
   app.add_option("--order", order, "element order: 1 (linear tetrahedra, 4 nodes) or 2 (quadratic, 10 nodes, "
                                   "curved on the CAD surfaces; default 1)");
-  app.add_option("--mesher", mesher_text, "gmsh's 3D algorithm: delaunay (default) or hxt (parallel)");
+  app.add_option("--mesher", mesher_text, "gmsh's 3D algorithm: delaunay (default, reproducible) or hxt (faster; differs per run)");
   app.add_option("--material", material_text, "steel|aluminium|titanium or E=210e9,nu=0.3,rho=7850 (SI)");
   app.add_option("--modes", modes, "number of elastic free-free modes (rigid-body modes never count)");
   app.add_option("--fmax", fmax, "all elastic modes up to this frequency [Hz]; with --modes, --modes caps");

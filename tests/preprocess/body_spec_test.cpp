@@ -88,17 +88,19 @@ TEST(BodySpec, CommandLineFlagsOverrideTheSpec) {
   EXPECT_EQ(json["interfaces"].size(), 2u);  // the rest of the spec still holds
 }
 
-// mesh: {order: 2} gives quadratic tetrahedra (issue 15); --order on the command line replaces it like every flag; an
+// mesh: {order: 2} gives quadratic tetrahedra (issue 15), algorithm: hxt gmsh's HXT mesher; --order on the command line
+// replaces the order like every flag; an
 // output region may be the whole surface.
 TEST(BodySpec, ElementOrderFromTheSpecAndItsOverride) {
   const auto dir = beam_folder();
   std::string spec = kBeamSpec;
-  spec.replace(spec.find("mesh: {size: 0.025}"), 19, "mesh: {size: 0.05, order: 2}");
+  spec.replace(spec.find("mesh: {size: 0.025}"), 19, "mesh: {size: 0.05, order: 2, algorithm: hxt}");
   spec += "output_regions:\n  skin: {select: surface}\n";
   write_text(dir / "part" / "beam.yaml", spec);
   const CliRun quadratic = run_fbprep(dir, "part/beam.yaml -o q.fbh5 --json");
   ASSERT_EQ(quadratic.exit_code, 0) << quadratic.err;
   EXPECT_EQ(nlohmann::json::parse(quadratic.out)["element_order"], 2);
+  EXPECT_EQ(nlohmann::json::parse(quadratic.out)["mesher"], "hxt");
   const CliRun linear = run_fbprep(dir, "part/beam.yaml -o l.fbh5 --order 1 --json");
   ASSERT_EQ(linear.exit_code, 0) << linear.err;
   EXPECT_EQ(nlohmann::json::parse(linear.out)["element_order"], 1);

@@ -262,7 +262,8 @@ TEST(FbprepCli, QuadraticTetrahedraEndToEnd) {
 // measured within 0.07 %). An unknown algorithm is a bad command line.
 TEST(FbprepCli, MesherHxt) {
   const auto dir = flexbody::test::scratch_dir();
-  const std::string beam = "'" + (std::filesystem::path(FLEXBODY_TEST_DATA_DIR) / "gmsh-beam" / "beam_1m.geo").string() + "'";
+  const std::string beam =
+      fmt::format("'{}'", (std::filesystem::path(FLEXBODY_TEST_DATA_DIR) / "gmsh-beam" / "beam_1m.geo").string());
   expect_refusal(dir, beam + " --unit m --mesher tetgen", "--mesher 'tetgen' is not one of delaunay, hxt");
   const CliRun run = fbprep(dir, beam + " --unit m --mesh-size 0.05 --order 2 --modes 2 --mesher hxt -o h.fbh5 --json");
   ASSERT_EQ(run.exit_code, 0) << run.err;

@@ -12,6 +12,7 @@
 #include "test_meshes.hpp"
 
 #include <Eigen/Dense>
+#include <fmt/format.h>
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>
 
@@ -271,13 +272,13 @@ TEST(FbprepOrder2, ReadsAQuadraticMshAsItIs) {
   const auto dir = flexbody::test::scratch_dir();
   const std::filesystem::path msh = flexbody::test::data_dir() / "gmsh-beam" / "beam_1m_order2.msh";
   const flexbody::test::CliRun run =
-      flexbody::test::run_fbprep(dir, "'" + msh.string() + "' --unit m --order 2 --modes 2 -o q.fbh5 --json");
+      flexbody::test::run_fbprep(dir, fmt::format("'{}' --unit m --order 2 --modes 2 -o q.fbh5 --json", msh.string()));
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const flexbody::format::BodyData body = flexbody::format::read_body_file(dir / "q.fbh5");
   EXPECT_EQ(body.mesh.element_order, 2);
   EXPECT_LT(std::abs(pair_error(body.modes.frequencies_hz, kFreeFree)), 2e-3);
   const flexbody::test::CliRun linear =
-      flexbody::test::run_fbprep(dir, "'" + msh.string() + "' --unit m --modes 2 -o l.fbh5");
+      flexbody::test::run_fbprep(dir, fmt::format("'{}' --unit m --modes 2 -o l.fbh5", msh.string()));
   EXPECT_EQ(linear.exit_code, 1);
   EXPECT_NE(linear.err.find("the mesh has no linear tetrahedra (it has quadratic ones: ask for order 2 to read them)"),
             std::string::npos) << linear.err;

@@ -392,7 +392,11 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
     gmsh::option::setNumber("Mesh.Optimize", 1);
     if (options.algorithm == MeshAlgorithm::hxt) {  // parallel Delaunay refinement on the process' threads
       gmsh::option::setNumber("Mesh.Algorithm3D", 10);
-      gmsh::option::setNumber("Mesh.MaxNumThreads3D", session.threads());
+      // gmsh 4.8 takes HXT's thread count from General.NumThreads (1 since initialize); Mesh.MaxNumThreads3D can only
+      // lower it. The session gives OpenMP the process' count back when it ends.
+      gmsh::option::setNumber("General.NumThreads", session.threads());
+      gmsh::option::setNumber("Mesh.MaxNumThreads1D", 1);  // curves and surfaces as with the default mesher
+      gmsh::option::setNumber("Mesh.MaxNumThreads2D", 1);
     }
     if (options.progress) options.progress(fmt::format("meshing {} volume(s), element size {:.4g} m ({})", volumes.size(),
                                                        result.mesh_size_m, to_string(options.algorithm)));

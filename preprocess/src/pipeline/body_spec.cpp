@@ -129,7 +129,7 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
                                           "10 nodes)", options.mesh.order));
     }
     if (mesh["algorithm"]) {
-      const std::string text = mesh["algorithm"].Scalar();
+      const std::string text = r.text(mesh["algorithm"], "mesh algorithm");
       const std::optional<MeshAlgorithm> algorithm = mesh_algorithm_from_string(text);
       if (!algorithm) r.fail(mesh["algorithm"], fmt::format("mesh algorithm '{}' is unknown; use delaunay or hxt", text));
       options.mesh.algorithm = *algorithm;

@@ -17,8 +17,8 @@ enum class InputFormat { step, iges, brep, geo, msh };
 /// From the file extension (case-insensitive); throws std::invalid_argument for anything else.
 [[nodiscard]] InputFormat input_format_of(const std::filesystem::path& path);
 
-/// gmsh's 3D meshing algorithm: its default Delaunay (single-threaded) or HXT (Mesh.Algorithm3D = 10, parallel on
-/// OpenMP's threads).
+/// gmsh's 3D meshing algorithm: its default Delaunay (single-threaded, reproducible) or HXT (Mesh.Algorithm3D = 10:
+/// faster, on OpenMP's threads, but its mesh differs from run to run).
 enum class MeshAlgorithm { delaunay, hxt };
 [[nodiscard]] std::string_view to_string(MeshAlgorithm algorithm);  ///< "delaunay", "hxt"
 /// From "delaunay" or "hxt"; nullopt for anything else.

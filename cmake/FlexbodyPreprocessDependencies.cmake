@@ -29,3 +29,13 @@ set_target_properties(SuiteSparse::CHOLMOD PROPERTIES IMPORTED_LOCATION ${CHOLMO
 # ARPACK (arpack-ng 3.8) through pkg-config.
 pkg_check_modules(ARPACK REQUIRED IMPORTED_TARGET arpack)
 add_library(ARPACK::ARPACK ALIAS PkgConfig::ARPACK)
+
+# The optional slepc eigensolver backend (fbprep --eigensolver slepc, under mpirun): SLEPc 3.18 and PETSc with
+# MUMPS, from Debian's libslepc-real-dev and libpetsc-real-dev (they bring Open MPI). Off by default: the
+# packages are large, and one process with CHOLMOD is faster on one machine (bench/README.md).
+option(FLEXBODY_WITH_SLEPC "Build the distributed slepc eigensolver backend (needs SLEPc, PETSc with MUMPS, MPI)" OFF)
+if(FLEXBODY_WITH_SLEPC)
+  pkg_check_modules(SLEPC REQUIRED IMPORTED_TARGET slepc)
+  find_package(MPI REQUIRED COMPONENTS C)
+  find_program(MPIEXEC_EXECUTABLE NAMES mpirun mpiexec REQUIRED)
+endif()

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs what flexbody needs on Debian 12, and nothing twice: packages already present are skipped.
-# Run as root (or with sudo). Idempotent: a second run installs nothing.
+# Run as root (or with sudo). Idempotent: a second run installs nothing. Usage: setup.sh [--with-slepc]
 set -euo pipefail
 
 packages=(
@@ -22,6 +22,14 @@ packages=(
   calculix-ccx           # independent FE code the tests compare against
   python3-matplotlib python3-h5py   # benchmark plots (bench/ only)
 )
+# --with-slepc: also what the optional slepc eigensolver backend needs (-DFLEXBODY_WITH_SLEPC=ON); the test
+# suite builds it. PETSc brings Open MPI (mpirun) and MUMPS.
+if [[ "${1:-}" == "--with-slepc" ]]; then
+  packages+=(libslepc-real-dev libpetsc-real-dev)
+elif [[ -n "${1:-}" ]]; then
+  echo "setup: unknown option '$1' (only --with-slepc)" >&2
+  exit 2
+fi
 
 missing=()
 for p in "${packages[@]}"; do

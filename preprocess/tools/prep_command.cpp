@@ -3,6 +3,7 @@
 
 #include "flexbody/preprocess/body_spec.hpp"
 #include "flexbody/preprocess/fbprep_pipeline.hpp"
+#include "flexbody/preprocess/parallel_session.hpp"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -45,7 +46,8 @@ int prep_command(int argc, char** argv) {
   app.add_option("--material", material_text, "steel|aluminium|titanium or E=210e9,nu=0.3,rho=7850 (SI)");
   app.add_option("--modes", modes, "number of elastic free-free modes (rigid-body modes never count)");
   app.add_option("--fmax", fmax, "all elastic modes up to this frequency [Hz]; with --modes, --modes caps");
-  app.add_option("--eigensolver", solver_text, "arpack|spectra");
+  app.add_option("--eigensolver", solver_text, "arpack|spectra|slepc (slepc: MUMPS and SLEPc, under mpirun for "
+                                               "several processes; builds with -DFLEXBODY_WITH_SLEPC=ON)");
   app.add_flag("--json", json, "print the summary as one JSON object on stdout instead of the report");
   app.add_flag("-q,--quiet", quiet, "no progress and no report (errors still go to stderr)");
   try {
@@ -130,6 +132,10 @@ int prep_command(int argc, char** argv) {
       options.modes.solver.backend = fp::eigensolver_backend_from_string(solver_text);
       record("eigensolver", solver_text);
     }
+    if (fp::parallel_ranks() > 1 && options.modes.solver.backend != fp::EigensolverBackend::slepc)
+      throw std::invalid_argument(fmt::format("--eigensolver {} runs on one process, but fbprep was started on {} MPI "
+                                              "ranks: use --eigensolver slepc under mpirun",
+                                              fp::to_string(options.modes.solver.backend), fp::parallel_ranks()));
   } catch (const std::exception& e) {
     return fail(e.what(), kBadCommandLine);
   }

@@ -1,6 +1,7 @@
 // fbprep as a user runs it: the bundled bracket end to end, units, and every refused input (one line
 // on stderr naming the problem, a non-zero exit, and no file under the output name).
 #include "flexbody/format/body_file.hpp"
+#include "flexbody/preprocess/eigensolver.hpp"
 #include "flexbody/preprocess/stress_recovery.hpp"
 #include "cli_run.hpp"
 #include "test_meshes.hpp"
@@ -394,7 +395,10 @@ TEST(FbprepCli, RefusesBadInputsWithOneLine) {
   expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,E=2e9,nu=0.3,rho=1", "E is given twice");
   expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,nu=0.3", "rho is missing");
   expect_refusal(dir, "input-cube.geo --unit furlong", "--unit 'furlong' is not one of mm, cm, m, in");
-  expect_refusal(dir, "input-cube.geo --unit m --eigensolver lapack", "'lapack' is unknown; use arpack or spectra");
+  expect_refusal(dir, "input-cube.geo --unit m --eigensolver lapack", "'lapack' is unknown; use arpack, spectra or slepc");
+  if (!flexbody::preprocess::slepc_available())  // a build without the backend says how to get it
+    expect_refusal(dir, "input-cube.geo --unit m --eigensolver slepc",
+                   "eigensolver: 'slepc' is not in this build (configure with -DFLEXBODY_WITH_SLEPC=ON)");
   expect_refusal(dir, "input-cube.geo --unit m --order 3", "--order 3: the element order is 1 (linear tetrahedra) or 2");
   expect_refusal(dir, "input-cube.txt --unit m", "unsupported file type '.txt'");
   expect_refusal(dir, "input-cube.geo --unit m --modes 100000", "--modes 100000: at most");

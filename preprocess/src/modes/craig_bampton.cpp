@@ -83,7 +83,9 @@ CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMat
   if (options.shift > 0.0 || !std::isfinite(options.shift))
     throw std::invalid_argument(fmt::format("craig-bampton: shift must be negative, got {}", options.shift));
   result.shift = options.shift < 0.0 ? options.shift : automatic_shift(nodes, material);
-  CholmodShiftSolve op(k_ii, m_ii, Eigen::MatrixXd(3 * n_interior, 0));
+  const std::unique_ptr<ShiftSolve> solver =
+      make_shift_solve(options.solver.backend, k_ii, m_ii, Eigen::MatrixXd(3 * n_interior, 0));
+  ShiftSolve& op = *solver;
   op.set_shift(result.shift);
   const VectorMassOperator mass_ii(m_ii);
   // With fmax: solve for more modes until the last one lies above it, then keep those at or below.

@@ -3,6 +3,11 @@
 #include <arpack.hpp>
 
 #include <Spectra/SymGEigsShiftSolver.h>
+#include <fmt/format.h>
+
+#ifdef FLEXBODY_WITH_SLEPC
+#include "slepc_shift_solve.hpp"
+#endif
 
 #include <algorithm>
 #include <numeric>
@@ -25,7 +30,7 @@ int lanczos_basis_size(int nev, Eigen::Index n) {
 namespace {
 
 // A reproducible start vector inside the deflated space: P (random).
-Eigen::VectorXd start_vector(CholmodShiftSolve& op, const VectorMassOperator& mass) {
+Eigen::VectorXd start_vector(ShiftSolve& op, const VectorMassOperator& mass) {
   const Eigen::Index n = op.rows();
   std::mt19937_64 generator(20230131);  // fixed seed: identical runs give identical modes
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
@@ -55,7 +60,7 @@ void sort_ascending(EigenPairs& pairs) {
 constexpr a_int kSeupdCountMismatch = -17;
 
 // nullopt if dseupd reports kSeupdCountMismatch.
-std::optional<EigenPairs> solve_arpack(CholmodShiftSolve& op, const VectorMassOperator& mass, int nev,
+std::optional<EigenPairs> solve_arpack(ShiftSolve& op, const VectorMassOperator& mass, int nev,
                                        double tolerance, const EigensolverOptions& options) {
   const auto n = static_cast<a_int>(op.rows());
   const a_int ncv = lanczos_basis_size(nev, n);
@@ -110,7 +115,7 @@ std::optional<EigenPairs> solve_arpack(CholmodShiftSolve& op, const VectorMassOp
 // when the shift changes.
 struct SpectraShiftSolve {
   using Scalar = double;
-  CholmodShiftSolve& op;
+  ShiftSolve& op;
   [[nodiscard]] Eigen::Index rows() const { return op.rows(); }
   [[nodiscard]] Eigen::Index cols() const { return op.rows(); }
   void set_shift(double sigma) {
@@ -119,7 +124,7 @@ struct SpectraShiftSolve {
   void perform_op(const double* x, double* y) { op.perform_op(x, y); }
 };
 
-EigenPairs solve_spectra(CholmodShiftSolve& op, const VectorMassOperator& mass, int nev,
+EigenPairs solve_spectra(ShiftSolve& op, const VectorMassOperator& mass, int nev,
                          const EigensolverOptions& options) {
   SpectraShiftSolve shift_solve{op};
   VectorMassOperator mass_op = mass;  // Spectra takes the B operator by non-const reference
@@ -146,21 +151,61 @@ EigenPairs solve_spectra(CholmodShiftSolve& op, const VectorMassOperator& mass, 
 }  // namespace
 
 std::string_view to_string(EigensolverBackend backend) {
-  return backend == EigensolverBackend::arpack ? "arpack" : "spectra";
+  switch (backend) {
+    case EigensolverBackend::arpack: return "arpack";
+    case EigensolverBackend::spectra: return "spectra";
+    case EigensolverBackend::slepc: return "slepc";
+  }
+  return "unknown";
+}
+
+bool slepc_available() {
+#ifdef FLEXBODY_WITH_SLEPC
+  return true;
+#else
+  return false;
+#endif
 }
 
 EigensolverBackend eigensolver_backend_from_string(std::string_view text) {
   if (text == "arpack") return EigensolverBackend::arpack;
   if (text == "spectra") return EigensolverBackend::spectra;
-  throw std::invalid_argument("eigensolver: '" + std::string(text) + "' is unknown; use arpack or spectra");
+  if (text == "slepc") {
+    if (!slepc_available())
+      throw std::invalid_argument("eigensolver: 'slepc' is not in this build (configure with -DFLEXBODY_WITH_SLEPC=ON)");
+    return EigensolverBackend::slepc;
+  }
+  throw std::invalid_argument("eigensolver: '" + std::string(text) + "' is unknown; use arpack, spectra or slepc");
 }
 
-EigenPairs solve_shift_invert(CholmodShiftSolve& op, const VectorMassOperator& mass, int nev,
+std::unique_ptr<ShiftSolve> make_shift_solve(EigensolverBackend backend, const SparseMatrix& stiffness_upper,
+                                             const SparseMatrix& scalar_mass_upper, Eigen::MatrixXd deflation) {
+  if (backend == EigensolverBackend::slepc) {
+#ifdef FLEXBODY_WITH_SLEPC
+    return std::make_unique<SlepcShiftSolve>(stiffness_upper, scalar_mass_upper, std::move(deflation));
+#else
+    throw std::invalid_argument("eigensolver: 'slepc' is not in this build (configure with -DFLEXBODY_WITH_SLEPC=ON)");
+#endif
+  }
+  // Under mpirun this runs on rank 0 alone (fbprep's command line refuses that combination as a waste of ranks).
+  return std::make_unique<CholmodShiftSolve>(stiffness_upper, scalar_mass_upper, std::move(deflation));
+}
+
+EigenPairs solve_shift_invert(ShiftSolve& op, const VectorMassOperator& mass, int nev,
                               const EigensolverOptions& options) {
   const Eigen::Index n = op.rows();
   if (nev < 1 || nev > n - 8)
     throw std::invalid_argument("eigensolver: the number of modes must satisfy 1 <= nev <= " +
                                 std::to_string(n - 8) + " (DOFs - 6 rigid-body modes - 2), got " + std::to_string(nev));
+  if (options.backend == EigensolverBackend::slepc) {
+#ifdef FLEXBODY_WITH_SLEPC
+    auto* distributed = dynamic_cast<SlepcShiftSolve*>(&op);
+    if (distributed == nullptr) throw std::logic_error("eigensolver slepc: the operator is not from make_shift_solve(slepc)");
+    return distributed->eigenpairs(mass, nev, options);
+#else
+    throw std::invalid_argument("eigensolver: 'slepc' is not in this build (configure with -DFLEXBODY_WITH_SLEPC=ON)");
+#endif
+  }
   if (options.backend == EigensolverBackend::spectra) return solve_spectra(op, mass, nev, options);
   const int solves_before = op.stats().solves;
   if (std::optional<EigenPairs> pairs = solve_arpack(op, mass, nev, options.tolerance, options)) return *pairs;

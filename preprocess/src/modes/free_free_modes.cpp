@@ -90,7 +90,9 @@ FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& sti
                                          result.rigid_body_residual));
   }
   result.shift = options.shift < 0.0 ? options.shift : automatic_shift(nodes, material);
-  CholmodShiftSolve op(stiffness_upper, scalar_mass_upper, rigid);
+  const std::unique_ptr<ShiftSolve> solver =
+      make_shift_solve(options.solver.backend, stiffness_upper, scalar_mass_upper, rigid);
+  ShiftSolve& op = *solver;
   op.set_shift(result.shift);
   const VectorMassOperator mass(scalar_mass_upper);
 

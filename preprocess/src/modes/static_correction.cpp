@@ -104,7 +104,7 @@ std::vector<std::string> unit_load_labels(const std::vector<LoadPoint>& points) 
   return labels;
 }
 
-StaticCorrectionModes static_correction_modes(CholmodShiftSolve& solve, const SparseMatrix& stiffness_upper,
+StaticCorrectionModes static_correction_modes(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
                                               const SparseMatrix& scalar_mass_upper, const Eigen::MatrixXd& known,
                                               const Eigen::MatrixXd& loads) {
   const Eigen::Index n = stiffness_upper.rows();

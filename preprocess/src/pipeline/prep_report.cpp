@@ -39,6 +39,10 @@ double PrepSummary::max_residual_to_floor() const {
 std::string PrepSummary::full_report() const {
   std::string r;
   auto line = [&r](std::string_view label, const std::string& value) { r += fmt::format("  {:<22}{}\n", label, value); };
+  auto factor_description = [this] {
+    return factor.processes > 1 ? fmt::format("{} over {} MPI ranks", factor.factor_library, factor.processes)
+                                : std::string(factor.factor_library);
+  };
   auto residual_check_line = [this] {
     return fmt::format("  {:<22}max residual / rounding floor {:.2g}; accepted: residual <= max({:.0e}, {:g} x "
                        "floor),\n  {:<22}floor = eps (|abs(K) abs(phi)| + lambda |abs(M) abs(phi)|) / |K phi|\n",
@@ -75,8 +79,8 @@ std::string PrepSummary::full_report() const {
   for (int i = 0; i < 3; ++i)
     line(i == 0 ? "inertia about CoM" : "", vector3(mass.inertia_about_com.row(i).transpose()) + (i == 0 ? " kg m^2" : ""));
   if (reduction == ReductionKind::craig_bampton) {
-    r += fmt::format("\nCraig-Bampton: fixed-interface modes ({}, shift-invert on CHOLMOD, sigma = {}, rbe2 interfaces "
-                     "clamped)\n", eigensolver, shift_as_frequency(shift));
+    r += fmt::format("\nCraig-Bampton: fixed-interface modes ({}, shift-invert on {}, sigma = {}, rbe2 interfaces "
+                     "clamped)\n", eigensolver, factor_description(), shift_as_frequency(shift));
     r += fmt::format("  {:>4}  {:>16}  {:>14}  {:>14}\n", "mode", "frequency [Hz]", "rel. residual", "rounding floor");
     for (Eigen::Index k = 0; k < fixed_interface_frequencies_hz.size(); ++k)
       r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}  {:>14.2e}\n", k + 1, fixed_interface_frequencies_hz(k),
@@ -85,8 +89,8 @@ std::string PrepSummary::full_report() const {
     r += "\nOrthonormalised modes (reduced eigenproblem on fixed-interface + constraint modes, 6 rigid dropped;\n"
          "residual: in the model with the rbe2 patches rigid, the reduction error)\n";
   } else {
-    r += fmt::format("\nFree-free modes ({}, shift-invert on CHOLMOD, sigma = {}, 6 rigid-body modes deflated)\n",
-                     eigensolver, shift_as_frequency(shift));
+    r += fmt::format("\nFree-free modes ({}, shift-invert on {}, sigma = {}, 6 rigid-body modes deflated)\n",
+                     eigensolver, factor_description(), shift_as_frequency(shift));
   }
   // Free-free modes have floors; the orthonormalised Craig-Bampton modes' residuals are reduction errors, not
   // rounding, and have none.
@@ -114,9 +118,14 @@ std::string PrepSummary::full_report() const {
                                          rigid_body_coupling));
   else
     line("rigid-body check", fmt::format("max |r^T M phi| = {:.1e}", rigid_body_coupling));
-  line("factorization", fmt::format("nnz(L) = {:.3g}, {:.3g} GFlop; ordering {:.2f} s, numeric {:.2f} s",
-                                    factor.factor_nonzeros, factor.factor_flops * 1e-9, factor.analyze_seconds,
-                                    factor.factorize_seconds));
+  if (factor.factor_megabytes > 0.0)  // MUMPS: its analysis and factorization are one step here
+    line("factorization", fmt::format("nnz(L) = {:.3g}, {:.3g} GFlop, {:.0f} MB over the ranks; analysis and numeric "
+                                      "{:.2f} s", factor.factor_nonzeros, factor.factor_flops * 1e-9,
+                                      factor.factor_megabytes, factor.factorize_seconds));
+  else
+    line("factorization", fmt::format("nnz(L) = {:.3g}, {:.3g} GFlop; ordering {:.2f} s, numeric {:.2f} s",
+                                      factor.factor_nonzeros, factor.factor_flops * 1e-9, factor.analyze_seconds,
+                                      factor.factorize_seconds));
   line("solves", fmt::format("{} in {:.2f} s ({} Lanczos restarts, {} solver run{})", factor.solves,
                              factor.solve_seconds, restarts, solver_runs, solver_runs == 1 ? "" : "s"));
   r += "\nGCMS constants (Y = [1, X, fields]; G = Y^T M_s Y, K_hat = (fields x I3)^T K (fields x I3))\n";
@@ -200,6 +209,8 @@ std::string PrepSummary::json() const {
                                                                     : nlohmann::ordered_json(nullptr);
   j["rigid_body_coupling"] = rigid_body_coupling;
   j["factor_nonzeros"] = factor.factor_nonzeros;
+  j["factor_library"] = factor.factor_library;  // CHOLMOD, or MUMPS for the slepc backend
+  j["mpi_ranks"] = factor.processes;
   j["solves"] = factor.solves;
   // JSON has no infinity: a singular matrix's condition number is written as null.
   auto condition = [](double c) { return std::isfinite(c) ? nlohmann::ordered_json(c) : nlohmann::ordered_json(nullptr); };

@@ -1,20 +1,25 @@
 #pragma once
 // flexbody/preprocess/eigensolver.hpp: the generalized symmetric eigenproblem K̄ phi = lambda M̄ phi,
-// lowest eigenvalues above a shift, by shift-invert Lanczos (ARPACK or Spectra).
+// lowest eigenvalues above a shift, by shift-invert Lanczos (ARPACK or Spectra on one process) or by SLEPc's
+// Krylov-Schur on a MUMPS factorization distributed over MPI ranks (builds with -DFLEXBODY_WITH_SLEPC=ON).
 
 #include "flexbody/preprocess/shift_invert_operator.hpp"
 
 #include <Eigen/Core>
 
+#include <memory>
 #include <string>
 #include <string_view>
 
 namespace flexbody::preprocess {
 
-enum class EigensolverBackend { arpack, spectra };
+enum class EigensolverBackend { arpack, spectra, slepc };
 [[nodiscard]] std::string_view to_string(EigensolverBackend backend);
-/// "arpack" or "spectra"; throws std::invalid_argument otherwise.
+/// "arpack", "spectra" or "slepc"; throws std::invalid_argument otherwise, and for "slepc" in a build
+/// without it.
 [[nodiscard]] EigensolverBackend eigensolver_backend_from_string(std::string_view text);
+/// True when this build has the SLEPc backend (-DFLEXBODY_WITH_SLEPC=ON).
+[[nodiscard]] bool slepc_available();
 
 struct EigensolverOptions {
   EigensolverBackend backend = EigensolverBackend::arpack;
@@ -38,10 +43,16 @@ struct EigenPairs {
 /// min(n - 6, max(2 nev + 1, nev + 20)) vectors of n doubles.
 [[nodiscard]] int lanczos_basis_size(int nev, Eigen::Index n);
 
+/// The shift-solve operator a backend works on: CHOLMOD for arpack and spectra, the distributed MUMPS
+/// factorization for slepc (collective over the MPI ranks, see parallel_session.hpp). K and M_s are borrowed.
+[[nodiscard]] std::unique_ptr<ShiftSolve> make_shift_solve(EigensolverBackend backend, const SparseMatrix& stiffness_upper,
+                                                           const SparseMatrix& scalar_mass_upper,
+                                                           Eigen::MatrixXd deflation);
+
 /// The `nev` eigenvalues nearest to (and above) sigma of K̄ phi = lambda M̄ phi within the range of
-/// the deflated operator. `op` must already be factorized at `sigma` (set_shift). Throws
-/// std::runtime_error if the backend fails or does not converge.
-[[nodiscard]] EigenPairs solve_shift_invert(CholmodShiftSolve& op, const VectorMassOperator& mass, int nev,
+/// the deflated operator. `op` must already be factorized at `sigma` (set_shift) and come from
+/// make_shift_solve for the same backend. Throws std::runtime_error if the backend fails or does not converge.
+[[nodiscard]] EigenPairs solve_shift_invert(ShiftSolve& op, const VectorMassOperator& mass, int nev,
                                             const EigensolverOptions& options);
 
 }  // namespace flexbody::preprocess

@@ -1,8 +1,8 @@
 #pragma once
-// flexbody/preprocess/shift_invert_operator.hpp: y = P (K̄ - sigma M̄)^-1 x on a CHOLMOD factorization.
+// flexbody/preprocess/shift_invert_operator.hpp: y = P (K̄ - sigma M̄)^-1 x on a sparse factorization.
 //
-// The operator follows Spectra's shift-solve concept (rows, cols, set_shift, perform_op), so both
-// eigensolver backends use the same object. It deflates the rigid-body modes R (M̄-orthonormal):
+// The operator follows Spectra's shift-solve concept (rows, cols, set_shift, perform_op), so every
+// eigensolver backend uses the same object. It deflates the rigid-body modes R (M̄-orthonormal):
 // P = I - R Rᵀ M̄ keeps every result M̄-orthogonal to them, so the six zero eigenvalues of a free body
 // never enter the Krylov space and a shift sigma < 0 can be chosen for accuracy alone
 // (PREPROCESSING.md: without deflation the rigid modes dominate the operator by ~1e7 for small |sigma|).
@@ -55,41 +55,60 @@ struct ShiftSolveStats {
   std::int64_t solves = 0;        ///< right-hand sides solved for (a block of k counts k)
   std::int64_t solve_passes = 0;  ///< passes over the factor (a block of k counts 1)
   double solve_seconds = 0.0;
+  const char* factor_library = "CHOLMOD";  ///< "CHOLMOD", or "MUMPS" for the slepc backend
+  int processes = 1;                       ///< MPI ranks the factor is distributed over
+  /// Memory the factorization used [MB], summed over the ranks (MUMPS's INFOG(22)); 0 where not known.
+  double factor_megabytes = 0.0;
 };
 
-class CholmodShiftSolve {
+/// y = P (K̄ - sigma M̄)^-1 x on some factorization of K̄ - sigma M̄: what the eigensolvers, the static
+/// corrections and the Craig-Bampton constraint modes need. Two implementations: CholmodShiftSolve (one
+/// process, below) and, in builds with SLEPc, a MUMPS factorization distributed over the MPI ranks.
+class ShiftSolve {
  public:
   using Scalar = double;
+  virtual ~ShiftSolve() = default;
+  ShiftSolve() = default;
+  ShiftSolve(const ShiftSolve&) = delete;
+  ShiftSolve& operator=(const ShiftSolve&) = delete;
+
+  [[nodiscard]] virtual Eigen::Index rows() const = 0;
+  [[nodiscard]] Eigen::Index cols() const { return rows(); }
+  /// Factorizes K̄ - sigma M̄. Throws std::runtime_error if the matrix is not positive definite at this shift.
+  virtual void set_shift(double sigma) = 0;
+  /// y = P (K̄ - sigma M̄)^-1 x.
+  virtual void perform_op(const double* x, double* y) = 0;
+
+  [[nodiscard]] double shift() const { return sigma_; }
+  [[nodiscard]] const ShiftSolveStats& stats() const { return stats_; }
+
+ protected:
+  double sigma_ = 0.0;
+  ShiftSolveStats stats_;
+};
+
+class CholmodShiftSolve final : public ShiftSolve {
+ public:
   /// K and M_s are borrowed (stored as upper triangles) and must outlive the operator. `deflation`
   /// (3 n_n x r, M̄-orthonormal) may be empty.
   CholmodShiftSolve(const SparseMatrix& stiffness_upper, const SparseMatrix& scalar_mass_upper,
                     Eigen::MatrixXd deflation);
   CholmodShiftSolve(SparseMatrix&&, const SparseMatrix&, Eigen::MatrixXd) = delete;  // borrows K and M_s
   CholmodShiftSolve(const SparseMatrix&, SparseMatrix&&, Eigen::MatrixXd) = delete;
-  ~CholmodShiftSolve();
-  CholmodShiftSolve(const CholmodShiftSolve&) = delete;
-  CholmodShiftSolve& operator=(const CholmodShiftSolve&) = delete;
+  ~CholmodShiftSolve() override;
 
-  [[nodiscard]] Eigen::Index rows() const;
-  [[nodiscard]] Eigen::Index cols() const { return rows(); }
-  /// Factorizes K̄ - sigma M̄ (the symbolic analysis is done once and reused for a new shift).
-  /// Throws std::runtime_error if the matrix is not positive definite at this shift.
-  void set_shift(double sigma);
-  /// y = P (K̄ - sigma M̄)^-1 x.
-  void perform_op(const double* x, double* y);
+  [[nodiscard]] Eigen::Index rows() const override;
+  /// The symbolic analysis is done once and reused for a new shift.
+  void set_shift(double sigma) override;
+  void perform_op(const double* x, double* y) override;
   /// Y = P (K̄ - sigma M̄)^-1 X for `columns` right-hand sides at once (column-major, leading dimension
   /// rows()). One pass over the factor serves all columns: the solves are bound by reading the factor,
   /// so k columns cost far less than k single solves (bench/README.md).
   void perform_block(const double* x, double* y, Eigen::Index columns);
 
-  [[nodiscard]] double shift() const { return sigma_; }
-  [[nodiscard]] const ShiftSolveStats& stats() const { return stats_; }
-
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  double sigma_ = 0.0;
-  ShiftSolveStats stats_;
 };
 
 }  // namespace flexbody::preprocess

@@ -81,7 +81,7 @@ struct StaticCorrectionModes {
 /// by the factorization: the preconditioned spectrum is λ / (λ − σ) with λ >= the first eigenvalue not in
 /// `known`, so a handful of solves reach 1e-10. Throws std::runtime_error if a solve does not converge (its true
 /// residual above max(1e-8, kResidualFloorFactor x its rounding floor)).
-[[nodiscard]] StaticCorrectionModes static_correction_modes(CholmodShiftSolve& solve, const SparseMatrix& stiffness_upper,
+[[nodiscard]] StaticCorrectionModes static_correction_modes(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
                                                             const SparseMatrix& scalar_mass_upper,
                                                             const Eigen::MatrixXd& known, const Eigen::MatrixXd& loads);
 

@@ -3,7 +3,9 @@
 #include "../parallel/distributed_shift_invert.hpp"
 #include "../parallel/petsc_runtime.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <random>
 
 namespace flexbody::preprocess {
@@ -39,6 +41,7 @@ void SlepcShiftSolve::set_shift(double sigma) {
   stats_.factor_nonzeros = system_->factor_entries();
   stats_.factor_flops = system_->factor_flops();
   stats_.factor_megabytes = system_->factor_megabytes();
+  stats_.other_ranks_peak_megabytes = std::max(stats_.other_ranks_peak_megabytes, system_->other_ranks_peak_megabytes());
 }
 
 void SlepcShiftSolve::perform_op(const double* x, double* y) {
@@ -72,6 +75,7 @@ EigenPairs SlepcShiftSolve::eigenpairs(const VectorMassOperator& mass, int nev, 
   stats_.solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
   stats_.solves += pairs.operator_applies;
   stats_.solve_passes += pairs.operator_applies;
+  stats_.other_ranks_peak_megabytes = std::max(stats_.other_ranks_peak_megabytes, system_->other_ranks_peak_megabytes());
   EigenPairs result;
   result.eigenvalues = std::move(pairs.eigenvalues);
   result.vectors = std::move(pairs.vectors);

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -18,73 +20,91 @@
 namespace flexbody::preprocess::parallel {
 namespace {
 
-using FullRows = Eigen::SparseMatrix<double, Eigen::RowMajor, std::int64_t>;
-
 // The first node of rank q: whole nodes (three rows each), as evenly as possible.
 PetscInt first_node(PetscInt n_nodes, int q, int ranks) {
   return n_nodes / ranks * q + std::min<PetscInt>(q, n_nodes % ranks);
 }
 
-// One rank's rows in PETSc's CSR form: local row starts, global column indices.
+// One rank's rows in PETSc's CSR form: local row starts, global column indices (sorted in each row).
 struct RowBlock {
   std::vector<PetscInt> start{0};
   std::vector<PetscInt> columns;
   std::vector<PetscScalar> values;
 };
 
-// Rows [first, end) of a full symmetric matrix.
-RowBlock block_of(const FullRows& full, Eigen::Index first, Eigen::Index end) {
-  RowBlock block;
-  const std::int64_t* outer = full.outerIndexPtr();
-  const std::size_t entries = static_cast<std::size_t>(outer[end] - outer[first]);
-  block.columns.reserve(entries);
-  block.values.assign(full.valuePtr() + outer[first], full.valuePtr() + outer[end]);
-  for (Eigen::Index i = first; i < end; ++i) {
-    for (std::int64_t p = outer[i]; p < outer[i + 1]; ++p) block.columns.push_back(static_cast<PetscInt>(full.innerIndexPtr()[p]));
-    block.start.push_back(static_cast<PetscInt>(block.columns.size()));
-  }
-  return block;
-}
-
-// Rows of M̄ = M_s ⊗ I3 for nodes [first, end), from the full scalar M_s.
-RowBlock vector_mass_block_of(const FullRows& scalar, Eigen::Index first, Eigen::Index end) {
-  RowBlock block;
-  for (Eigen::Index i = first; i < end; ++i)
-    for (int c = 0; c < 3; ++c) {
-      for (FullRows::InnerIterator it(scalar, i); it; ++it) {
-        block.columns.push_back(static_cast<PetscInt>(3 * it.index() + c));
-        block.values.push_back(it.value());
-      }
-      block.start.push_back(static_cast<PetscInt>(block.columns.size()));
+// Every rank's rows of the full symmetric matrix whose upper triangle is `upper` (column j holds rows i <= j),
+// without forming the full matrix: (i, j) goes to row i and, for i != j, (j, i) to row j. Columns are visited in
+// ascending order, so each row's columns come out sorted. `first_row` has ranks + 1 entries.
+std::vector<RowBlock> row_blocks(const SparseMatrix& upper, const std::vector<PetscInt>& first_row) {
+  const auto ranks = static_cast<int>(first_row.size()) - 1;
+  const Eigen::Index n = upper.rows();
+  std::vector<int> owner(static_cast<std::size_t>(n));
+  for (int q = 0; q < ranks; ++q)
+    std::fill(owner.begin() + first_row[q], owner.begin() + first_row[q + 1], q);
+  std::vector<std::int64_t> length(static_cast<std::size_t>(n), 0);
+  for (Eigen::Index j = 0; j < upper.outerSize(); ++j)
+    for (SparseMatrix::InnerIterator it(upper, j); it; ++it) {
+      ++length[static_cast<std::size_t>(it.row())];
+      if (it.row() != j) ++length[static_cast<std::size_t>(j)];
     }
-  return block;
+  std::vector<RowBlock> blocks(static_cast<std::size_t>(ranks));
+  std::vector<std::int64_t> cursor(static_cast<std::size_t>(n));
+  for (int q = 0; q < ranks; ++q) {
+    RowBlock& block = blocks[static_cast<std::size_t>(q)];
+    std::int64_t entries = 0;
+    for (PetscInt r = first_row[q]; r < first_row[q + 1]; ++r) {
+      cursor[static_cast<std::size_t>(r)] = entries;
+      entries += length[static_cast<std::size_t>(r)];
+      if (entries > std::numeric_limits<PetscInt>::max())
+        throw std::runtime_error("distributed matrix: one rank's block exceeds 2^31 entries; use more MPI ranks");
+      block.start.push_back(static_cast<PetscInt>(entries));
+    }
+    block.columns.resize(static_cast<std::size_t>(entries));
+    block.values.resize(static_cast<std::size_t>(entries));
+  }
+  auto put = [&](Eigen::Index row, Eigen::Index column, double value) {
+    RowBlock& block = blocks[static_cast<std::size_t>(owner[static_cast<std::size_t>(row)])];
+    const auto p = static_cast<std::size_t>(cursor[static_cast<std::size_t>(row)]++);
+    block.columns[p] = static_cast<PetscInt>(column);
+    block.values[p] = value;
+  };
+  for (Eigen::Index j = 0; j < upper.outerSize(); ++j)
+    for (SparseMatrix::InnerIterator it(upper, j); it; ++it) {
+      put(it.row(), j, it.value());
+      if (it.row() != j) put(j, it.row(), it.value());
+    }
+  return blocks;
 }
 
-int count_of(std::size_t size) {
-  if (size > static_cast<std::size_t>(std::numeric_limits<int>::max()))
-    throw std::runtime_error("distributed matrix: one rank's block exceeds 2^31 entries; use more MPI ranks");
-  return static_cast<int>(size);
+// M̄ = M_s ⊗ I3's rows for the nodes of each rank, from the full scalar rows of M_s (one block over all nodes).
+std::vector<RowBlock> vector_mass_blocks(const RowBlock& scalar, const std::vector<PetscInt>& first_node_of) {
+  std::vector<RowBlock> blocks(first_node_of.size() - 1);
+  for (std::size_t q = 0; q + 1 < first_node_of.size(); ++q) {
+    RowBlock& block = blocks[q];
+    for (PetscInt i = first_node_of[q]; i < first_node_of[q + 1]; ++i)
+      for (int c = 0; c < 3; ++c) {
+        for (PetscInt p = scalar.start[static_cast<std::size_t>(i)]; p < scalar.start[static_cast<std::size_t>(i) + 1]; ++p) {
+          block.columns.push_back(3 * scalar.columns[static_cast<std::size_t>(p)] + c);
+          block.values.push_back(scalar.values[static_cast<std::size_t>(p)]);
+        }
+        block.start.push_back(static_cast<PetscInt>(block.columns.size()));
+      }
+  }
+  return blocks;
 }
 
 void send_block(const RowBlock& block, int destination) {
-  std::int64_t entries = static_cast<std::int64_t>(block.columns.size());
-  MPI_Send(&entries, 1, MPI_INT64_T, destination, 0, PETSC_COMM_WORLD);
-  MPI_Send(block.start.data(), count_of(block.start.size()), MPIU_INT, destination, 1, PETSC_COMM_WORLD);
-  MPI_Send(block.columns.data(), count_of(block.columns.size()), MPIU_INT, destination, 2, PETSC_COMM_WORLD);
-  MPI_Send(block.values.data(), count_of(block.values.size()), MPIU_SCALAR, destination, 3, PETSC_COMM_WORLD);
+  MPI_Send(block.start.data(), static_cast<int>(block.start.size()), MPIU_INT, destination, 1, PETSC_COMM_WORLD);
+  MPI_Send(block.columns.data(), static_cast<int>(block.columns.size()), MPIU_INT, destination, 2, PETSC_COMM_WORLD);
+  MPI_Send(block.values.data(), static_cast<int>(block.values.size()), MPIU_SCALAR, destination, 3, PETSC_COMM_WORLD);
 }
 
-RowBlock receive_block(PetscInt rows) {
-  std::int64_t entries = 0;
-  MPI_Recv(&entries, 1, MPI_INT64_T, 0, 0, PETSC_COMM_WORLD, MPI_STATUS_IGNORE);
-  RowBlock block;
-  block.start.resize(static_cast<std::size_t>(rows) + 1);
-  block.columns.resize(static_cast<std::size_t>(entries));
-  block.values.resize(static_cast<std::size_t>(entries));
-  MPI_Recv(block.start.data(), count_of(block.start.size()), MPIU_INT, 0, 1, PETSC_COMM_WORLD, MPI_STATUS_IGNORE);
-  MPI_Recv(block.columns.data(), count_of(block.columns.size()), MPIU_INT, 0, 2, PETSC_COMM_WORLD, MPI_STATUS_IGNORE);
-  MPI_Recv(block.values.data(), count_of(block.values.size()), MPIU_SCALAR, 0, 3, PETSC_COMM_WORLD, MPI_STATUS_IGNORE);
-  return block;
+void receive_block(RowBlock& block) {  // sized by the caller
+  MPI_Recv(block.start.data(), static_cast<int>(block.start.size()), MPIU_INT, 0, 1, PETSC_COMM_WORLD, MPI_STATUS_IGNORE);
+  MPI_Recv(block.columns.data(), static_cast<int>(block.columns.size()), MPIU_INT, 0, 2, PETSC_COMM_WORLD,
+           MPI_STATUS_IGNORE);
+  MPI_Recv(block.values.data(), static_cast<int>(block.values.size()), MPIU_SCALAR, 0, 3, PETSC_COMM_WORLD,
+           MPI_STATUS_IGNORE);
 }
 
 Mat create_matrix(RowBlock& block, PetscInt local_rows, PetscInt global_rows, const char* name) {
@@ -107,6 +127,9 @@ KSP factor_solver(EPS eps) {
 
 }  // namespace
 
+// Every step that allocates or may fail on one rank alone is agreed on before the next communication, so a
+// failure on one rank (bad_alloc on rank 0 for the blocks, on a worker for its share) throws on every rank
+// instead of leaving the others waiting in a send or a receive.
 DistributedShiftInvert::DistributedShiftInvert(const SparseMatrix* stiffness_upper, const SparseMatrix* scalar_mass_upper,
                                                const Eigen::MatrixXd* deflation) {
   const int me = rank(), ranks = size();
@@ -116,45 +139,82 @@ DistributedShiftInvert::DistributedShiftInvert(const SparseMatrix* stiffness_upp
     header[1] = deflation->cols();
   }
   MPI_Bcast(header, 2, MPI_INT64_T, 0, PETSC_COMM_WORLD);
-  if (3 * header[0] > std::numeric_limits<PetscInt>::max())
+  if (3 * header[0] > std::numeric_limits<PetscInt>::max())  // the same on every rank
     throw std::runtime_error(fmt::format("distributed matrix: {} DOFs exceed this PETSc's 32-bit indices", 3 * header[0]));
   const auto n_nodes = static_cast<PetscInt>(header[0]);
   rows_ = 3 * n_nodes;
-  const PetscInt local_rows = 3 * (first_node(n_nodes, me + 1, ranks) - first_node(n_nodes, me, ranks));
+  std::vector<PetscInt> first_node_of(static_cast<std::size_t>(ranks) + 1), first_row(first_node_of.size());
+  for (int q = 0; q <= ranks; ++q) {
+    first_node_of[static_cast<std::size_t>(q)] = first_node(n_nodes, q, ranks);
+    first_row[static_cast<std::size_t>(q)] = 3 * first_node_of[static_cast<std::size_t>(q)];
+  }
+  const PetscInt local_rows = first_row[static_cast<std::size_t>(me) + 1] - first_row[static_cast<std::size_t>(me)];
+
+  std::vector<RowBlock> k_blocks, m_blocks;
+  collective([&] {  // rank 0 builds every rank's rows
+    if (me != 0) return;
+    k_blocks = row_blocks(*stiffness_upper, first_row);
+    const std::vector<PetscInt> all_nodes = {0, n_nodes};
+    m_blocks = vector_mass_blocks(row_blocks(*scalar_mass_upper, all_nodes)[0], first_node_of);
+  });
+  std::vector<std::int64_t> entries(2 * static_cast<std::size_t>(ranks)), mine(2);
+  if (me == 0)
+    for (int q = 0; q < ranks; ++q) {
+      entries[2 * static_cast<std::size_t>(q)] = static_cast<std::int64_t>(k_blocks[static_cast<std::size_t>(q)].columns.size());
+      entries[2 * static_cast<std::size_t>(q) + 1] = static_cast<std::int64_t>(m_blocks[static_cast<std::size_t>(q)].columns.size());
+    }
+  MPI_Scatter(entries.data(), 2, MPI_INT64_T, mine.data(), 2, MPI_INT64_T, 0, PETSC_COMM_WORLD);
   RowBlock k_block, m_block;
+  collective([&] {  // the workers make room for their rows
+    if (me == 0) {
+      k_block = std::move(k_blocks[0]);
+      m_block = std::move(m_blocks[0]);
+      return;
+    }
+    for (auto [block, count] : {std::pair{&k_block, mine[0]}, std::pair{&m_block, mine[1]}}) {
+      block->start.resize(static_cast<std::size_t>(local_rows) + 1);
+      block->columns.resize(static_cast<std::size_t>(count));
+      block->values.resize(static_cast<std::size_t>(count));
+    }
+  });
   if (me == 0) {
-    // Both triangles, by rows; each rank gets its rows, rank 0 keeps its own last.
-    FullRows full_k = stiffness_upper->selfadjointView<Eigen::Upper>();
-    FullRows full_m = scalar_mass_upper->selfadjointView<Eigen::Upper>();
-    for (int q = ranks - 1; q >= 0; --q) {
-      const PetscInt a = first_node(n_nodes, q, ranks), b = first_node(n_nodes, q + 1, ranks);
-      RowBlock kb = block_of(full_k, 3 * a, 3 * b), mb = vector_mass_block_of(full_m, a, b);
-      if (q == 0) {
-        k_block = std::move(kb);
-        m_block = std::move(mb);
-      } else {
-        send_block(kb, q);
-        send_block(mb, q);
-      }
+    for (int q = 1; q < ranks; ++q) {
+      send_block(k_blocks[static_cast<std::size_t>(q)], q);
+      send_block(m_blocks[static_cast<std::size_t>(q)], q);
+      k_blocks[static_cast<std::size_t>(q)] = RowBlock();
+      m_blocks[static_cast<std::size_t>(q)] = RowBlock();
     }
   } else {
-    k_block = receive_block(local_rows);
-    m_block = receive_block(local_rows);
+    receive_block(k_block);
+    receive_block(m_block);
   }
-  stiffness_ = create_matrix(k_block, local_rows, rows_, "distributed K");
-  mass_ = create_matrix(m_block, local_rows, rows_, "distributed M");
-  check(MatCreateVecs(stiffness_, &work_, &work_out_), "MatCreateVecs");
-  check(VecScatterCreateToZero(work_, &to_zero_, &gathered_), "VecScatterCreateToZero");
-  deflation_.resize(static_cast<std::size_t>(header[1]), nullptr);
-  for (std::size_t k = 0; k < deflation_.size(); ++k) {
-    check(VecDuplicate(work_, &deflation_[k]), "VecDuplicate");
-    to_distributed(me == 0 ? deflation->col(static_cast<Eigen::Index>(k)).data() : nullptr, deflation_[k]);
+  // If a creation fails on any rank, every rank releases what it made.
+  try {
+    collective([&] {
+      stiffness_ = create_matrix(k_block, local_rows, rows_, "distributed K");
+      k_block = RowBlock();  // PETSc copied it
+      mass_ = create_matrix(m_block, local_rows, rows_, "distributed M");
+      m_block = RowBlock();
+      check(MatCreateVecs(stiffness_, &work_, &work_out_), "MatCreateVecs");
+      check(VecScatterCreateToZero(work_, &to_zero_, &gathered_), "VecScatterCreateToZero");
+      deflation_.resize(static_cast<std::size_t>(header[1]), nullptr);
+      for (std::size_t k = 0; k < deflation_.size(); ++k) {
+        check(VecDuplicate(work_, &deflation_[k]), "VecDuplicate");
+        to_distributed(me == 0 ? deflation->col(static_cast<Eigen::Index>(k)).data() : nullptr, deflation_[k]);
+      }
+    });
+  } catch (...) {
+    release();
+    throw;
   }
 }
 
-DistributedShiftInvert::~DistributedShiftInvert() {
+DistributedShiftInvert::~DistributedShiftInvert() { release(); }
+
+void DistributedShiftInvert::release() {
   EPSDestroy(&eps_);
   for (Vec& v : deflation_) VecDestroy(&v);
+  deflation_.clear();
   VecScatterDestroy(&to_zero_);
   VecDestroy(&gathered_);
   VecDestroy(&work_);
@@ -207,12 +267,30 @@ void DistributedShiftInvert::set_shift(double sigma) {
   check(KSPGetPC(ksp, &pc), "KSPGetPC");
   check(PCSetType(pc, PCCHOLESKY), "PCSetType");
   check(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS), "PCFactorSetMatSolverType");
-  // PETSC_OPTIONS may tune the solver, e.g. -mat_mumps_icntl_22 1 for MUMPS's out-of-core factor.
+  // MUMPS counts the negative pivots of a root node factorized by ScaLAPACK (several ranks) only with ICNTL(13) = 1,
+  // which keeps that node on one rank: without it an indefinite K - sigma M could pass the check below.
+  if (size() > 1) {
+    PetscBool given = PETSC_FALSE;
+    check(PetscOptionsHasName(nullptr, nullptr, "-st_mat_mumps_icntl_13", &given), "PetscOptionsHasName");
+    if (!given) check(PetscOptionsSetValue(nullptr, "-st_mat_mumps_icntl_13", "1"), "PetscOptionsSetValue");
+  }
+  // PETSC_OPTIONS may tune the solver (the factor's options carry the ST's prefix), e.g.
+  // -st_mat_mumps_icntl_22 1 for MUMPS's out-of-core factor.
   check(EPSSetFromOptions(eps_), "EPSSetFromOptions");
   const auto start = std::chrono::steady_clock::now();
   check(EPSSetUp(eps_), "SLEPc: factorization of K - sigma M by MUMPS");
   factorize_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  measure_other_ranks_memory();
   read_factor_statistics();
+}
+
+void DistributedShiftInvert::measure_other_ranks_memory() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  const double mine = rank() == 0 ? 0.0 : static_cast<double>(usage.ru_maxrss) / 1024.0;  // KiB on Linux
+  double largest = 0.0;
+  MPI_Reduce(&mine, &largest, 1, MPI_DOUBLE, MPI_MAX, 0, PETSC_COMM_WORLD);
+  other_ranks_peak_megabytes_ = largest;
 }
 
 void DistributedShiftInvert::read_factor_statistics() {
@@ -248,6 +326,12 @@ DistributedEigenPairs DistributedShiftInvert::eigenpairs(int nev, int ncv, doubl
     check(EPSSetDeflationSpace(eps_, static_cast<PetscInt>(deflation_.size()), deflation_.data()), "EPSSetDeflationSpace");
   to_distributed(rank() == 0 ? start->data() : nullptr, work_);
   check(EPSSetInitialSpace(eps_, 1, &work_), "EPSSetInitialSpace");
+  DistributedEigenPairs result;
+  collective([&] {  // rank 0 makes room for the vectors before the collective calls that fill them
+    if (rank() != 0) return;
+    result.eigenvalues.resize(nev);
+    result.vectors.resize(rows_, nev);
+  });
   KSP ksp = factor_solver(eps_);
   PetscInt solves_before = 0, solves_after = 0;
   check(KSPGetTotalIterations(ksp, &solves_before), "KSPGetTotalIterations");
@@ -258,12 +342,7 @@ DistributedEigenPairs DistributedShiftInvert::eigenpairs(int nev, int ncv, doubl
   if (converged < nev)
     throw std::runtime_error(fmt::format("SLEPc: no convergence after {} restarts ({} of {} eigenpairs converged)",
                                          iterations, converged, nev));
-  DistributedEigenPairs result;
   result.iterations = static_cast<int>(iterations);
-  if (rank() == 0) {
-    result.eigenvalues.resize(nev);
-    result.vectors.resize(rows_, nev);
-  }
   std::vector<double> values(static_cast<std::size_t>(nev));
   for (int k = 0; k < nev; ++k) {
     check(EPSGetEigenpair(eps_, k, &values[static_cast<std::size_t>(k)], nullptr, work_out_, nullptr), "EPSGetEigenpair");
@@ -272,6 +351,7 @@ DistributedEigenPairs DistributedShiftInvert::eigenpairs(int nev, int ncv, doubl
   // The vectors are purified (one more solve each) when they are first asked for.
   check(KSPGetTotalIterations(factor_solver(eps_), &solves_after), "KSPGetTotalIterations");
   result.operator_applies = static_cast<int>(solves_after - solves_before);
+  measure_other_ranks_memory();
   if (rank() == 0) {  // ascending (EPS orders by distance to the target, the same for sigma below the spectrum)
     std::vector<int> order(static_cast<std::size_t>(nev));
     std::iota(order.begin(), order.end(), 0);

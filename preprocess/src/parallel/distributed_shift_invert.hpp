@@ -55,11 +55,16 @@ class DistributedShiftInvert {
   [[nodiscard]] double factor_flops() const { return factor_flops_; }
   [[nodiscard]] double factor_megabytes() const { return factor_megabytes_; }
   [[nodiscard]] double factorize_seconds() const { return factorize_seconds_; }
+  /// The largest peak resident memory of ranks 1 ... N-1 [MB] when last measured (after the factorization and
+  /// after each eigen solve); 0 on one rank.
+  [[nodiscard]] double other_ranks_peak_megabytes() const { return other_ranks_peak_megabytes_; }
 
  private:
   void to_distributed(const double* x, Vec v);    // rank 0's full vector into the distributed v
   void to_root(Vec v, double* x);                 // the distributed v into rank 0's full vector
   void read_factor_statistics();
+  void release();  // destroys every PETSc object made so far (collective)
+  void measure_other_ranks_memory();
 
   Eigen::Index rows_ = 0;
   Mat stiffness_ = nullptr, mass_ = nullptr;
@@ -69,6 +74,7 @@ class DistributedShiftInvert {
   EPS eps_ = nullptr;
   double sigma_ = 0.0;
   double factor_entries_ = 0.0, factor_flops_ = 0.0, factor_megabytes_ = 0.0, factorize_seconds_ = 0.0;
+  double other_ranks_peak_megabytes_ = 0.0;
 };
 
 }  // namespace flexbody::preprocess::parallel

@@ -14,6 +14,15 @@ namespace {
 
 bool g_initialized = false;
 bool g_finalized = false;
+// The specific message of the last PETSc error on this rank ("MUMPS error in numerical factorization phase:
+// INFOG(1)=-9, ..."); PetscErrorMessage() knows only the generic text of the code.
+std::string g_last_error;
+
+PetscErrorCode keep_message(MPI_Comm, int, const char*, const char*, PetscErrorCode code, PetscErrorType type,
+                            const char* message, void*) {
+  if (type == PETSC_ERROR_INITIAL) g_last_error = message != nullptr ? message : "";
+  return code;
+}
 
 }  // namespace
 
@@ -35,7 +44,7 @@ void initialize() {
   // A program that used the slepc backend without a ParallelSession still ends MPI properly.
   std::atexit(finalize);
   // One error line from us, not PETSc's traceback on stderr.
-  check(PetscPushErrorHandler(PetscReturnErrorHandler, nullptr), "PetscPushErrorHandler");
+  check(PetscPushErrorHandler(keep_message, nullptr), "PetscPushErrorHandler");
 }
 
 bool initialized() { return g_initialized; }
@@ -63,11 +72,19 @@ int size() {
 }
 
 void check(PetscErrorCode code, const char* what) {
-  if (code == 0) return;
-  const char* text = nullptr;
-  PetscErrorMessage(code, &text, nullptr);
-  throw std::runtime_error(fmt::format("{}: {} (PETSc error {})", what, text != nullptr ? text : "unknown error",
-                                       static_cast<int>(code)));
+  if (code == 0) {
+    g_last_error.clear();
+    return;
+  }
+  std::string text = g_last_error;
+  g_last_error.clear();
+  if (text.empty()) {
+    const char* generic = nullptr;
+    PetscErrorMessage(code, &generic, nullptr);
+    text = generic != nullptr ? generic : "unknown error";
+  }
+  while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+  throw std::runtime_error(fmt::format("{}: {} (PETSc error {})", what, text, static_cast<int>(code)));
 }
 
 void send_command(Command command) {

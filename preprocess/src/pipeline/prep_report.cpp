@@ -148,6 +148,9 @@ std::string PrepSummary::full_report() const {
   r += fmt::format("\n  {:<22}{:>10}  {:>18}\n", "stage", "time [s]", "peak memory [MB]");
   for (const auto& stage : stages) r += fmt::format("  {:<22}{:>10.3f}  {:>18.1f}\n", stage.name, stage.seconds, stage.peak_memory_mb);
   r += fmt::format("  {:<22}{:>10.3f}  {:>18.1f}\n", "total", total_seconds, peak_memory_mb);
+  if (factor.processes > 1)
+    r += fmt::format("  {:<22}{:>10}  {:>18.1f}  (the largest of MPI ranks 1-{}; the column above is rank 0's)\n",
+                     "other ranks", "", factor.other_ranks_peak_megabytes, factor.processes - 1);
   r += "\nOutput\n";
   line("body file", fmt::format("{} ({:.3g} MB)", output.string(), static_cast<double>(output_bytes) / 1e6));
   return r;
@@ -209,8 +212,15 @@ std::string PrepSummary::json() const {
                                                                     : nlohmann::ordered_json(nullptr);
   j["rigid_body_coupling"] = rigid_body_coupling;
   j["factor_nonzeros"] = factor.factor_nonzeros;
+  j["factor_flops"] = factor.factor_flops;
   j["factor_library"] = factor.factor_library;  // CHOLMOD, or MUMPS for the slepc backend
+  // MUMPS's own count of the memory its factorization used, all ranks (null for CHOLMOD).
+  j["factor_mb"] = factor.factor_megabytes > 0.0 ? nlohmann::ordered_json(factor.factor_megabytes)
+                                                : nlohmann::ordered_json(nullptr);
   j["mpi_ranks"] = factor.processes;
+  // peak_memory_mb is rank 0's; this is the largest of the other ranks' (null on one process).
+  j["peak_memory_other_ranks_mb"] = factor.processes > 1 ? nlohmann::ordered_json(factor.other_ranks_peak_megabytes)
+                                                         : nlohmann::ordered_json(nullptr);
   j["solves"] = factor.solves;
   // JSON has no infinity: a singular matrix's condition number is written as null.
   auto condition = [](double c) { return std::isfinite(c) ? nlohmann::ordered_json(c) : nlohmann::ordered_json(nullptr); };

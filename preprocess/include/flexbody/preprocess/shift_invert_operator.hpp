@@ -59,6 +59,8 @@ struct ShiftSolveStats {
   int processes = 1;                       ///< MPI ranks the factor is distributed over
   /// Memory the factorization used [MB], summed over the ranks (MUMPS's INFOG(22)); 0 where not known.
   double factor_megabytes = 0.0;
+  /// The largest peak resident memory of the MPI ranks other than 0 [MB] (rank 0's is the process' own); 0 on one.
+  double other_ranks_peak_megabytes = 0.0;
 };
 
 /// y = P (K̄ - sigma M̄)^-1 x on some factorization of K̄ - sigma M̄: what the eigensolvers, the static

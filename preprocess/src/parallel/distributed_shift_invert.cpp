@@ -256,6 +256,10 @@ void DistributedShiftInvert::set_shift(double sigma) {
   // Nearest to sigma in magnitude: for sigma below the spectrum, the lowest eigenvalues in ascending order.
   check(EPSSetWhichEigenpairs(eps_, EPS_TARGET_MAGNITUDE), "EPSSetWhichEigenpairs");
   check(EPSSetTarget(eps_, sigma), "EPSSetTarget");
+  // Purification (one more solve per eigenvector) cleans vectors of a singular B's null space; M̄ is positive
+  // definite, and ARPACK does without. Measured on the bracket at 41k DOFs, 26 modes: 73 solves instead of 99,
+  // the same residuals.
+  check(EPSSetPurify(eps_, PETSC_FALSE), "EPSSetPurify");
   ST st = nullptr;
   check(EPSGetST(eps_, &st), "EPSGetST");
   check(STSetType(st, STSINVERT), "STSetType");

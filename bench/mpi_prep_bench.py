@@ -8,6 +8,7 @@ configuration gets the same matrices):
   slepc-1       fbprep --eigensolver slepc                  one MPI rank, MUMPS, two threads
   slepc-2       mpirun -np 2 fbprep --eigensolver slepc     two ranks, one thread each
   slepc-2-ooc   as slepc-2 with MUMPS's out-of-core factor (-st_mat_mumps_icntl_22 1; largest mesh only)
+  slepc-1-ooc   one rank, out of core (not in the default list: --configs slepc-1-ooc)
 
 and records the stage times, MUMPS's factor size and flops, rank 0's peak memory and the other
 ranks'. Writes results/mpi_prep_bench.{csv,json,md,png} and prints the table. Needs a build with
@@ -99,10 +100,14 @@ def write_results(raw, out):
         sel = [r for r in rows if r["config"] == config]
         dofs = [r["dofs"] for r in sel]
         ax_t.plot(dofs, [r["modes_s"] for r in sel], "o-", label=config)
-        ax_m.plot(dofs, [max(r["rank0_peak_mb"], r["other_ranks_peak_mb"] or 0) / 1024 for r in sel], "o-", label=config)
+        line, = ax_m.plot(dofs, [max(r["rank0_peak_mb"], r["other_ranks_peak_mb"] or 0) / 1024 for r in sel], "o-",
+                          label=config)
+        if sel[0]["ranks"] > 1:  # the whole run's memory: rank 0 plus the others
+            ax_m.plot(dofs, [(r["rank0_peak_mb"] + (r["ranks"] - 1) * r["other_ranks_peak_mb"]) / 1024 for r in sel],
+                      "x:", color=line.get_color(), label=f"{config}, all ranks")
     ax_t.set(xscale="log", yscale="log", xlabel="DOFs", ylabel="eigen stage [s] (factor + solves)",
              title=f"{raw['options']['modes']} modes, bracket, {raw['machine']['nproc']} cores")
-    ax_m.set(xscale="log", xlabel="DOFs", ylabel="largest peak memory of one process [GiB]")
+    ax_m.set(xscale="log", xlabel="DOFs", ylabel="peak memory [GiB]: largest process, and all ranks")
     ax_m.axhline(8, color="grey", lw=0.8, ls="--")
     for ax in (ax_t, ax_m):
         ax.grid(True, which="both", alpha=0.3)

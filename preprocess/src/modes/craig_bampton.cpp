@@ -114,6 +114,7 @@ CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMat
   result.fixed_interface_frequencies_hz = fixed.eigenvalues.cwiseMax(0.0).cwiseSqrt() / kTwoPi;
   result.fixed_interface_residuals.resize(nev);
   result.fixed_interface_residual_floors.resize(nev);
+#pragma omp parallel for schedule(dynamic)  // one pass over K_ii per mode, the modes on all threads
   for (int m = 0; m < nev; ++m) {
     const EigenResidual residual = eigen_residual(k_ii, m_ii, fixed.eigenvalues(m), fixed.vectors.col(m));
     result.fixed_interface_residuals(m) = residual.relative;

@@ -153,15 +153,22 @@ FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& sti
   result.frequencies_hz = result.eigenvalues.cwiseMax(0.0).cwiseSqrt() / kTwoPi;
   result.relative_residuals.resize(n_m);
   result.residual_floors.resize(n_m);
-  Eigen::VectorXd mphi(n);
-  for (Eigen::Index k = 0; k < n_m; ++k) {
-    const EigenResidual residual =
-        eigen_residual(stiffness_upper, scalar_mass_upper, result.eigenvalues(k), result.vectors.col(k));
-    result.relative_residuals(k) = residual.relative;
-    result.residual_floors(k) = residual.floor;
-    mass.perform_op(result.vectors.col(k).data(), mphi.data());
-    result.rigid_body_coupling = std::max(result.rigid_body_coupling, (rigid.transpose() * mphi).cwiseAbs().maxCoeff());
+  // One pass over K̄ per mode, the modes on all threads (at 1M DOFs a pass takes about 0.3 s, 26 of them 8 s serially).
+  double coupling = 0.0;
+#pragma omp parallel reduction(max : coupling)
+  {
+    Eigen::VectorXd mphi(n);
+#pragma omp for schedule(dynamic)
+    for (Eigen::Index k = 0; k < n_m; ++k) {
+      const EigenResidual residual =
+          eigen_residual(stiffness_upper, scalar_mass_upper, result.eigenvalues(k), result.vectors.col(k));
+      result.relative_residuals(k) = residual.relative;
+      result.residual_floors(k) = residual.floor;
+      mass.perform_op(result.vectors.col(k).data(), mphi.data());
+      coupling = std::max(coupling, (rigid.transpose() * mphi).cwiseAbs().maxCoeff());
+    }
   }
+  result.rigid_body_coupling = coupling;
   result.stats = op.stats();
   // Each normal mode against its own rounding floor (eigen_residual.hpp).
   const Eigen::Index worst = worst_refused(result.relative_residuals.head(keep), result.residual_floors.head(keep));

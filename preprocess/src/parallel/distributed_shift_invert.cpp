@@ -352,7 +352,7 @@ DistributedEigenPairs DistributedShiftInvert::eigenpairs(int nev, int ncv, doubl
     check(EPSGetEigenpair(eps_, k, &values[static_cast<std::size_t>(k)], nullptr, work_out_, nullptr), "EPSGetEigenpair");
     to_root(work_out_, rank() == 0 ? result.vectors.col(k).data() : nullptr);
   }
-  // The vectors are purified (one more solve each) when they are first asked for.
+  // Solves made while the vectors were asked for count too (none without purification, which set_shift turns off).
   check(KSPGetTotalIterations(factor_solver(eps_), &solves_after), "KSPGetTotalIterations");
   result.operator_applies = static_cast<int>(solves_after - solves_before);
   measure_other_ranks_memory();

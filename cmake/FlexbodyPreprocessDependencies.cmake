@@ -26,6 +26,11 @@ set_target_properties(SuiteSparse::CHOLMOD PROPERTIES IMPORTED_LOCATION ${CHOLMO
   INTERFACE_INCLUDE_DIRECTORIES ${CHOLMOD_INCLUDE_DIR}
   INTERFACE_LINK_LIBRARIES ${SUITESPARSECONFIG_LIBRARY})
 
+# The BLAS's C interface (cblas.h from libblas-dev) for the block-lanczos backend's dense products. Debian links
+# against the reference libblas.so; at run time the libblas.so.3 alternative is OpenBLAS (libopenblas0-pthread).
+find_package(BLAS REQUIRED)
+find_path(CBLAS_INCLUDE_DIR cblas.h REQUIRED)
+
 # ARPACK (arpack-ng 3.8) through pkg-config.
 pkg_check_modules(ARPACK REQUIRED IMPORTED_TARGET arpack)
 add_library(ARPACK::ARPACK ALIAS PkgConfig::ARPACK)

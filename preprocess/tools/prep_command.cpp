@@ -28,7 +28,7 @@ int prep_command(int argc, char** argv) {
   app.footer("Other commands:\n  fbprep inspect FILE.fbh5 [--json]   check a body file and print what it holds\n"
              "  fbprep export-vtu FILE.fbh5 -o DIR  mesh, mode shapes, fields, interfaces for ParaView\n"
              "  fbprep list-surfaces INPUT          CAD surface tags, areas, centroids (for body specs)");
-  std::string input, output, unit_text, material_text = "steel", solver_text = "arpack", mesher_text = "delaunay";
+  std::string input, output, unit_text, material_text = "steel", solver_text = "auto", mesher_text = "delaunay";
   double mesh_size = 0.0, fmax = 0.0;
   int order = 1, modes = 0;
   bool json = false, quiet = false;
@@ -46,8 +46,9 @@ int prep_command(int argc, char** argv) {
   app.add_option("--material", material_text, "steel|aluminium|titanium or E=210e9,nu=0.3,rho=7850 (SI)");
   app.add_option("--modes", modes, "number of elastic free-free modes (rigid-body modes never count)");
   app.add_option("--fmax", fmax, "all elastic modes up to this frequency [Hz]; with --modes, --modes caps");
-  app.add_option("--eigensolver", solver_text, "arpack|spectra|slepc (slepc: MUMPS and SLEPc, under mpirun for "
-                                               "several processes; builds with -DFLEXBODY_WITH_SLEPC=ON)");
+  app.add_option("--eigensolver", solver_text, "auto|arpack|spectra|block-lanczos|slepc (auto: block-lanczos from 100k "
+                                               "DOFs, arpack below, slepc under mpirun; slepc: MUMPS and SLEPc, "
+                                               "builds with -DFLEXBODY_WITH_SLEPC=ON)");
   app.add_flag("--json", json, "print the summary as one JSON object on stdout instead of the report");
   app.add_flag("-q,--quiet", quiet, "no progress and no report (errors still go to stderr)");
   try {
@@ -132,6 +133,9 @@ int prep_command(int argc, char** argv) {
       options.modes.solver.backend = fp::eigensolver_backend_from_string(solver_text);
       record("eigensolver", solver_text);
     }
+    if (fp::parallel_ranks() > 1 && options.modes.solver.backend == fp::EigensolverBackend::automatic &&
+        fp::slepc_available())  // the one backend that uses the ranks
+      options.modes.solver.backend = fp::EigensolverBackend::slepc;
     if (fp::parallel_ranks() > 1 && options.modes.solver.backend != fp::EigensolverBackend::slepc)
       throw std::invalid_argument(fmt::format("--eigensolver {} runs on one process, but fbprep was started on {} MPI "
                                               "ranks: use --eigensolver slepc under mpirun",

@@ -395,7 +395,7 @@ TEST(FbprepCli, RefusesBadInputsWithOneLine) {
   expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,E=2e9,nu=0.3,rho=1", "E is given twice");
   expect_refusal(dir, "input-cube.geo --unit m --material E=1e9,nu=0.3", "rho is missing");
   expect_refusal(dir, "input-cube.geo --unit furlong", "--unit 'furlong' is not one of mm, cm, m, in");
-  expect_refusal(dir, "input-cube.geo --unit m --eigensolver lapack", "'lapack' is unknown; use arpack, spectra or slepc");
+  expect_refusal(dir, "input-cube.geo --unit m --eigensolver lapack", "'lapack' is unknown; use auto, arpack, spectra, block-lanczos or slepc");
   if (!flexbody::preprocess::slepc_available())  // a build without the backend says how to get it
     expect_refusal(dir, "input-cube.geo --unit m --eigensolver slepc",
                    "eigensolver: 'slepc' is not in this build (configure with -DFLEXBODY_WITH_SLEPC=ON)");

@@ -39,6 +39,11 @@ void VectorMassOperator::perform_op(const double* x, double* y) const {
   apply_vector_mass(mass_, Eigen::Map<const Eigen::VectorXd>(x, n), Eigen::Map<Eigen::VectorXd>(y, n));
 }
 
+void ShiftSolve::perform_block(const double* x, double* y, Eigen::Index columns) {
+  const Eigen::Index n = rows();
+  for (Eigen::Index c = 0; c < columns; ++c) perform_op(x + c * n, y + c * n);
+}
+
 struct CholmodShiftSolve::Impl {
   const SparseMatrix& stiffness;
   const SparseMatrix& mass;

@@ -5,6 +5,8 @@
 #include <Spectra/SymGEigsShiftSolver.h>
 #include <fmt/format.h>
 
+#include "block_lanczos.hpp"
+
 #ifdef FLEXBODY_WITH_SLEPC
 #include "slepc_shift_solve.hpp"
 #endif
@@ -152,11 +154,18 @@ EigenPairs solve_spectra(ShiftSolve& op, const VectorMassOperator& mass, int nev
 
 std::string_view to_string(EigensolverBackend backend) {
   switch (backend) {
+    case EigensolverBackend::automatic: return "auto";
     case EigensolverBackend::arpack: return "arpack";
     case EigensolverBackend::spectra: return "spectra";
+    case EigensolverBackend::block_lanczos: return "block-lanczos";
     case EigensolverBackend::slepc: return "slepc";
   }
   return "unknown";
+}
+
+EigensolverBackend resolve_backend(EigensolverBackend backend, Eigen::Index dofs) {
+  if (backend != EigensolverBackend::automatic) return backend;
+  return dofs >= kBlockLanczosFromDofs ? EigensolverBackend::block_lanczos : EigensolverBackend::arpack;
 }
 
 bool slepc_available() {
@@ -168,14 +177,16 @@ bool slepc_available() {
 }
 
 EigensolverBackend eigensolver_backend_from_string(std::string_view text) {
+  if (text == "auto") return EigensolverBackend::automatic;
   if (text == "arpack") return EigensolverBackend::arpack;
   if (text == "spectra") return EigensolverBackend::spectra;
+  if (text == "block-lanczos") return EigensolverBackend::block_lanczos;
   if (text == "slepc") {
     if (!slepc_available())
       throw std::invalid_argument("eigensolver: 'slepc' is not in this build (configure with -DFLEXBODY_WITH_SLEPC=ON)");
     return EigensolverBackend::slepc;
   }
-  throw std::invalid_argument("eigensolver: '" + std::string(text) + "' is unknown; use arpack, spectra or slepc");
+  throw std::invalid_argument("eigensolver: '" + std::string(text) + "' is unknown; use auto, arpack, spectra, block-lanczos or slepc");
 }
 
 std::unique_ptr<ShiftSolve> make_shift_solve(EigensolverBackend backend, const SparseMatrix& stiffness_upper,
@@ -197,7 +208,8 @@ EigenPairs solve_shift_invert(ShiftSolve& op, const VectorMassOperator& mass, in
   if (nev < 1 || nev > n - 8)
     throw std::invalid_argument("eigensolver: the number of modes must satisfy 1 <= nev <= " +
                                 std::to_string(n - 8) + " (DOFs - 6 rigid-body modes - 2), got " + std::to_string(nev));
-  if (options.backend == EigensolverBackend::slepc) {
+  const EigensolverBackend backend = resolve_backend(options.backend, n);
+  if (backend == EigensolverBackend::slepc) {
 #ifdef FLEXBODY_WITH_SLEPC
     auto* distributed = dynamic_cast<SlepcShiftSolve*>(&op);
     if (distributed == nullptr) throw std::logic_error("eigensolver slepc: the operator is not from make_shift_solve(slepc)");
@@ -206,7 +218,8 @@ EigenPairs solve_shift_invert(ShiftSolve& op, const VectorMassOperator& mass, in
     throw std::invalid_argument("eigensolver: 'slepc' is not in this build (configure with -DFLEXBODY_WITH_SLEPC=ON)");
 #endif
   }
-  if (options.backend == EigensolverBackend::spectra) return solve_spectra(op, mass, nev, options);
+  if (backend == EigensolverBackend::spectra) return solve_spectra(op, mass, nev, options);
+  if (backend == EigensolverBackend::block_lanczos) return solve_block_lanczos(op, mass, nev, options);
   const int solves_before = op.stats().solves;
   if (std::optional<EigenPairs> pairs = solve_arpack(op, mass, nev, options.tolerance, options)) return *pairs;
   if (options.tolerance == 0.0) throw std::runtime_error("ARPACK dseupd: converged-count mismatch (info = -17)");

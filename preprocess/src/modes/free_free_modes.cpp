@@ -99,7 +99,7 @@ FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& sti
   int nev = std::min(options.modes > 0 ? options.modes : 12, limit);
   EigenPairs pairs;
   while (true) {
-    if (options.progress) options.progress(fmt::format("eigensolver: {} modes by {}", nev, to_string(options.solver.backend)));
+    if (options.progress) options.progress(fmt::format("eigensolver: {} modes by {}", nev, to_string(resolve_backend(options.solver.backend, n))));
     pairs = solve_shift_invert(op, mass, nev, options.solver);
     ++result.solver_runs;
     result.restarts += pairs.iterations;

@@ -197,10 +197,15 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   // 3. Modes: free-free, or Craig-Bampton on the rbe2 interfaces.
   StageTimer modes_timer(summary, "modes");
   summary.reduction = options.reduction;
-  summary.eigensolver = std::string(to_string(options.modes.solver.backend));
+  // auto is decided here, on the whole body's DOFs, so that the report, the file and a Craig-Bampton run (whose
+  // eigenproblem is the interior's) all name the same backend.
+  EigensolverOptions solver = options.modes.solver;
+  solver.backend = resolve_backend(solver.backend, stiffness.rows());
+  summary.eigensolver = std::string(to_string(solver.backend));
   Eigen::MatrixXd mode_vectors;
   if (options.reduction == ReductionKind::free_free) {
     FreeFreeOptions mode_options = options.modes;
+    mode_options.solver = solver;
     mode_options.progress = options.progress;
     const FreeFreeModes modes = in_stage("modes", [&] {
       return free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options, static_loads);
@@ -225,7 +230,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     CraigBamptonOptions cb_options;
     cb_options.fixed_interface_modes = options.modes.modes;
     cb_options.fmax_hz = options.modes.fmax_hz;
-    cb_options.solver = options.modes.solver;
+    cb_options.solver = solver;
     cb_options.shift = options.modes.shift;
     if (options.progress)
       options.progress(fmt::format("Craig-Bampton: fixed-interface modes ({}), {} rbe2 interfaces",

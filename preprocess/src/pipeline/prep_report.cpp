@@ -126,8 +126,13 @@ std::string PrepSummary::full_report() const {
     line("factorization", fmt::format("nnz(L) = {:.3g}, {:.3g} GFlop; ordering {:.2f} s, numeric {:.2f} s",
                                       factor.factor_nonzeros, factor.factor_flops * 1e-9, factor.analyze_seconds,
                                       factor.factorize_seconds));
-  line("solves", fmt::format("{} in {:.2f} s ({} Lanczos restarts, {} solver run{})", factor.solves,
-                             factor.solve_seconds, restarts, solver_runs, solver_runs == 1 ? "" : "s"));
+  if (factor.solve_passes < factor.solves)  // block Lanczos: several right-hand sides per pass over the factor
+    line("solves", fmt::format("{} in {:.2f} s, {} passes over the factor ({} block steps, {} solver run{})",
+                               factor.solves, factor.solve_seconds, factor.solve_passes, restarts, solver_runs,
+                               solver_runs == 1 ? "" : "s"));
+  else
+    line("solves", fmt::format("{} in {:.2f} s ({} Lanczos restarts, {} solver run{})", factor.solves,
+                               factor.solve_seconds, restarts, solver_runs, solver_runs == 1 ? "" : "s"));
   r += "\nGCMS constants (Y = [1, X, fields]; G = Y^T M_s Y, K_hat = (fields x I3)^T K (fields x I3))\n";
   line("fields", fmt::format("{} kept of {} (3 per mode), {} dropped as dependent", gcms_fields,
                              gcms_fields + dropped_fields, dropped_fields));
@@ -222,6 +227,7 @@ std::string PrepSummary::json() const {
   j["peak_memory_other_ranks_mb"] = factor.processes > 1 ? nlohmann::ordered_json(factor.other_ranks_peak_megabytes)
                                                          : nlohmann::ordered_json(nullptr);
   j["solves"] = factor.solves;
+  j["solve_passes"] = factor.solve_passes;  // passes over the factor: fewer than solves with block-lanczos
   // JSON has no infinity: a singular matrix's condition number is written as null.
   auto condition = [](double c) { return std::isfinite(c) ? nlohmann::ordered_json(c) : nlohmann::ordered_json(nullptr); };
   j["gcms_fields"] = gcms_fields;

@@ -13,16 +13,23 @@
 
 namespace flexbody::preprocess {
 
-enum class EigensolverBackend { arpack, spectra, slepc };
+/// automatic: block_lanczos on eigenproblems of kBlockLanczosFromDofs DOFs or more, arpack below (resolve_backend).
+enum class EigensolverBackend { automatic, arpack, spectra, block_lanczos, slepc };
 [[nodiscard]] std::string_view to_string(EigensolverBackend backend);
-/// "arpack", "spectra" or "slepc"; throws std::invalid_argument otherwise, and for "slepc" in a build
+/// "auto", "arpack", "spectra", "block-lanczos" or "slepc"; throws std::invalid_argument otherwise, and for "slepc" in a build
 /// without it.
 [[nodiscard]] EigensolverBackend eigensolver_backend_from_string(std::string_view text);
+/// Where `automatic` switches from arpack to block_lanczos (DOFs of the eigenproblem). Measured on the bracket
+/// (bench/README.md, "Block Lanczos"): block Lanczos takes longer than ARPACK at 43k DOFs and less from about 100k,
+/// for about 2.7x ARPACK's basis memory (2.8 against 0.45 GB at 1.05M DOFs, 26 modes).
+inline constexpr Eigen::Index kBlockLanczosFromDofs = 100'000;
+/// The backend `backend` stands for on an eigenproblem of `dofs` DOFs: itself, unless it is automatic.
+[[nodiscard]] EigensolverBackend resolve_backend(EigensolverBackend backend, Eigen::Index dofs);
 /// True when this build has the SLEPc backend (-DFLEXBODY_WITH_SLEPC=ON).
 [[nodiscard]] bool slepc_available();
 
 struct EigensolverOptions {
-  EigensolverBackend backend = EigensolverBackend::arpack;
+  EigensolverBackend backend = EigensolverBackend::automatic;
   /// Relative accuracy of the Ritz values of the shift-inverted operator (ARPACK's and Spectra's tol).
   /// Measured on the bracket at 17k-127k DOFs: 1e-14 ... 1e-10 all converge after 69 solves with the
   /// same relative residuals ||K phi - lambda M phi|| / ||K phi|| (3e-11 ... 2e-10, the rounding floor),
@@ -30,6 +37,8 @@ struct EigensolverOptions {
   /// (its vectors at 1e-12 sit further from converged; slepc_shift_solve.cpp gives the figures).
   double tolerance = 1e-12;
   int max_restarts = 1000;
+  /// Right-hand sides per solve of the block-lanczos backend (measured at 1.05M DOFs: bench/README.md).
+  Eigen::Index block_size = 8;
 };
 
 /// Eigenpairs with lambda ascending; vectors M̄-orthonormal (3 n_n x nev).
@@ -43,6 +52,11 @@ struct EigenPairs {
 /// Lanczos basis size used for nev eigenpairs of an operator of dimension n (deflated rank n - 6):
 /// min(n - 6, max(2 nev + 1, nev + 20)) vectors of n doubles.
 [[nodiscard]] int lanczos_basis_size(int nev, Eigen::Index n);
+
+/// Largest Krylov basis the block-lanczos backend may build for nev eigenpairs in blocks of b (a multiple of b):
+/// 20 nev rounded up to whole blocks, at least 8 blocks, at most the deflated rank n - 6 and at most what keeps the
+/// basis and its M̄ image within 8 GiB.
+[[nodiscard]] Eigen::Index block_lanczos_basis_limit(int nev, Eigen::Index block, Eigen::Index n);
 
 /// The shift-solve operator a backend works on: CHOLMOD for arpack and spectra, the distributed MUMPS
 /// factorization for slepc (collective over the MPI ranks, see parallel_session.hpp). K and M_s are borrowed.

@@ -46,7 +46,7 @@ int prep_command(int argc, char** argv) {
   app.add_option("--material", material_text, "steel|aluminium|titanium or E=210e9,nu=0.3,rho=7850 (SI)");
   app.add_option("--modes", modes, "number of elastic free-free modes (rigid-body modes never count)");
   app.add_option("--fmax", fmax, "all elastic modes up to this frequency [Hz]; with --modes, --modes caps");
-  app.add_option("--eigensolver", solver_text, "auto|arpack|spectra|block-lanczos|slepc (auto: block-lanczos from 100k "
+  app.add_option("--eigensolver", solver_text, "auto|arpack|spectra|block-lanczos|slepc (auto: block-lanczos from 50k "
                                                "DOFs, arpack below, slepc under mpirun; slepc: MUMPS and SLEPc, "
                                                "builds with -DFLEXBODY_WITH_SLEPC=ON)");
   app.add_flag("--json", json, "print the summary as one JSON object on stdout instead of the report");

@@ -19,10 +19,10 @@ enum class EigensolverBackend { automatic, arpack, spectra, block_lanczos, slepc
 /// "auto", "arpack", "spectra", "block-lanczos" or "slepc"; throws std::invalid_argument otherwise, and for "slepc" in a build
 /// without it.
 [[nodiscard]] EigensolverBackend eigensolver_backend_from_string(std::string_view text);
-/// Where `automatic` switches from arpack to block_lanczos (DOFs of the eigenproblem). Measured on the bracket
-/// (bench/README.md, "Block Lanczos"): block Lanczos takes longer than ARPACK at 43k DOFs and less from about 100k,
-/// for about 2.7x ARPACK's basis memory (2.8 against 0.45 GB at 1.05M DOFs, 26 modes).
-inline constexpr Eigen::Index kBlockLanczosFromDofs = 100'000;
+/// Where `automatic` switches from arpack to block_lanczos (DOFs of the eigenproblem). Measured on the bracket, 26
+/// modes (bench/README.md, "Block Lanczos"): the eigen stage takes as long at 43k DOFs, 12 % less at 58k, 24 % at
+/// 79k, 15 % at 127k and 203k; the Krylov basis and its M̄ image take 2.8 GB at 1.05M DOFs against ARPACK's 0.45.
+inline constexpr Eigen::Index kBlockLanczosFromDofs = 50'000;
 /// The backend `backend` stands for on an eigenproblem of `dofs` DOFs: itself, unless it is automatic.
 [[nodiscard]] EigensolverBackend resolve_backend(EigensolverBackend backend, Eigen::Index dofs);
 /// True when this build has the SLEPc backend (-DFLEXBODY_WITH_SLEPC=ON).

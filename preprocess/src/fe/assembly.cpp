@@ -134,6 +134,23 @@ void apply_vector_mass(const SparseMatrix& scalar_mass_upper, const Eigen::Ref<c
   }
 }
 
+Eigen::MatrixXd symmetric_product(const SparseMatrix& full, const Eigen::Ref<const Eigen::MatrixXd>& x) {
+  const Eigen::Index n = full.cols(), columns = x.cols();
+  if (x.rows() != n) throw std::logic_error("symmetric_product: X has the wrong number of rows");
+  Eigen::MatrixXd y(n, columns);
+  const std::int64_t* start = full.outerIndexPtr();
+  const std::int64_t* row = full.innerIndexPtr();
+  const double* value = full.valuePtr();
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (Eigen::Index c = 0; c < columns; ++c) {
+      double sum = 0.0;
+      for (std::int64_t p = start[j]; p < start[j + 1]; ++p) sum += value[p] * x(row[p], c);
+      y(j, c) = sum;
+    }
+  return y;
+}
+
 void apply_symmetric(const SparseMatrix& upper, const Eigen::Ref<const Eigen::VectorXd>& x,
                      Eigen::Ref<Eigen::VectorXd> y) {
   y.noalias() = upper.selfadjointView<Eigen::Upper>() * x;

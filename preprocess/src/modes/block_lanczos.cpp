@@ -1,6 +1,6 @@
 #include "block_lanczos.hpp"
 
-#include <cblas.h>
+#include "../linalg/blas_gemm.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
@@ -20,27 +20,19 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 
 // The basis V (n x k) and its image M̄ V are read in every step; their products with thin blocks run on the BLAS
-// (OpenBLAS picks AVX-512 kernels here; Eigen's own kernels are compiled without AVX, see the top CMakeLists).
+// (linalg/blas_gemm.hpp).
 constexpr double kMaxBasisBytes = 8.0 * (1ull << 30);
-
-int blas_int(Index value) {
-  if (value > std::numeric_limits<int>::max())
-    throw std::invalid_argument("block Lanczos: a dimension exceeds the BLAS's 32-bit integers");
-  return static_cast<int>(value);
-}
 
 // C = Aᵀ B for column-major A (n x k) and B (n x m) with leading dimension n; C is k x m.
 MatrixXd transposed_product(const double* a, Index k, const double* b, Index m, Index n) {
   MatrixXd c(k, m);
-  cblas_dgemm(CblasColMajor, CblasTrans, CblasNoTrans, blas_int(k), blas_int(m), blas_int(n), 1.0, a, blas_int(n), b,
-              blas_int(n), 0.0, c.data(), blas_int(k));
+  blas::gemm(blas::Op::transpose, blas::Op::none, k, m, n, 1.0, a, n, b, n, 0.0, c.data(), k);
   return c;
 }
 
 // B <- alpha A C + beta B for column-major A (n x k, leading dimension n), C (k x m) and B (n x m, leading dimension n).
 void add_product(double alpha, const double* a, Index k, const MatrixXd& c, double* b, Index n, double beta = 1.0) {
-  cblas_dgemm(CblasColMajor, CblasNoTrans, CblasNoTrans, blas_int(n), blas_int(c.cols()), blas_int(k), alpha, a,
-              blas_int(n), c.data(), blas_int(k), beta, b, blas_int(n));
+  blas::gemm(blas::Op::none, blas::Op::none, n, c.cols(), k, alpha, a, n, c.data(), k, beta, b, n);
 }
 
 // Y = M̄ X, the columns on all threads.

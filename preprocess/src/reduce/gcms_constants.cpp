@@ -1,6 +1,9 @@
 #include "flexbody/preprocess/gcms_constants.hpp"
 
+#include "flexbody/preprocess/assembly.hpp"
 #include "flexbody/preprocess/gcms_matrices.hpp"
+
+#include "../linalg/blas_gemm.hpp"
 
 #include <fmt/format.h>
 
@@ -14,11 +17,11 @@ format::Gcms gcms_constants(const SparseMatrix& stiffness_upper, const SparseMat
                             const GeneralizedFieldOptions& options) {
   format::Gcms gcms;
   // Before: the modes' own fields (FORMULATION.md section 7 measured 7e7 ... 7e8 on a square beam).
-  const Eigen::MatrixXd mass_upsilon = scalar_mass_upper.selfadjointView<Eigen::Upper>() * upsilon;
+  const Eigen::MatrixXd mass_upsilon = symmetric_product(full_from_upper(scalar_mass_upper), upsilon);
   // The Gram matrix's entries all carry the same unit (1, for M-orthonormal modes): its condition does not
   // depend on the part's size. G's blocks carry kg, kg m^2 and 1: the Jacobi-scaled figures are the ones that
   // do not (SCHEMA.md, "Conditioning"); the SI ones are kept for the file's version 3 (issue 12).
-  gcms.condition_mode_gram_before = spectral_condition(upsilon.transpose() * mass_upsilon);
+  gcms.condition_mode_gram_before = spectral_condition(blas::transposed_product(upsilon, mass_upsilon));
   const Eigen::MatrixXd g_before = gcms_mass_matrix(scalar_mass_upper, nodes, upsilon, mass_upsilon);
   gcms.condition_mass_before = spectral_condition(g_before);
   gcms.condition_mass_scaled_before = scaled_condition(g_before);

@@ -1,5 +1,7 @@
 #include "flexbody/preprocess/gcms_matrices.hpp"
 
+#include "../linalg/blas_gemm.hpp"
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -68,7 +70,7 @@ Eigen::MatrixXd gcms_mass_matrix(const SparseMatrix& scalar_mass_upper, const Ro
   g.topLeftCorner<4, 4>() = rigid.transpose() * mass_rigid;
   g.topRightCorner(4, n_f) = rigid.transpose() * mass_fields;
   g.bottomLeftCorner(n_f, 4) = g.topRightCorner(4, n_f).transpose();
-  g.bottomRightCorner(n_f, n_f) = fields.transpose() * mass_fields;
+  g.bottomRightCorner(n_f, n_f) = blas::transposed_product(fields, mass_fields);
   return 0.5 * (g + g.transpose());  // symmetric to the last bit
 }
 
@@ -85,8 +87,11 @@ Eigen::MatrixXd reduced_stiffness(const SparseMatrix& stiffness_upper, const Eig
     // K̂[3g + l, 3(f0 + f) + k] = sum_i U(i, g) z(3i + l, k b + f) = w(g, l 3b + k b + f).
     // Only the rows g < f0 + b: K̂ is symmetric, the rest is the transpose of later chunks' rows.
     const Eigen::Index g_end = f0 + b;
-    const Eigen::Map<const RowMatrix> zn(z.data(), n_n, 9 * b);
-    const Eigen::MatrixXd w = fields.leftCols(g_end).transpose() * zn;
+    // w = Uᵀ zn on the BLAS (2.4e10 flops in all at 1M DOFs and 78 fields: 2 s in Eigen's SSE2 kernels); zn is
+    // row-major n_n x 9b, i.e. column-major 9b x n_n, hence the second transpose.
+    Eigen::MatrixXd w(g_end, 9 * b);
+    blas::gemm(blas::Op::transpose, blas::Op::transpose, g_end, 9 * b, n_n, 1.0, fields.data(), n_n, z.data(), 9 * b,
+               0.0, w.data(), g_end);
     for (Eigen::Index g = 0; g < g_end; ++g)
       for (int l = 0; l < 3; ++l)
         for (int k = 0; k < 3; ++k)

@@ -13,6 +13,7 @@ packages=(
   libarpack2-dev         # ARPACK: the default eigensolver
   libspectra-dev         # Spectra: the second eigensolver backend
   libopenblas0-pthread   # optimized BLAS: CHOLMOD is ~10x slower on Debian's reference BLAS
+  libblas-dev            # cblas.h: dense products on the BLAS (block Lanczos, GCMS constants); OpenBLAS at run time
   libcli11-dev           # fbprep's command line
   libyaml-cpp-dev        # body specs (fbprep body.yaml) and fbsim scenes
   libfmt-dev             # formatting of reports and messages

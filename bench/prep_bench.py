@@ -217,7 +217,8 @@ def main():
         return write_results(json.loads(args.replot.read_text()), args.out)
     sizes = [3.5, 2.2] if args.quick else [float(s) for s in args.sizes.split(",")]
     solvers = args.eigensolvers.split(",")
-    args.fbprep, args.part = args.fbprep.resolve(), args.part.resolve()
+    # Absolute: fbprep runs in OUT/work/h<size>, where a relative output path would name another directory.
+    args.fbprep, args.part, args.out = args.fbprep.resolve(), args.part.resolve(), args.out.resolve()
     if not args.fbprep.is_file():
         p.error(f"{args.fbprep} not found: build it (bash scripts/build.sh) or pass --fbprep")
     raw = {"machine": machine_info(), "options": {k: str(v) for k, v in vars(args).items()}, "runs": []}

@@ -123,4 +123,27 @@ TEST(BlockLanczos, RefusesABasisLargerThanTheMesh) {
 TEST(BlockLanczos, IsNamedBlockLanczos) {
   EXPECT_EQ(fp::eigensolver_backend_from_string("block-lanczos"), fp::EigensolverBackend::block_lanczos);
   EXPECT_EQ(fp::to_string(fp::EigensolverBackend::block_lanczos), "block-lanczos");
+  EXPECT_EQ(fp::eigensolver_backend_from_string("auto"), fp::EigensolverBackend::automatic);
+}
+
+TEST(BlockLanczos, AutoPicksItForLargeMeshesWhoseBasisFits) {
+  using B = fp::EigensolverBackend;
+  EXPECT_EQ(fp::resolve_backend(B::automatic, 49'999, 26), B::arpack);
+  EXPECT_EQ(fp::resolve_backend(B::automatic, 50'000, 26), B::block_lanczos);
+  EXPECT_EQ(fp::resolve_backend(B::automatic, 1'053'090, 26), B::block_lanczos);
+  // At 1.05M DOFs 8 GiB hold 504 basis vectors (whole blocks of 8) and their M̄ image: 10 per mode fit 50 modes.
+  EXPECT_EQ(fp::block_lanczos_basis_limit(50, 8, 1'053'090), 504);
+  EXPECT_EQ(fp::resolve_backend(B::automatic, 1'053'090, 50), B::block_lanczos);
+  EXPECT_EQ(fp::resolve_backend(B::automatic, 1'053'090, 51), B::arpack);
+  for (B named : {B::arpack, B::spectra, B::block_lanczos, B::slepc})
+    EXPECT_EQ(fp::resolve_backend(named, 1'000, 500), named);  // a backend asked for by name is kept
+}
+
+TEST(BlockLanczos, ModesNameTheBackendThatRan) {
+  // What the report and the body file's /reduction/eigensolver say: never "auto".
+  const auto& beam = flexbody::test::square_beam();  // ~2k DOFs: auto is arpack
+  EXPECT_EQ(free_free(beam, 6, fp::EigensolverBackend::automatic).eigensolver, fp::EigensolverBackend::arpack);
+  EXPECT_EQ(free_free(beam, 6, fp::EigensolverBackend::block_lanczos).eigensolver,
+            fp::EigensolverBackend::block_lanczos);
+  EXPECT_EQ(free_free(beam, 6, fp::EigensolverBackend::spectra).eigensolver, fp::EigensolverBackend::spectra);
 }

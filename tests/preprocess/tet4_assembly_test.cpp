@@ -94,6 +94,16 @@ TEST(Tet4Assembly, VectorMassProductEqualsTheKroneckerMatrix) {
   EXPECT_LT((y - expected).cwiseAbs().maxCoeff(), 1e-14 * expected.cwiseAbs().maxCoeff());
 }
 
+TEST(Tet4Assembly, SymmetricProductOfTheWholeMatrixEqualsTheUpperTriangles) {
+  // symmetric_product (rows on all threads, both triangles stored) against Eigen's product with the upper triangle.
+  const auto a = assemble(irregular_box(), kAbaqusSteel, fp::MassScheme::consistent);
+  const Eigen::MatrixXd x = Eigen::MatrixXd::Random(a.scalar_mass.rows(), 5);
+  const Eigen::MatrixXd expected = a.scalar_mass.selfadjointView<Eigen::Upper>() * x;
+  const Eigen::MatrixXd y = fp::symmetric_product(fp::full_from_upper(a.scalar_mass), x);
+  EXPECT_LT((y - expected).cwiseAbs().maxCoeff(), 1e-14 * expected.cwiseAbs().maxCoeff());  // summation order only
+  EXPECT_THROW((void)fp::symmetric_product(fp::full_from_upper(a.scalar_mass), Eigen::MatrixXd(3, 2)), std::logic_error);
+}
+
 TEST(Tet4Assembly, StiffnessAnnihilatesRigidBodyFields) {
   const auto a = assemble(irregular_box(), kAbaqusSteel, fp::MassScheme::consistent);
   const Eigen::MatrixXd rigid = fp::rigid_body_modes(a.mesh.nodes, a.scalar_mass);

@@ -118,7 +118,12 @@ EigenPairs solve_block_lanczos(ShiftSolve& op, const VectorMassOperator& mass, i
   const double tolerance = 1e-2 * (options.tolerance > 0.0 ? options.tolerance : std::numeric_limits<double>::epsilon());
 
   MatrixXd v(n, k_max), mv(n, k_max);  // the basis V and M̄ V; only the columns in use are ever touched
-  MatrixXd h = MatrixXd::Zero(k_max, k_max);  // OP V_j = sum_i V_i H_ij: block tridiagonal up to round-off
+  MatrixXd h;  // OP V_j = sum_i V_i H_ij: block tridiagonal up to round-off; grown as the basis grows
+  auto reserve = [&](Index size) {  // h at least size x size, doubling (k_max^2 would be 0.6 GB for 500 modes)
+    if (size <= h.rows()) return;
+    const Index grown = std::min(k_max, std::max(size, 2 * h.rows()));
+    h.conservativeResizeLike(MatrixXd::Zero(grown, grown));
+  };
   MatrixXd scratch(n, b);
   EigenPairs result;
   {  // V_0 = P (K̄ - sigma M̄)^-1 M̄ X for a reproducible random X: inside the range of the deflated operator
@@ -133,6 +138,9 @@ EigenPairs solve_block_lanczos(ShiftSolve& op, const VectorMassOperator& mass, i
     (void)orthonormalize(Block{v.data(), mv.data(), n, b}, b, scratch);
   }
   const double reorthogonalize = std::sqrt(std::numeric_limits<double>::epsilon());
+  // A new column whose M̄-norm the projections reduce below this fraction is round-off, not a new direction.
+  const double exhausted = 1e3 * std::numeric_limits<double>::epsilon();
+  Index last_check = 0;  // basis size at the last Rayleigh-Ritz step
   for (Index k = b;; k += b) {  // k: basis vectors so far; the newest block starts at j = k - b
     const Index j = k - b;
     if (k + b > k_max)
@@ -142,6 +150,8 @@ EigenPairs solve_block_lanczos(ShiftSolve& op, const VectorMassOperator& mass, i
     op.perform_block(mv.col(j).data(), next.w, b);  // W = OP V_j = P (K̄ - sigma M̄)^-1 (M̄ V_j)
     result.operator_applies += static_cast<int>(b);
     apply_mass(mass, next.w, next.mw, b);
+    reserve(k + b);
+    const Eigen::VectorXd before = mass_norms(next);
     // Gram-Schmidt: the two newest blocks first (the large components), then the whole basis, which also restores
     // the orthogonality that Lanczos loses as Ritz values converge; once more if that pass still removed much.
     const Index local = j == 0 ? 0 : j - b;  // blocks j - 1 and j: OP V_j's components in exact arithmetic
@@ -154,12 +164,20 @@ EigenPairs solve_block_lanczos(ShiftSolve& op, const VectorMassOperator& mass, i
       for (Index col = 0; col < b; ++col) again |= c.col(col).norm() > reorthogonalize * left(col);
       if (!again) break;
     }
+    const Eigen::VectorXd after = mass_norms(next);
+    for (Index col = 0; col < b; ++col)
+      if (!(after(col) > exhausted * before(col)))
+        throw std::runtime_error(fmt::format("block Lanczos: the Krylov space is exhausted after {} vectors (use "
+                                             "--eigensolver arpack)", k));
     h.block(k, j, b, b) = orthonormalize(next, k + b, scratch);
     ++result.iterations;
 
     // Rayleigh-Ritz on T = Vᵀ M̄ OP V (k x k); the residual of a Ritz pair (theta, V s) is V_next H_next s_last,
     // whose M̄-norm is ||H_next s_last|| (s_last: s's entries of the newest block).
-    if (k < nev) continue;
+    // Up to 400 vectors every step (an eigensolve of T takes milliseconds there); beyond, once the basis has grown by
+    // 5 %, so that the eigensolves of T cost a bounded multiple of the last one.
+    if (k < nev || (k > 400 && 20 * (k - last_check) < k)) continue;
+    last_check = k;
     const MatrixXd t = 0.5 * (h.topLeftCorner(k, k) + h.topLeftCorner(k, k).transpose());
     const Eigen::SelfAdjointEigenSolver<MatrixXd> ritz(t);
     const MatrixXd residuals = h.block(k, j, b, b) * ritz.eigenvectors().bottomRows(b);

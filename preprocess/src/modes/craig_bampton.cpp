@@ -172,6 +172,7 @@ CraigBamptonModes craig_bampton_modes(const RowMatrixX3d& nodes, const SparseMat
       if (dof_index[d] >= 0) result.basis.row(d).tail(n_s) = correction.vectors.row(dof_index[d]);
   }
   result.stats = op.stats();
+  result.eigensolver = fixed.backend;
 
   // 4. Orthonormalise: the reduced eigenproblem on the basis (Eqs. of a Rayleigh-Ritz step).
   const Eigen::Index m_b = result.basis.cols();

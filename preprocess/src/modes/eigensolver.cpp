@@ -163,9 +163,10 @@ std::string_view to_string(EigensolverBackend backend) {
   return "unknown";
 }
 
-EigensolverBackend resolve_backend(EigensolverBackend backend, Eigen::Index dofs) {
+EigensolverBackend resolve_backend(EigensolverBackend backend, Eigen::Index dofs, int nev, Eigen::Index block_size) {
   if (backend != EigensolverBackend::automatic) return backend;
-  return dofs >= kBlockLanczosFromDofs ? EigensolverBackend::block_lanczos : EigensolverBackend::arpack;
+  const bool fits = block_size >= 1 && block_lanczos_basis_limit(nev, block_size, dofs) >= 10 * static_cast<Eigen::Index>(nev);
+  return dofs >= kBlockLanczosFromDofs && fits ? EigensolverBackend::block_lanczos : EigensolverBackend::arpack;
 }
 
 bool slepc_available() {
@@ -208,18 +209,34 @@ EigenPairs solve_shift_invert(ShiftSolve& op, const VectorMassOperator& mass, in
   if (nev < 1 || nev > n - 8)
     throw std::invalid_argument("eigensolver: the number of modes must satisfy 1 <= nev <= " +
                                 std::to_string(n - 8) + " (DOFs - 6 rigid-body modes - 2), got " + std::to_string(nev));
-  const EigensolverBackend backend = resolve_backend(options.backend, n);
+  const EigensolverBackend backend = resolve_backend(options.backend, n, nev, options.block_size);
   if (backend == EigensolverBackend::slepc) {
 #ifdef FLEXBODY_WITH_SLEPC
     auto* distributed = dynamic_cast<SlepcShiftSolve*>(&op);
     if (distributed == nullptr) throw std::logic_error("eigensolver slepc: the operator is not from make_shift_solve(slepc)");
-    return distributed->eigenpairs(mass, nev, options);
+    EigenPairs pairs = distributed->eigenpairs(mass, nev, options);
+    pairs.backend = EigensolverBackend::slepc;
+    return pairs;
 #else
     throw std::invalid_argument("eigensolver: 'slepc' is not in this build (configure with -DFLEXBODY_WITH_SLEPC=ON)");
 #endif
   }
-  if (backend == EigensolverBackend::spectra) return solve_spectra(op, mass, nev, options);
-  if (backend == EigensolverBackend::block_lanczos) return solve_block_lanczos(op, mass, nev, options);
+  if (backend == EigensolverBackend::spectra) {
+    EigenPairs pairs = solve_spectra(op, mass, nev, options);
+    pairs.backend = EigensolverBackend::spectra;
+    return pairs;
+  }
+  if (backend == EigensolverBackend::block_lanczos) {
+    try {
+      EigenPairs pairs = solve_block_lanczos(op, mass, nev, options);
+      pairs.backend = EigensolverBackend::block_lanczos;
+      return pairs;
+    } catch (const std::runtime_error&) {
+      // Not converged within its basis, or the Krylov space exhausted: auto goes on with ARPACK, which restarts
+      // (the solves so far stay in op.stats()); a backend asked for by name reports its failure.
+      if (options.backend != EigensolverBackend::automatic) throw;
+    }
+  }
   const int solves_before = op.stats().solves;
   if (std::optional<EigenPairs> pairs = solve_arpack(op, mass, nev, options.tolerance, options)) return *pairs;
   if (options.tolerance == 0.0) throw std::runtime_error("ARPACK dseupd: converged-count mismatch (info = -17)");

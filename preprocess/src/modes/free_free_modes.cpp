@@ -99,11 +99,14 @@ FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& sti
   int nev = std::min(options.modes > 0 ? options.modes : 12, limit);
   EigenPairs pairs;
   while (true) {
-    if (options.progress) options.progress(fmt::format("eigensolver: {} modes by {}", nev, to_string(resolve_backend(options.solver.backend, n))));
+    if (options.progress) options.progress(fmt::format("eigensolver: {} modes by {}", nev,
+                                                     to_string(resolve_backend(options.solver.backend, n, nev,
+                                                                               options.solver.block_size))));
     pairs = solve_shift_invert(op, mass, nev, options.solver);
     ++result.solver_runs;
     result.restarts += pairs.iterations;
     result.operator_applies += pairs.operator_applies;
+    result.eigensolver = pairs.backend;
     const double f_top = std::sqrt(std::max(pairs.eigenvalues(nev - 1), 0.0)) / kTwoPi;
     const bool enough_for_fmax = options.fmax_hz <= 0.0 || f_top > options.fmax_hz;
     const bool capped = options.modes > 0 && nev >= options.modes;

@@ -197,11 +197,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   // 3. Modes: free-free, or Craig-Bampton on the rbe2 interfaces.
   StageTimer modes_timer(summary, "modes");
   summary.reduction = options.reduction;
-  // auto is decided here, on the whole body's DOFs, so that the report, the file and a Craig-Bampton run (whose
-  // eigenproblem is the interior's) all name the same backend.
-  EigensolverOptions solver = options.modes.solver;
-  solver.backend = resolve_backend(solver.backend, stiffness.rows());
-  summary.eigensolver = std::string(to_string(solver.backend));
+  const EigensolverOptions& solver = options.modes.solver;  // auto is decided per solve: the report names what ran
   Eigen::MatrixXd mode_vectors;
   if (options.reduction == ReductionKind::free_free) {
     FreeFreeOptions mode_options = options.modes;
@@ -221,6 +217,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     summary.solver_runs = modes.solver_runs;
     summary.restarts = modes.restarts;
     summary.operator_applies = modes.operator_applies;
+    summary.eigensolver = std::string(to_string(modes.eigensolver));
     summary.factor = modes.stats;
     mode_vectors = modes.vectors;
   } else {
@@ -250,6 +247,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     summary.shift = modes.shift;
     summary.rigid_body_coupling = modes.rigid_body_coupling;
     summary.solver_runs = 1;
+    summary.eigensolver = std::string(to_string(modes.eigensolver));
     summary.factor = modes.stats;
     summary.operator_applies = static_cast<int>(modes.stats.solves);
     mode_vectors = modes.vectors;

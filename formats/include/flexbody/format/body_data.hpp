@@ -88,7 +88,7 @@ struct Modes {
   /// Craig-Bampton only (empty otherwise): the fixed-interface frequencies [Hz], every rbe2 interface
   /// clamped, ascending.
   Eigen::VectorXd fixed_interface_frequencies_hz;
-  std::string eigensolver;  ///< "arpack" or "spectra"
+  std::string eigensolver;  ///< the backend that ran: "arpack", "spectra", "block-lanczos" or "slepc"
   double shift = 0.0;       ///< sigma of the shift-invert solve [rad^2/s^2]
   /// The unit loads ("load point:fx", ...: forces fx, fy, fz, moments mx, my, mz) whose residual static
   /// responses (static correction modes) are in the basis; empty if none.

@@ -53,6 +53,7 @@ struct CraigBamptonModes {
   Eigen::MatrixXd vectors;
   double rigid_body_coupling = 0.0;  ///< max |r_kᵀ M̄ ψ| over the rigid fields r_k and the modes
   double shift = 0.0;
+  EigensolverBackend eigensolver = EigensolverBackend::arpack;  ///< the backend of the last run (never automatic)
   ShiftSolveStats stats;
 };
 

@@ -13,7 +13,8 @@
 
 namespace flexbody::preprocess {
 
-/// automatic: block_lanczos on eigenproblems of kBlockLanczosFromDofs DOFs or more, arpack below (resolve_backend).
+/// automatic: block_lanczos on eigenproblems of kBlockLanczosFromDofs DOFs or more whose basis fits, arpack otherwise
+/// and if block Lanczos fails (resolve_backend, solve_shift_invert).
 enum class EigensolverBackend { automatic, arpack, spectra, block_lanczos, slepc };
 [[nodiscard]] std::string_view to_string(EigensolverBackend backend);
 /// "auto", "arpack", "spectra", "block-lanczos" or "slepc"; throws std::invalid_argument otherwise, and for "slepc" in a build
@@ -23,8 +24,11 @@ enum class EigensolverBackend { automatic, arpack, spectra, block_lanczos, slepc
 /// modes (bench/README.md, "Block Lanczos"): the eigen stage takes as long at 43k DOFs, 12 % less at 58k, 24 % at
 /// 79k, 15 % at 127k and 203k; the Krylov basis and its M̄ image take 2.8 GB at 1.05M DOFs against ARPACK's 0.45.
 inline constexpr Eigen::Index kBlockLanczosFromDofs = 50'000;
-/// The backend `backend` stands for on an eigenproblem of `dofs` DOFs: itself, unless it is automatic.
-[[nodiscard]] EigensolverBackend resolve_backend(EigensolverBackend backend, Eigen::Index dofs);
+/// The backend `backend` stands for on an eigenproblem of `dofs` DOFs and `nev` modes: itself, unless it is automatic;
+/// then block_lanczos from kBlockLanczosFromDofs DOFs if its basis limit allows 10 vectors per mode (it needed 6.5
+/// on the bracket), arpack otherwise.
+[[nodiscard]] EigensolverBackend resolve_backend(EigensolverBackend backend, Eigen::Index dofs, int nev,
+                                                 Eigen::Index block_size = 8);
 /// True when this build has the SLEPc backend (-DFLEXBODY_WITH_SLEPC=ON).
 [[nodiscard]] bool slepc_available();
 
@@ -45,8 +49,9 @@ struct EigensolverOptions {
 struct EigenPairs {
   Eigen::VectorXd eigenvalues;
   Eigen::MatrixXd vectors;
-  int iterations = 0;      ///< restarts of the implicitly restarted Lanczos method
+  int iterations = 0;      ///< restarts of the implicitly restarted Lanczos method (block steps of block Lanczos)
   int operator_applies = 0;
+  EigensolverBackend backend = EigensolverBackend::arpack;  ///< the one that delivered them (never automatic)
 };
 
 /// Lanczos basis size used for nev eigenpairs of an operator of dimension n (deflated rank n - 6):
@@ -66,7 +71,8 @@ struct EigenPairs {
 
 /// The `nev` eigenvalues nearest to (and above) sigma of K̄ phi = lambda M̄ phi within the range of
 /// the deflated operator. `op` must already be factorized at `sigma` (set_shift) and come from
-/// make_shift_solve for the same backend. Throws std::runtime_error if the backend fails or does not converge.
+/// make_shift_solve for the same backend. Throws std::runtime_error if the backend fails or does not converge;
+/// with `automatic`, a block Lanczos that fails is followed by ARPACK on the same factorization.
 [[nodiscard]] EigenPairs solve_shift_invert(ShiftSolve& op, const VectorMassOperator& mass, int nev,
                                             const EigensolverOptions& options);
 

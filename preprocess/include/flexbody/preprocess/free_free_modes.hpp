@@ -49,6 +49,7 @@ struct FreeFreeModes {
   int solver_runs = 0;
   int restarts = 0;
   int operator_applies = 0;
+  EigensolverBackend eigensolver = EigensolverBackend::arpack;  ///< the backend of the last run (never automatic)
   ShiftSolveStats stats;
 };
 

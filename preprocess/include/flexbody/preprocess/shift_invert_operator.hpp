@@ -41,6 +41,8 @@ class VectorMassOperator {
   [[nodiscard]] Eigen::Index rows() const { return 3 * mass_.rows(); }
   [[nodiscard]] Eigen::Index cols() const { return rows(); }
   void perform_op(const double* x, double* y) const;
+  /// M_s, upper triangle.
+  [[nodiscard]] const SparseMatrix& scalar_mass_upper() const { return mass_; }
 
  private:
   const SparseMatrix& mass_;

@@ -131,7 +131,7 @@ TEST(BlockLanczos, AutoPicksItForLargeMeshesWhoseBasisFits) {
   EXPECT_EQ(fp::resolve_backend(B::automatic, 49'999, 26), B::arpack);
   EXPECT_EQ(fp::resolve_backend(B::automatic, 50'000, 26), B::block_lanczos);
   EXPECT_EQ(fp::resolve_backend(B::automatic, 1'053'090, 26), B::block_lanczos);
-  // At 1.05M DOFs 8 GiB hold 504 basis vectors (whole blocks of 8) and their M̄ image: 10 per mode fit 50 modes.
+  // At 1.05M DOFs 4 GiB hold 504 basis vectors (whole blocks of 8): 10 per mode fit 50 modes.
   EXPECT_EQ(fp::block_lanczos_basis_limit(50, 8, 1'053'090), 504);
   EXPECT_EQ(fp::resolve_backend(B::automatic, 1'053'090, 50), B::block_lanczos);
   EXPECT_EQ(fp::resolve_backend(B::automatic, 1'053'090, 51), B::arpack);

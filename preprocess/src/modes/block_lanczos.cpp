@@ -21,7 +21,7 @@ using Eigen::MatrixXd;
 
 // The basis V (n x k) and its image M̄ V are read in every step; their products with thin blocks run on the BLAS
 // (linalg/blas_gemm.hpp).
-constexpr double kMaxBasisBytes = 8.0 * (1ull << 30);
+constexpr double kMaxBasisBytes = 4.0 * (1ull << 30);  // as for ARPACK's basis (free_free_modes.cpp)
 
 // C = Aᵀ B for column-major A (n x k) and B (n x m) with leading dimension n; C is k x m.
 MatrixXd transposed_product(const double* a, Index k, const double* b, Index m, Index n) {
@@ -121,7 +121,7 @@ MatrixXd orthonormalize(const Block& block, Index basis_size, MatrixXd& scratch)
 
 Index block_lanczos_basis_limit(int nev, Index block, Index n) {
   const Index wanted = std::max<Index>(20 * static_cast<Index>(nev), 8 * block);
-  const auto affordable = static_cast<Index>(kMaxBasisBytes / (2.0 * 8.0 * static_cast<double>(n)));
+  const auto affordable = static_cast<Index>(kMaxBasisBytes / (8.0 * static_cast<double>(n)));
   const Index limit = std::min({wanted + block - 1, affordable, n - 6});
   return limit / block * block;
 }

@@ -22,7 +22,7 @@ enum class EigensolverBackend { automatic, arpack, spectra, block_lanczos, slepc
 [[nodiscard]] EigensolverBackend eigensolver_backend_from_string(std::string_view text);
 /// Where `automatic` switches from arpack to block_lanczos (DOFs of the eigenproblem). Measured on the bracket, 26
 /// modes (bench/README.md, "Block Lanczos"): the eigen stage takes as long at 43k DOFs, 12 % less at 58k, 24 % at
-/// 79k, 15 % at 127k and 203k; the Krylov basis and its M̄ image take 2.8 GB at 1.05M DOFs against ARPACK's 0.45.
+/// 79k, 15 % at 127k and 203k; its Krylov basis takes 1.4 GB at 1.05M DOFs against ARPACK's 0.45.
 inline constexpr Eigen::Index kBlockLanczosFromDofs = 50'000;
 /// The backend `backend` stands for on an eigenproblem of `dofs` DOFs and `nev` modes: itself, unless it is automatic;
 /// then block_lanczos from kBlockLanczosFromDofs DOFs if its basis limit allows 10 vectors per mode (it needed 6.5
@@ -59,8 +59,8 @@ struct EigenPairs {
 [[nodiscard]] int lanczos_basis_size(int nev, Eigen::Index n);
 
 /// Largest Krylov basis the block-lanczos backend may build for nev eigenpairs in blocks of b (a multiple of b):
-/// 20 nev rounded up to whole blocks, at least 8 blocks, at most the deflated rank n - 6 and at most what keeps the
-/// basis and its M̄ image within 8 GiB.
+/// 20 nev rounded up to whole blocks, at least 8 blocks, at most the deflated rank n - 6 and at most 4 GiB of basis
+/// (ARPACK's limit too).
 [[nodiscard]] Eigen::Index block_lanczos_basis_limit(int nev, Eigen::Index block, Eigen::Index n);
 
 /// The shift-solve operator a backend works on: CHOLMOD for arpack and spectra, the distributed MUMPS

@@ -19,9 +19,8 @@ namespace {
 using Eigen::Index;
 using Eigen::MatrixXd;
 
-// The basis V (n x k) and its image M̄ V are read in every step; their products with thin blocks run on the BLAS
-// (linalg/blas_gemm.hpp).
-constexpr double kMaxBasisBytes = 4.0 * (1ull << 30);  // as for ARPACK's basis (free_free_modes.cpp)
+// The basis V (n x k) is read in every step; its products with thin blocks run on the BLAS (linalg/blas_gemm.hpp).
+constexpr double kMaxBasisBytes = 4.0 * (1ull << 30);  // the basis' limit, as ARPACK's (free_free_modes.cpp)
 
 // C = Aᵀ B for column-major A (n x k) and B (n x m) with leading dimension n; C is k x m.
 MatrixXd transposed_product(const double* a, Index k, const double* b, Index m, Index n) {

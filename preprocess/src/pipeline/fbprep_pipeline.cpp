@@ -197,11 +197,9 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   // 3. Modes: free-free, or Craig-Bampton on the rbe2 interfaces.
   StageTimer modes_timer(summary, "modes");
   summary.reduction = options.reduction;
-  const EigensolverOptions& solver = options.modes.solver;  // auto is decided per solve: the report names what ran
   Eigen::MatrixXd mode_vectors;
   if (options.reduction == ReductionKind::free_free) {
-    FreeFreeOptions mode_options = options.modes;
-    mode_options.solver = solver;
+    FreeFreeOptions mode_options = options.modes;  // with auto, each solve picks its backend; the modes name it
     mode_options.progress = options.progress;
     const FreeFreeModes modes = in_stage("modes", [&] {
       return free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options, static_loads);
@@ -227,7 +225,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     CraigBamptonOptions cb_options;
     cb_options.fixed_interface_modes = options.modes.modes;
     cb_options.fmax_hz = options.modes.fmax_hz;
-    cb_options.solver = solver;
+    cb_options.solver = options.modes.solver;
     cb_options.shift = options.modes.shift;
     if (options.progress)
       options.progress(fmt::format("Craig-Bampton: fixed-interface modes ({}), {} rbe2 interfaces",

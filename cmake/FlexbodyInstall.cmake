@@ -20,7 +20,7 @@ configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/flexbodyConfig.cmake.i
   ${PROJECT_BINARY_DIR}/flexbodyConfig.cmake INSTALL_DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/flexbody)
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/flexbodyConfigVersion.cmake COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/flexbodyConfig.cmake ${PROJECT_BINARY_DIR}/flexbodyConfigVersion.cmake
-  DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/flexbody)
+  ${PROJECT_SOURCE_DIR}/cmake/FlexbodyKlu.cmake DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/flexbody)
 install(TARGETS fbsim RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 if(TARGET fbprep)
   install(TARGETS fbprep RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

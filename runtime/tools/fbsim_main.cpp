@@ -86,6 +86,8 @@ int main(int argc, char** argv) {
     j["scene"] = scene_path.string();
     j["steps"] = summary.steps;
     j["newton_iterations"] = summary.newton_iterations;
+    j["newton_matrices"] = summary.newton_matrices;
+    j["linear_solver"] = summary.sparse ? "sparse" : "dense";
     j["cpu_s"] = summary.cpu_seconds;
     j["energy_initial_j"] = summary.energy_initial;
     j["energy_final_j"] = summary.energy_final;
@@ -111,6 +113,8 @@ int main(int argc, char** argv) {
                              summary.newton_iterations,
                              summary.steps ? static_cast<double>(summary.newton_iterations) / static_cast<double>(summary.steps) : 0.0,
                              summary.cpu_seconds);
+    std::cout << fmt::format("  {} Newton matrices, factorized {}\n", summary.newton_matrices,
+                             summary.sparse ? "sparse (KLU)" : "dense");
     std::cout << fmt::format("  {:.1f} us per step ({:.1f} in the integrator, the rest checks and outputs)\n",
                              1e6 * summary.wall_seconds / std::max(1.0, static_cast<double>(summary.steps)),
                              1e6 * summary.integrator_wall_seconds / std::max(1.0, static_cast<double>(summary.steps)));

@@ -190,6 +190,7 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
     throw std::runtime_error(fmt::format("{}: cannot create the output directory: {}", directory.string(), error.message()));
   std::vector<std::unique_ptr<CsvFile>> files;
   RunSummary summary;
+  summary.sparse = integrator.sparse();
   for (const Sensor& s : scene.sensors) {
     summary.files.push_back(directory / (s.name + ".csv"));
     files.push_back(std::make_unique<CsvFile>(summary.files.back(), columns_of(scene, s)));
@@ -328,6 +329,7 @@ RunSummary run_scene(Scene& scene, const std::filesystem::path& directory, const
     throw;
   }
   summary.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+  summary.newton_matrices = integrator.factorizations();
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   summary.integrator_wall_seconds = std::chrono::duration<double>(in_integrator).count();
   summary.energy_drift = largest_change / std::max(exchanged, 1e-300);

@@ -12,6 +12,8 @@ namespace flexbody::fbsim {
 struct RunSummary {
   long steps = 0;
   long newton_iterations = 0;
+  long newton_matrices = 0;  ///< Newton matrices built (factorizations)
+  bool sparse = false;       ///< the reduced Newton matrix was factorized sparse (GeneralizedAlpha::sparse)
   double cpu_seconds = 0.0;
   double energy_initial = 0.0, energy_final = 0.0;
   /// max_t |E(t) − E_0| / max_t (kinetic + elastic + spring energy): meaningful for conservative scenes (no

@@ -77,6 +77,7 @@ Scene read_scene(const std::filesystem::path& file) {
 
   const YAML::Node body_map = r.required(root, "bodies", "the scene");
   if (!body_map.IsMap() || body_map.size() == 0) r.fail(body_map, "bodies must be a map of names to bodies");
+  std::map<std::string, format::BodyData> files;  // by canonical path
   for (auto it = body_map.begin(); it != body_map.end(); ++it) {
     const std::string name = it->first.Scalar();
     const std::string where = fmt::format("body '{}'", name);
@@ -87,12 +88,17 @@ Scene read_scene(const std::filesystem::path& file) {
     const std::string path_text = r.text(r.required(b, "file", where), where + " file");
     const std::filesystem::path path =
         std::filesystem::path(path_text).is_absolute() ? std::filesystem::path(path_text) : base / path_text;
-    format::BodyData data;
-    try {
-      data = format::read_body_file(path);
-    } catch (const std::exception& e) {
-      r.fail(b["file"], e.what());
+    // Each file is read (and its seal checked) once: a chain of 1024 copies of one part would otherwise spend
+    // 60 ms per copy of the bracket on its SHA-256.
+    const std::string key = std::filesystem::weakly_canonical(path).string();
+    if (!files.count(key)) {
+      try {
+        files.emplace(key, format::read_body_file(path));
+      } catch (const std::exception& e) {
+        r.fail(b["file"], e.what());
+      }
     }
+    const format::BodyData& data = files.at(key);
     // modes: all (default) | rigid | a count | full (the unreduced improved ACF of the file's mesh: the reference).
     std::optional<Eigen::Index> modes;
     bool full = false;
@@ -345,7 +351,7 @@ Scene read_scene(const std::filesystem::path& file) {
   const YAML::Node integrator = r.required(root, "integrator", "the scene");
   r.expect_map(integrator, "integrator",
                {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every", "deformation_limit",
-                "spin_warning", "spin_limit", "constraints"});
+                "spin_warning", "spin_limit", "constraints", "linear_solver"});
   if (const YAML::Node t = integrator["type"]; t && r.text(t, "integrator type") != "generalized-alpha")
     r.fail(t, fmt::format("integrator type '{}' is unknown; use generalized-alpha", t.Scalar()));
   if (const YAML::Node rho = integrator["rho_inf"]) {
@@ -390,6 +396,18 @@ Scene read_scene(const std::filesystem::path& file) {
     else
       r.fail(form, fmt::format("integrator constraints '{}' is unknown; use stabilized-index2 (positions and "
                                "velocities, the default) or index3 (positions only)", f));
+  }
+  if (const YAML::Node solver = integrator["linear_solver"]) {
+    const std::string f = r.text(solver, "integrator linear_solver");
+    if (f == "auto")
+      scene.integrator.reduced_matrix = runtime::ReducedMatrix::automatic;
+    else if (f == "dense")
+      scene.integrator.reduced_matrix = runtime::ReducedMatrix::dense;
+    else if (f == "sparse")
+      scene.integrator.reduced_matrix = runtime::ReducedMatrix::sparse;
+    else
+      r.fail(solver, fmt::format("integrator linear_solver '{}' is unknown; use auto (the default: sparse from {} rows "
+                                 "of the reduced Newton matrix), dense or sparse", f, runtime::kSparseFromRows));
   }
   if (const YAML::Node it = integrator["max_iterations"]) scene.integrator.max_iterations = r.count(it, "integrator max_iterations");
   if (const YAML::Node every = integrator["output_every"]) {

@@ -1,5 +1,6 @@
 #include "flexbody/runtime/generalized_alpha.hpp"
 
+#include "constraint_projection.hpp"
 #include "newton_solvers.hpp"
 #include "saddle_point.hpp"
 #include "stabilized_coupling.hpp"
@@ -23,7 +24,9 @@ Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen
     const Eigen::VectorXd qs = q + shift * v;
     const double ts = t + shift, dt = 1e-6;
     const Eigen::VectorXd phi_t = (system.constraints(ts + dt, qs) - system.constraints(ts - dt, qs)) / (2 * dt);
-    return Eigen::VectorXd(system.constraint_jacobian(ts, qs) * v + phi_t);
+    Eigen::SparseMatrix<double> jacobian;
+    system.sparse_constraint_jacobian(ts, qs, jacobian);
+    return Eigen::VectorXd(jacobian * v + phi_t);
   };
   return (phi_dot(s) - phi_dot(-s)) / (2 * s);
 }
@@ -243,17 +246,18 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
     if (std::abs(phi(k)) > 1e-8)
       throw std::invalid_argument("initial state violates " + system.constraint_name(k) + " by " + std::to_string(phi(k)));
   // [M Φ_qᵀ; Φ_q 0], sparse: M is block diagonal and the full-order body's blocks have the mesh's sparsity.
-  const Eigen::MatrixXd jac = system.constraint_jacobian(t_, q_);
+  Eigen::SparseMatrix<double> jac;
+  system.sparse_constraint_jacobian(t_, q_, jac);
   const Eigen::SparseMatrix<double> mass = system.sparse_mass_matrix(q_);
   std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(static_cast<std::size_t>(mass.nonZeros()));
+  entries.reserve(static_cast<std::size_t>(mass.nonZeros() + 2 * jac.nonZeros()));
   for (Eigen::Index k = 0; k < mass.outerSize(); ++k)
     for (Eigen::SparseMatrix<double>::InnerIterator it(mass, k); it; ++it) entries.emplace_back(it.row(), it.col(), it.value());
-  for (Eigen::Index i = 0; i < m; ++i)
-    for (Eigen::Index j = 0; j < n; ++j)
-      if (jac(i, j) != 0.0) {
-        entries.emplace_back(n + i, j, jac(i, j));
-        entries.emplace_back(j, n + i, jac(i, j));
+  for (Eigen::Index k = 0; k < jac.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(jac, k); it; ++it)
+      if (it.value() != 0.0) {
+        entries.emplace_back(n + it.row(), it.col(), it.value());
+        entries.emplace_back(it.col(), n + it.row(), it.value());
       }
   Eigen::SparseMatrix<double> kkt(n + m, n + m);  // for the residuals of the solves
   kkt.setFromTriplets(entries.begin(), entries.end());
@@ -285,7 +289,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
     const Eigen::VectorXd phi_t = (system.constraints(t_ + dt, q_) - system.constraints(t_ - dt, q_)) / (2 * dt);
     // Row by row against the row's own terms |Φ_q| |v| + |Φ_t|: the rows carry m/s, 1/s and kg^1/2 m/s.
     const Eigen::ArrayXd violation = (jac * v_ + phi_t).cwiseAbs().array();
-    const Eigen::ArrayXd terms = (jac.cwiseAbs() * v_.cwiseAbs()).array() + phi_t.cwiseAbs().array();
+    const Eigen::ArrayXd terms = (Eigen::SparseMatrix<double>(jac.cwiseAbs()) * v_.cwiseAbs()).array() + phi_t.cwiseAbs().array();
     if ((violation > 1e-12 * terms).any()) {
       Eigen::VectorXd rhs(n + m);
       rhs << mass * v_, -phi_t;
@@ -301,6 +305,13 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   qdd_ = x.head(n);
   lambda_ = x.tail(m);
   a_ = qdd_;
+  // Dense or sparse reduced matrix: its size is every body's kept coordinates (12, or all of a floating-frame body's)
+  // and the constraint rows.
+  Eigen::Index reduced_rows = m;
+  for (int b = 0; b < system.body_count(); ++b) reduced_rows += system.model(b).floating() ? system.model(b).coordinate_count() : 12;
+  sparse_ = options.reduced_matrix == ReducedMatrix::sparse ||
+            (options.reduced_matrix == ReducedMatrix::automatic && reduced_rows >= kSparseFromRows);
+  projected_ = std::make_unique<detail::ConstraintProjection>(sparse_);
   build_solver(options.step);
 }
 
@@ -310,7 +321,7 @@ void GeneralizedAlpha::build_solver(double h) {
   if (options_.newton_matrix == NewtonMatrix::dense)
     solver_ = std::make_unique<detail::DenseNewton>(system_, beta_prime, gamma_prime);
   else
-    solver_ = std::make_unique<detail::ConstantCoreNewton>(system_, beta_prime, gamma_prime);
+    solver_ = std::make_unique<detail::ConstantCoreNewton>(system_, beta_prime, gamma_prime, sparse_);
   solver_step_ = h;
   refresh_ = true;
 }
@@ -349,7 +360,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
   // stop shrinking fast (ratio > 1/4); a step that does not converge with a kept matrix is retried with a fresh one.
   bool fresh_this_step = false;
   const bool stabilized = options_.constraints == ConstraintForm::stabilized_index2 && m > 0;
-  Eigen::MatrixXd& jacobian = work_.jacobian;
+  Eigen::SparseMatrix<double>& jacobian = work_.jacobian;
   Eigen::VectorXd &velocity_rows = work_.velocity_rows, &position_step = work_.position_step;
   // The position correction W Φ_q(q_n)ᵀ ν: its direction is fixed for the step, so that the correction is normal to
   // the constraint manifold at q_n. (Taken from an older Newton matrix, it turned the correction along the manifold:
@@ -411,11 +422,10 @@ void GeneralizedAlpha::advance(double h, double t1) {
       bool evaluated = false;
       const bool refresh = refresh_ || !options_.reuse_newton_matrix;
       if (refresh) {
-        jacobian = system_.constraint_jacobian(t1, q);
+        system_.sparse_constraint_jacobian(t1, q, jacobian);
         solver_->factor(t1, q, v, qdd, mu, jacobian);
         if (stabilized) {
-          projected_.compute(jacobian * squared_scales_.asDiagonal() * jacobian.transpose());  // Φ_q W Φ_qᵀ
-          if (projected_.info() != Eigen::Success) {
+          if (!projected_->factor(jacobian, squared_scales_)) {  // Φ_q W Φ_qᵀ
             if (iterations_ > 1)  // rows independent at the predictor lost it at a diverging iterate
               throw StepFailure("t = " + std::to_string(t1) + " s: the Newton iteration diverged: at iteration " +
                                 std::to_string(iterations_) + " the constraint rows became dependent (Φ_q W Φ_qᵀ is "
@@ -428,8 +438,8 @@ void GeneralizedAlpha::advance(double h, double t1) {
             evaluate_residual();
             evaluated = true;
             const Eigen::MatrixXd direction = squared_scales_.asDiagonal() * system_.constraint_jacobian(t_, q_).transpose();
-            if (!coupling_->build(system_, *solver_, t1, q, v, qdd, mu, jacobian, direction, residual, scales_, beta_prime,
-                                  gamma_prime, h))
+            if (!coupling_->build(system_, *solver_, t1, q, v, qdd, mu, Eigen::MatrixXd(jacobian), direction, residual,
+                                  scales_, beta_prime, gamma_prime, h))
               throw StepFailure("t = " + std::to_string(t1) + " s: the coupling of the position and velocity rows "
                                 "(stabilised index-2) is not finite" + last_state_diagnosis());
           }
@@ -447,7 +457,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
         // cancelled and the stopping test ended the iteration early: velocities off by 6.5e-7 of 3 m/s, helper
         // review of 77a5e2a).
         work_.nu_step = velocity_rows - phi;
-        projected_.solveInPlace(work_.nu_step);
+        projected_->solve_in_place(work_.nu_step);
         correction_of(work_.nu_step, position_step);
         if (!all_finite(position_step)) diverged(phi);
         work_.nu += work_.nu_step;

@@ -38,9 +38,11 @@ DenseNewton::DenseNewton(const System& system, double beta_prime, double gamma_p
     : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime) {}
 
 void DenseNewton::factor(double time, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
-                         const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
+                         const Eigen::VectorXd& mu, const Eigen::SparseMatrix<double>& sparse_jacobian) {
+  const Eigen::MatrixXd jacobian(sparse_jacobian);
   const Eigen::Index n = q.size(), m = jacobian.rows();
-  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + m, n + m);
+  Eigen::MatrixXd& kkt = kkt_;
+  kkt = Eigen::MatrixXd::Zero(n + m, n + m);
   kkt.topLeftCorner(n, n) = system_.mass_matrix(q) + (system_.stiffness(q) + system_.constraint_hessian(time, q, beta_prime_ * mu)) / beta_prime_;
   for (int b = 0; b < system_.body_count(); ++b) {  // a floating-frame body: (∂R/∂q + γ' ∂R/∂q̇)/β'
     if (!system_.model(b).floating()) continue;
@@ -83,8 +85,10 @@ void DenseNewton::solve(const Eigen::VectorXd&, const Eigen::VectorXd& residual,
   dx = lu_.solve(rhs);
 }
 
-ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime)
-    : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime) {
+ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime, bool sparse)
+    : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime),
+      reduced_(sparse ? std::unique_ptr<ReducedSolver>(std::make_unique<SparseReducedSolver>())
+                      : std::make_unique<DenseReducedSolver>()) {
   for (int b = 0; b < system.body_count(); ++b) {
     const BodyModel& model = system.model(b);
     const Eigen::Index n_f = model.floating() ? 0 : model.field_count();
@@ -158,43 +162,60 @@ void ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const do
 }
 
 void ConstantCoreNewton::factor(double time, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
-                                const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) {
+                                const Eigen::VectorXd& mu, const Eigen::SparseMatrix<double>& jacobian) {
   const int n_b = system_.body_count();
   const Eigen::Index m = jacobian.rows(), n_r = kept_total_;
-  // The springs' tangents: their rigid-rigid blocks (every pair of bodies) and, within a body, the rigid-ξ coupling
-  // enter; their ξξ blocks cannot (the core is the body's constant).
+  entries_.clear();
+  auto add_block = [this](Eigen::Index row, Eigen::Index column, const Eigen::Ref<const Eigen::MatrixXd>& block) {
+    for (Eigen::Index c = 0; c < block.cols(); ++c)
+      for (Eigen::Index r = 0; r < block.rows(); ++r) entries_.emplace_back(row + r, column + c, block(r, c));
+  };
+  // Columns [o, o + count) of Φ_q as body b's kept coordinates (from r_b on) in the reduced matrix: J_r and J_rᵀ.
+  auto add_jacobian = [&](Eigen::Index o, Eigen::Index count, Eigen::Index r_b) {
+    for (Eigen::Index c = 0; c < count; ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(jacobian, o + c); it; ++it) {
+        entries_.emplace_back(r_b + c, n_r + it.row(), it.value());
+        entries_.emplace_back(n_r + it.row(), r_b + c, it.value());
+      }
+  };
+  // The springs' tangents: their rigid-rigid blocks (within a body and between its two bodies) and, within a body,
+  // the rigid-ξ coupling enter; their ξξ blocks cannot (the core is the body's constant).
   const std::vector<SpringTangent> springs = system_.spring_tangents(q, v);
-  std::vector<std::vector<Eigen::MatrixXd>> spring_j(springs.size());  // [spring][body] J_b
-  for (std::size_t s = 0; s < springs.size(); ++s)
-    for (int b = 0; b < n_b; ++b) spring_j[s].push_back(spring_jacobian(springs[s], b, system_.model(b).coordinate_count()));
+  std::vector<std::vector<std::size_t>> springs_of(static_cast<std::size_t>(n_b));  // per body, the springs on it
+  for (std::size_t s = 0; s < springs.size(); ++s) {
+    if (springs[s].first != kGround) springs_of[static_cast<std::size_t>(springs[s].first)].push_back(s);
+    if (springs[s].second != kGround && springs[s].second != springs[s].first)
+      springs_of[static_cast<std::size_t>(springs[s].second)].push_back(s);
+  }
   auto spring_k = [&](std::size_t s) -> Eigen::Matrix3d {
     return (springs[s].stiffness + gamma_prime_ * springs[s].damping) / beta_prime_;
   };
   // The reduced matrix in [Δq_r (12 per GCMS body, all of a floating-frame body); Δμ] after eliminating every GCMS
-  // body's ξ.
-  Eigen::MatrixXd reduced = Eigen::MatrixXd::Zero(n_r + m, n_r + m);
+  // body's ξ: each body's own block, its Jacobian columns, and the fill its elimination leaves among the rows that
+  // touch its ξ (its Tisserand rows and its joints').
   for (int b = 0; b < n_b; ++b) {
     const BodyModel& model = system_.model(b);
-    const Eigen::Index r_b = kept_offset_[static_cast<std::size_t>(b)];
+    const auto bs = static_cast<std::size_t>(b);
+    const Eigen::Index r_b = kept_offset_[bs], o = system_.offset(b);
+    Eliminated& e = eliminated_[bs];
+    e.rows.clear();
     if (model.floating()) {  // S_b = M(q) + (∂R/∂q + γ' ∂R/∂q̇ + 2 λ_p I_pp)/β', and its springs
-      const Eigen::Index o = system_.offset(b), size = model.coordinate_count();
+      const Eigen::Index size = model.coordinate_count();
       const FfrfTangent t = system_.floating_frame_tangent(b, q, v, qdd);
       Eigen::MatrixXd s_b = t.mass + (t.stiffness + gamma_prime_ * t.damping) / beta_prime_;
       s_b.block<4, 4>(3, 3).diagonal().array() += 2.0 * mu(system_.reference_row(b));  // (2 λ/β') I, λ = β' μ
-      for (std::size_t s = 0; s < springs.size(); ++s) {
-        const Eigen::MatrixXd& j_b = spring_j[s][static_cast<std::size_t>(b)];
-        if (j_b.size() > 0) s_b += j_b.transpose() * spring_k(s) * j_b;
+      for (const std::size_t s : springs_of[bs]) {
+        const Eigen::MatrixXd j_b = spring_jacobian(springs[s], b, size);
+        s_b += j_b.transpose() * spring_k(s) * j_b;
       }
-      reduced.block(r_b, r_b, size, size) = s_b;
-      reduced.block(r_b, n_r, size, m) = jacobian.middleCols(o, size).transpose();
-      reduced.block(n_r, r_b, m, size) = jacobian.middleCols(o, size);
-      eliminated_[static_cast<std::size_t>(b)].rows.clear();
+      add_block(r_b, r_b, s_b);
+      add_jacobian(o, size, r_b);
       continue;
     }
-    const Eigen::Index o = system_.offset(b), n_xi = 3 * model.field_count(), n_f = model.field_count();
-    const Eigen::VectorXd q_b = q.segment(o, 12 + n_xi);
+    const Eigen::Index n_xi = 3 * model.field_count(), n_f = model.field_count();
+    const VectorRef q_b = q.segment(o, 12 + n_xi);
     const Eigen::Matrix3d a = orientation_of(q_b);
-    const Eigen::VectorXd xi = q_b.tail(n_xi);
+    const VectorRef xi = q_b.tail(n_xi);
     // S_rr = G[0:4, 0:4] ⊗ I3 + (K_aa + H_aa) / β';  S_rf = G[0:4, 4:] ⊗ I3 + (K_aξ + H_aξ) / β'.
     Eigen::MatrixXd s_rr = Eigen::MatrixXd::Zero(12, 12), s_rf = Eigen::MatrixXd::Zero(12, n_xi);
     for (int r = 0; r < 4; ++r) {
@@ -211,37 +232,44 @@ void ConstantCoreNewton::factor(double time, const Eigen::VectorXd& q, const Eig
       s_rr.bottomRightCorner<9, 9>() += t.aa / beta_prime_;
       s_rf.bottomRows<9>() += (t.a_xi + h.rightCols(n_xi)) / beta_prime_;
     }
-    for (std::size_t s = 0; s < springs.size(); ++s) {
-      const Eigen::MatrixXd& j_b = spring_j[s][static_cast<std::size_t>(b)];
-      if (j_b.size() == 0) continue;
+    for (const std::size_t s : springs_of[bs]) {
+      const Eigen::MatrixXd j_b = spring_jacobian(springs[s], b, 12 + n_xi);
       const Eigen::MatrixXd kj = spring_k(s) * j_b;
       s_rr += j_b.leftCols<12>().transpose() * kj.leftCols<12>();
       if (n_xi > 0) s_rf += j_b.leftCols<12>().transpose() * kj.rightCols(n_xi);
     }
-    reduced.block(r_b, r_b, 12, 12) = s_rr;
-    reduced.block(r_b, n_r, 12, m) = jacobian.middleCols(o, 12).transpose();
-    reduced.block(n_r, r_b, m, 12) = jacobian.middleCols(o, 12);
-    Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
-    e.rows.clear();
-    if (n_xi == 0) continue;
+    add_jacobian(o, 12, r_b);
+    if (n_xi == 0) {
+      add_block(r_b, r_b, s_rr);
+      continue;
+    }
     // Eliminate ξ for S_fr and the constraint rows that involve this body's ξ (its reference rows and joints).
-    const Eigen::MatrixXd j_all = jacobian.middleCols(o + 12, n_xi);
-    for (Eigen::Index k = 0; k < m; ++k)
-      if (j_all.row(k).cwiseAbs().maxCoeff() > 0.0) e.rows.push_back(k);
+    for (Eigen::Index c = 0; c < n_xi; ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(jacobian, o + 12 + c); it; ++it)
+        if (it.value() != 0.0) e.rows.push_back(it.row());
+    std::sort(e.rows.begin(), e.rows.end());
+    e.rows.erase(std::unique(e.rows.begin(), e.rows.end()), e.rows.end());
     const auto k_rows = static_cast<Eigen::Index>(e.rows.size());
-    const Eigen::MatrixXd j_f = j_all(e.rows, Eigen::all);
+    Eigen::MatrixXd j_f = Eigen::MatrixXd::Zero(k_rows, n_xi);
+    for (Eigen::Index c = 0; c < n_xi; ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(jacobian, o + 12 + c); it; ++it)
+        if (it.value() != 0.0) j_f(std::lower_bound(e.rows.begin(), e.rows.end(), it.row()) - e.rows.begin(), c) = it.value();
     e.coupling.resize(12 + k_rows, n_xi);
     e.coupling << s_rf, j_f;
     e.y = core_solve(b, a, e.coupling.transpose());
     e.coupling_kernel = PaddedMatrix(e.coupling);
     e.y_kernel = PaddedMatrix(e.y);
-    reduced.block(r_b, r_b, 12, 12) -= s_rf * e.y.leftCols(12);
+    s_rr -= s_rf * e.y.leftCols(12);
+    add_block(r_b, r_b, s_rr);
     const Eigen::MatrixXd s_rf_y = s_rf * e.y.rightCols(k_rows), j_y = j_f * e.y.leftCols(12);
     const Eigen::MatrixXd j_yj = j_f * e.y.rightCols(k_rows);
     for (Eigen::Index i = 0; i < k_rows; ++i) {
-      reduced.col(n_r + e.rows[i]).segment(r_b, 12) -= s_rf_y.col(i);
-      reduced.row(n_r + e.rows[i]).segment(r_b, 12) -= j_y.row(i);
-      for (Eigen::Index l = 0; l < k_rows; ++l) reduced(n_r + e.rows[i], n_r + e.rows[l]) -= j_yj(i, l);
+      const Eigen::Index row_i = n_r + e.rows[static_cast<std::size_t>(i)];
+      for (Eigen::Index c = 0; c < 12; ++c) {
+        entries_.emplace_back(r_b + c, row_i, -s_rf_y(c, i));
+        entries_.emplace_back(row_i, r_b + c, -j_y(i, c));
+      }
+      for (Eigen::Index l = 0; l < k_rows; ++l) entries_.emplace_back(row_i, n_r + e.rows[static_cast<std::size_t>(l)], -j_yj(i, l));
     }
   }
   // The joints' curvature ∂(Φ_qᵀ μ)/∂q (System::add_joint_hessian) is left out here: it is μ = λ/β' times the rows'
@@ -249,24 +277,17 @@ void ConstantCoreNewton::factor(double time, const Eigen::VectorXd& q, const Eig
   // count, while its differences cost 20 % of a step of the pendulum (fbsim, 8 modes, both formulations).
   // The dense reference matrix has it.
   static_cast<void>(time);
-  for (std::size_t s = 0; s < springs.size(); ++s)  // springs between two bodies: their rigid-rigid blocks
-    for (int b = 0; b < n_b; ++b)
-      for (int c = 0; c < n_b; ++c) {
-        const Eigen::MatrixXd& j_b = spring_j[s][static_cast<std::size_t>(b)];
-        const Eigen::MatrixXd& j_c = spring_j[s][static_cast<std::size_t>(c)];
-        const Eigen::Index k_b = kept_[static_cast<std::size_t>(b)], k_c = kept_[static_cast<std::size_t>(c)];
-        if (b != c && j_b.size() > 0 && j_c.size() > 0)
-          reduced.block(kept_offset_[static_cast<std::size_t>(b)], kept_offset_[static_cast<std::size_t>(c)], k_b, k_c) +=
-              j_b.leftCols(k_b).transpose() * spring_k(s) * j_c.leftCols(k_c);
-      }
-  // Its inverse explicitly, like C⁻¹: a solve is then one product with a (12 n_b + m)-square matrix, where Eigen's
-  // blocked triangular solves took 0.4 µs each at 21 rows (7 % of a 20-mode step, two per iteration). The matrix
-  // is a saddle point whose condition estimate is about 1e9 in the bracket pendulum (where the product agreed
-  // with LU solves to 5e-12) and passes 1e14 in the driven spin-up test, which converges as it did with LU solves:
-  // a Newton matrix needs to be only roughly right, the residual is exact. An exactly zero pivot gives
-  // non-finite entries, which the integrator reports as a singular Newton matrix; a matrix singular only after
-  // rounding gives large corrections, as the LU solve did, and the iteration's failure to converge is reported.
-  reduced_inverse_ = PaddedMatrix(Eigen::PartialPivLU<Eigen::MatrixXd>(reduced).inverse());
+  for (std::size_t s = 0; s < springs.size(); ++s) {  // a spring between two bodies: their rigid-rigid blocks
+    const int b = springs[s].first, c = springs[s].second;
+    if (b == kGround || c == kGround || b == c) continue;
+    const auto bs = static_cast<std::size_t>(b), cs = static_cast<std::size_t>(c);
+    const Eigen::MatrixXd j_b = spring_jacobian(springs[s], b, system_.model(b).coordinate_count()).leftCols(kept_[bs]);
+    const Eigen::MatrixXd j_c = spring_jacobian(springs[s], c, system_.model(c).coordinate_count()).leftCols(kept_[cs]);
+    const Eigen::Matrix3d k = spring_k(s);
+    add_block(kept_offset_[bs], kept_offset_[cs], j_b.transpose() * k * j_c);
+    add_block(kept_offset_[cs], kept_offset_[bs], j_c.transpose() * k * j_b);
+  }
+  reduced_->factor(n_r + m, entries_);
 }
 
 void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
@@ -289,8 +310,7 @@ void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& 
     rhs_.segment(r_b, 12) += e.coupled.head<12>();
     for (std::size_t i = 0; i < e.rows.size(); ++i) rhs_(n_r + e.rows[i]) += e.coupled(12 + static_cast<Eigen::Index>(i));
   }
-  reduced_solution_.resize(rhs_.size());
-  reduced_inverse_.multiply(rhs_.data(), reduced_solution_.data());
+  reduced_->solve(rhs_, reduced_solution_);
   const Eigen::VectorXd& x = reduced_solution_;
   // Back-substitute: Δq_f = −S_ff⁻¹ (r_f + S_fr Δq_r + J_fᵀ Δμ).
   dx.resize(q.size() + m);

@@ -7,13 +7,15 @@
 // either densely (O(n³) per iteration), or with the constant core of FORMULATION.md section 5: the ξξ block of
 // each flexible body is Â C Âᵀ with C = G_ff ⊗ I3 + (K̂ + γ' D̂)/β' constant for a fixed step (A orthogonal), so C is
 // factorized once and every ξ block is eliminated by two triangular solves per right-hand side, leaving a small
-// dense system in the 12 rigid coordinates per body and the constraint rows. Of the damping tangent C_t only the
+// system in the 12 rigid coordinates per body and the constraint rows (reduced_solver.hpp: dense for a few bodies,
+// sparse for many, where each joint's rows touch two bodies). Of the damping tangent C_t only the
 // ξξ block Â D̂ Âᵀ enters (its coupling to ȧ only changes the convergence rate). A floating-frame body keeps all of
 // its 7 + n_m coordinates in that dense system, with its exact tangent M(q) + (∂R/∂q + γ' ∂R/∂q̇)/β'.
 
 #include "flexbody/runtime/system.hpp"
 
 #include "../kernels/dense_product.hpp"
+#include "reduced_solver.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
@@ -31,8 +33,9 @@ class NewtonSolver {
   virtual ~NewtonSolver() = default;
   /// Builds and factorizes the Newton matrix at (t, q, q̇, q̈, μ) with the constraint Jacobian J (μ = λ/β', scaled).
   /// q̈ enters through the floating-frame bodies, whose mass matrix depends on q; t through driven joints' curvature.
+  /// The Jacobian is System::sparse_constraint_jacobian's.
   virtual void factor(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a,
-                      const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) = 0;
+                      const Eigen::VectorXd& mu, const Eigen::SparseMatrix<double>& jacobian) = 0;
   /// dx = [Δq; Δμ] for the scaled residual r and Φ with the last factorization (which may be from an earlier
   /// iterate: a modified Newton iteration; the constant core is always applied at the current A). Not const:
   /// the solvers keep their work vectors, so that an iteration allocates nothing here once sizes are set. dx must
@@ -45,23 +48,29 @@ class DenseNewton final : public NewtonSolver {
  public:
   DenseNewton(const System& system, double beta_prime, double gamma_prime);
   void factor(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a,
-              const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) override;
+              const Eigen::VectorXd& mu, const Eigen::SparseMatrix<double>& jacobian) override;
   void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
              Eigen::VectorXd& dx) override;
+  /// [S Jᵀ; J 0] of the last factor() (for tests).
+  [[nodiscard]] const Eigen::MatrixXd& matrix() const { return kkt_; }
 
  private:
   const System& system_;
   double beta_prime_, gamma_prime_;
+  Eigen::MatrixXd kkt_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
 };
 
 class ConstantCoreNewton final : public NewtonSolver {
  public:
-  ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime);
+  /// `sparse`: factorize the reduced matrix with KLU (SparseReducedSolver) instead of its dense inverse.
+  ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime, bool sparse);
   void factor(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a,
-              const Eigen::VectorXd& mu, const Eigen::MatrixXd& jacobian) override;
+              const Eigen::VectorXd& mu, const Eigen::SparseMatrix<double>& jacobian) override;
   void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
              Eigen::VectorXd& dx) override;
+  /// The reduced matrix's solver (its last matrix: for tests).
+  [[nodiscard]] const ReducedSolver& reduced() const { return *reduced_; }
 
  private:
   // One flexible body's part of the factorization: the constraint rows that touch its ξ, coupling = [S_rf; J_f]
@@ -88,7 +97,8 @@ class ConstantCoreNewton final : public NewtonSolver {
   /// GCMS body, all 7 + n_m of a floating-frame body (whose block is dense and small: nothing to eliminate).
   std::vector<Eigen::Index> kept_offset_, kept_;
   Eigen::Index kept_total_ = 0;
-  PaddedMatrix reduced_inverse_;  ///< of the matrix in [Δq_r; Δμ] left after eliminating every body's ξ
+  std::unique_ptr<ReducedSolver> reduced_;  ///< of the matrix in [Δq_r; Δμ] left after eliminating every body's ξ
+  std::vector<Eigen::Triplet<double>> entries_;  ///< that matrix's entries (work storage of factor())
   Eigen::VectorXd rotated_, core_y_, rhs_, reduced_solution_;  ///< work vectors of solve()
 };
 

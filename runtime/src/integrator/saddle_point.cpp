@@ -2,7 +2,7 @@
 
 namespace flexbody::runtime::detail {
 
-SaddlePointSolver::SaddlePointSolver(const Eigen::SparseMatrix<double>& mass, const Eigen::MatrixXd& jacobian,
+SaddlePointSolver::SaddlePointSolver(const Eigen::SparseMatrix<double>& mass, const Eigen::SparseMatrix<double>& jacobian,
                                      const std::vector<bool>& eliminated) {
   const Eigen::Index n = mass.rows(), m = jacobian.rows();
   std::vector<Eigen::Index> position(static_cast<std::size_t>(n + m));  // K index -> index in F or in y
@@ -24,11 +24,11 @@ SaddlePointSolver::SaddlePointSolver(const Eigen::SparseMatrix<double>& mass, co
   };
   for (Eigen::Index k = 0; k < mass.outerSize(); ++k)
     for (Eigen::SparseMatrix<double>::InnerIterator it(mass, k); it; ++it) add(it.row(), it.col(), it.value());
-  for (Eigen::Index i = 0; i < m; ++i)
-    for (Eigen::Index j = 0; j < n; ++j)
-      if (jacobian(i, j) != 0.0) {
-        add(n + i, j, jacobian(i, j));
-        add(j, n + i, jacobian(i, j));
+  for (Eigen::Index k = 0; k < jacobian.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(jacobian, k); it; ++it)
+      if (it.value() != 0.0) {
+        add(n + it.row(), it.col(), it.value());
+        add(it.col(), n + it.row(), it.value());
       }
   Eigen::SparseMatrix<double> reduced(n_y, n_y);
   reduced.setFromTriplets(rr.begin(), rr.end());

@@ -24,7 +24,7 @@ class SaddlePointSolver {
   /// K from M (n square, symmetric, both triangles) and the m x n rows Φ_q; `eliminated` (n) marks F, whose block of M
   /// must be SPD. ok() is false when the reduced system is singular (redundant rows, or a body whose mass is singular
   /// where no row holds it): the caller names the cause.
-  SaddlePointSolver(const Eigen::SparseMatrix<double>& mass, const Eigen::MatrixXd& jacobian,
+  SaddlePointSolver(const Eigen::SparseMatrix<double>& mass, const Eigen::SparseMatrix<double>& jacobian,
                     const std::vector<bool>& eliminated);
 
   [[nodiscard]] bool ok() const { return ok_; }

@@ -102,8 +102,9 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
   const Eigen::Index rows = model.floating() ? 1 : model.rigid() ? 6 : (model.needs_translational_tisserand() ? 12 : 9);
   std::shared_ptr<const detail::PaddedMatrix> stiffness;
   if (!model.sparse && !model.rigid() && !model.floating()) stiffness = std::make_shared<const detail::PaddedMatrix>(model.stiffness);
-  bodies_.push_back({name, std::move(model), state, coordinates_, rows, std::move(stiffness), {}, {}});
+  bodies_.push_back({name, std::move(model), state, coordinates_, rows, reference_total_, std::move(stiffness), {}, {}});
   coordinates_ += bodies_.back().model.coordinate_count();
+  reference_total_ += rows;
   return static_cast<int>(bodies_.size()) - 1;
 }
 
@@ -112,6 +113,8 @@ void System::add_joint(Joint joint) {
   check_marker(joint.second, "joint '" + joint.name + "'");
   for (const Joint& j : joints_)
     if (j.name == joint.name) throw std::invalid_argument("joint '" + joint.name + "' is defined twice");
+  joint_start_.push_back(joint_total_);
+  joint_total_ += joint.rows();
   joints_.push_back(std::move(joint));
   joint_work_.emplace_back();
 }
@@ -150,12 +153,7 @@ int System::body_index(const std::string& name) const {
   throw std::invalid_argument("no body '" + name + "'");
 }
 
-Eigen::Index System::constraint_count() const {
-  Eigen::Index rows = 0;
-  for (const Body& b : bodies_) rows += reference_rows(b);
-  for (const Joint& j : joints_) rows += j.rows();
-  return rows;
-}
+Eigen::Index System::constraint_count() const { return reference_total_ + joint_total_; }
 
 Eigen::VectorXd System::initial_coordinates() const {
   Eigen::VectorXd q(coordinates_);
@@ -557,32 +555,9 @@ void System::constraints_and_rates(double t, const Eigen::VectorXd& q, const Eig
 }
 
 Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) const {
-  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(constraint_count(), coordinates_);
-  Eigen::Index row = 0;
-  for (const Body& b : bodies_) {
-    const Eigen::Index n = b.model.coordinate_count();
-    const auto q_b = q.segment(b.offset, n);
-    if (b.model.floating()) {
-      jac.block<1, 4>(row++, b.offset + 3) = 2.0 * q_b.segment<4>(3).transpose();
-      continue;
-    }
-    const Eigen::MatrixXd ref = reference_jacobian(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12));
-    jac.block(row, b.offset + 3, std::min<Eigen::Index>(9, reference_rows(b)), n - 3) =
-        ref.topRows(std::min<Eigen::Index>(9, reference_rows(b)));
-    if (reference_rows(b) == 12)
-      for (Eigen::Index f = 0; f < b.model.field_count(); ++f)
-        jac.block<3, 3>(row + 9, b.offset + 12 + 3 * f).diagonal().setConstant(b.model.g_border(0, 4 + f));
-    row += reference_rows(b);
-  }
-  for (std::size_t k = 0; k < joints_.size(); ++k) {
-    const Joint& j = joints_[k];
-    const JointEvaluation& e = evaluated(k, t, q);
-    if (j.first.body != kGround) jac.block(row, offset(j.first.body), j.rows(), e.jacobian_first.cols()) += e.jacobian_first;
-    if (j.second.body != kGround)
-      jac.block(row, offset(j.second.body), j.rows(), e.jacobian_second.cols()) += e.jacobian_second;
-    row += j.rows();
-  }
-  return jac;
+  Eigen::SparseMatrix<double> jac;
+  sparse_constraint_jacobian(t, q, jac);
+  return Eigen::MatrixXd(jac);
 }
 
 Eigen::VectorXd System::constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q,
@@ -642,8 +617,7 @@ Eigen::VectorXd System::constraint_time_derivative(double t, const Eigen::Vector
 }
 
 void System::add_constraint_time_derivative(double t, const Eigen::VectorXd& q, Eigen::VectorXd& out) const {
-  Eigen::Index row = 0;
-  for (const Body& b : bodies_) row += reference_rows(b);
+  Eigen::Index row = reference_total_;
   const double dt = std::cbrt(std::numeric_limits<double>::epsilon() * (1.0 + std::abs(t)));
   const double before = t - dt, after = t + dt;  // divided by after − before: exact, whatever t + dt rounds to
   for (std::size_t k = 0; k < joints_.size(); ++k) {
@@ -722,24 +696,6 @@ void System::add_joint_hessian(double t, const Eigen::VectorXd& q, const Eigen::
   }
 }
 
-Eigen::Index System::first_redundant_constraint(double t, const Eigen::VectorXd& q) const {
-  const Eigen::MatrixXd jac = constraint_jacobian(t, q);
-  // Gram-Schmidt over the rows in order, each normalised (rows carry different units), orthogonalised twice
-  // ("twice is enough", Giraud et al. 2005); a row whose remainder is below 1e-9 of its length adds nothing.
-  Eigen::MatrixXd basis(jac.cols(), 0);
-  for (Eigen::Index k = 0; k < jac.rows(); ++k) {
-    const double length = jac.row(k).norm();
-    if (!(length > 0.0)) return k;  // a row that constrains nothing
-    Eigen::VectorXd r = jac.row(k).transpose() / length;
-    for (int pass = 0; pass < 2; ++pass) r -= basis * (basis.transpose() * r);
-    const double remainder = r.norm();
-    if (remainder < 1e-9) return k;
-    basis.conservativeResize(Eigen::NoChange, basis.cols() + 1);
-    basis.col(basis.cols() - 1) = r / remainder;
-  }
-  return -1;
-}
-
 std::string System::constraint_name(Eigen::Index row) const {
   for (const Body& b : bodies_) {
     if (b.model.floating()) {
@@ -760,15 +716,11 @@ std::string System::constraint_name(Eigen::Index row) const {
 }
 
 Eigen::Index System::reference_row(int body) const {
-  Eigen::Index row = 0;
-  for (int b = 0; b < body; ++b) row += reference_rows(bodies_.at(static_cast<std::size_t>(b)));
-  return row;
+  return body == body_count() ? reference_total_ : bodies_.at(static_cast<std::size_t>(body)).reference_row;
 }
 
 Eigen::Index System::joint_row(std::size_t joint) const {
-  Eigen::Index row = reference_row(body_count());
-  for (std::size_t j = 0; j < joint; ++j) row += joints_.at(j).rows();
-  return row;
+  return reference_total_ + (joint == joints_.size() ? joint_total_ : joint_start_.at(joint));
 }
 
 JointReaction System::joint_reaction(std::size_t joint, double t, const Eigen::VectorXd& q,

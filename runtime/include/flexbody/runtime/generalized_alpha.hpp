@@ -33,6 +33,21 @@ enum class NewtonMatrix {
   dense,  ///< the whole matrix, LU per iteration: the reference the constant core is tested against
 };
 
+/// How the constant core's reduced Newton matrix (every body's τ and a, or all of a floating-frame body's
+/// coordinates, and the constraint rows) and the stabilised form's Φ_q W Φ_qᵀ are factorized.
+enum class ReducedMatrix {
+  /// Sparse from kSparseFromRows reduced rows on, dense below (the measured crossover, bench/README.md "scale_bench").
+  automatic,
+  /// Explicit dense inverse: a solve is one dense product, O(size²); a factorization O(size³).
+  dense,
+  /// KLU (SuiteSparse) with its ordering computed once per run: O(size) per solve and per factorization in a chain
+  /// or a ladder of loops.
+  sparse,
+};
+
+/// ReducedMatrix::automatic's crossover: reduced matrices of at least this many rows are factorized sparse.
+inline constexpr long kSparseFromRows = 100;
+
 /// Which constraint equations each step solves.
 enum class ConstraintForm {
   /// Φ(q_{n+1}) = 0 and Φ_q v_{n+1} + Φ_t = 0: the stabilised index-2 form of Arnold, Cardona & Brüls (2016, the
@@ -57,6 +72,7 @@ inline constexpr double kLargestTolerance = 1e-3;
 
 struct GeneralizedAlphaOptions {
   NewtonMatrix newton_matrix = NewtonMatrix::constant_core;
+  ReducedMatrix reduced_matrix = ReducedMatrix::automatic;  ///< constant_core only
   ConstraintForm constraints = ConstraintForm::stabilized_index2;
   double rho_infinity = 0.9;  ///< spectral radius at infinite frequency, [0, 1]
   double step = 1e-3;         ///< h [s]
@@ -102,6 +118,7 @@ class StepFailure : public std::runtime_error {
 namespace detail {
 class NewtonSolver;
 class StabilizedCoupling;
+class ConstraintProjection;
 }
 
 class GeneralizedAlpha {
@@ -139,6 +156,8 @@ class GeneralizedAlpha {
   [[nodiscard]] int last_iterations() const { return iterations_; }
   [[nodiscard]] long total_iterations() const { return total_iterations_; }
   [[nodiscard]] long factorizations() const { return factorizations_; }  ///< Newton matrices built so far
+  /// Whether the reduced Newton matrix is factorized sparse (GeneralizedAlphaOptions::reduced_matrix).
+  [[nodiscard]] bool sparse() const { return sparse_; }
   /// Lines about the model's validity, in the order they arose (GeneralizedAlphaOptions::spin_warning): a simulator
   /// shows the new ones after each step.
   [[nodiscard]] const std::vector<std::string>& warnings() const { return warnings_; }
@@ -159,12 +178,13 @@ class GeneralizedAlpha {
   struct Iterate {  // step()'s Newton iterate and its residual and correction: storage reused across steps
     Eigen::VectorXd qdd, a, v, q, mu, dx, residual, predicted;
     Eigen::VectorXd phi, velocity_rows, nu, nu_step, position_step;  ///< Φ; Ψ/γ', ν, Δν, W Φ_qᵀ Δν (stabilized_index2)
-    Eigen::MatrixXd jacobian;                      ///< Φ_q at the iterate
+    Eigen::SparseMatrix<double> jacobian;          ///< Φ_q at the iterate
   } work_;
   /// ConstraintForm::stabilized_index2: Φ_q W Φ_qᵀ at the Newton matrix's iterate, factorized to detect dependent
   /// rows, and the coupling of ν to δ and μ kept with the Newton matrix (an older one only converges more slowly;
   /// the direction W Φ_q(q_n)ᵀ of each step decides the result).
-  Eigen::LLT<Eigen::MatrixXd> projected_;
+  std::unique_ptr<detail::ConstraintProjection> projected_;
+  bool sparse_ = false;  ///< the reduced Newton matrix and Φ_q W Φ_qᵀ are factorized sparse
   std::unique_ptr<detail::StabilizedCoupling> coupling_;
   /// ConstraintForm::stabilized_index2 builds its Newton matrices with the coupled step (stabilized_coupling.hpp):
   /// set once a step failed with a fresh Newton matrix and the alternating step.

@@ -153,7 +153,13 @@ class System {
   [[nodiscard]] Eigen::VectorXd constraints(double t, const Eigen::VectorXd& q) const;
   /// The same into `phi` (resized): with the System's per-joint work storage, no allocation once sizes are set.
   void constraints(double t, const Eigen::VectorXd& q, Eigen::VectorXd& phi) const;
+  /// Φ_q, dense (tests and the dense reference Newton solve; O(m n) storage).
   [[nodiscard]] Eigen::MatrixXd constraint_jacobian(double t, const Eigen::VectorXd& q) const;
+  /// Φ_q into `out`, sparse (m x n, column-major): each body's reference rows over its own coordinates and each
+  /// joint's rows over its two bodies' coordinates, O(rows x body size) storage, linear in the scene. Every entry of
+  /// these blocks is stored, zero or not, so the pattern depends on the scene only and a factorization of a matrix
+  /// built from it can keep its symbolic analysis from step to step.
+  void sparse_constraint_jacobian(double t, const Eigen::VectorXd& q, Eigen::SparseMatrix<double>& out) const;
   /// Φ_qᵀ μ without forming Φ_q (the reference rows in O(n_f) per body): what a Newton residual needs.
   [[nodiscard]] Eigen::VectorXd constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q,
                                                                       const Eigen::VectorXd& mu) const;
@@ -227,6 +233,7 @@ class System {
     BodyState initial;
     Eigen::Index offset = 0;
     Eigen::Index reference_rows = 0;  ///< 6 (rigid), 9, or 12 with the translational Tisserand rows; 1 (floating)
+    Eigen::Index reference_row = 0;   ///< its first reference row
     /// K̂ as the runtime's product kernel reads it fastest (null for rigid and full-order bodies).
     std::shared_ptr<const detail::PaddedMatrix> stiffness;
     mutable FfrfWorkspace work;  ///< a floating-frame body's evaluation scratch (dynamic_residual)
@@ -249,6 +256,8 @@ class System {
   std::vector<SpringDamper> springs_;
   Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();
   Eigen::Index coordinates_ = 0;
+  Eigen::Index reference_total_ = 0, joint_total_ = 0;  ///< the bodies' reference rows, and the joints' rows
+  std::vector<Eigen::Index> joint_start_;  ///< per joint: its first row after the reference rows
 };
 
 }  // namespace flexbody::runtime

@@ -1,0 +1,71 @@
+#pragma once
+// reduced_solver.hpp (internal): the factorization of the reduced Newton matrix, the system in [Δq_r; Δμ] that is
+// left after each body's ξ block has been eliminated with its constant core (newton_solvers.hpp). It is given as
+// triplets (duplicates add), the way the bodies and joints contribute their blocks.
+//
+// Two kinds, chosen by the size of the matrix (GeneralizedAlphaOptions::reduced_solver):
+// - dense: the explicit inverse, so that a solve is one product with the dense kernel. Cheapest for a few bodies
+//   (a one-body pendulum's 26 rows: a 0.3 µs product), but O(size²) per solve and O(size³) per factorization.
+// - sparse: SuiteSparse's KLU (Davis & Palamadai Natarajan 2010), made for circuit simulation's sequences of
+//   matrices with one pattern. Each joint's rows touch two bodies, so the matrix has O(size) entries and a chain
+//   or a loop keeps the factors O(size) under KLU's fill-reducing ordering (AMD on the pattern of A + Aᵀ). The
+//   ordering is computed once per pattern (klu_analyze); later factorizations of the same pattern reuse the pivot
+//   sequence too (klu_refactor) and fall back to a fresh pivoting factorization when its pivots have degraded.
+//   klu_solve works in place on KLU's own work storage: a solve allocates nothing.
+
+#include "../kernels/dense_product.hpp"
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <memory>
+#include <vector>
+
+namespace flexbody::runtime::detail {
+
+class ReducedSolver {
+ public:
+  virtual ~ReducedSolver() = default;
+  /// Factorizes the size x size matrix whose entries are the sums of `entries` (row, column, value).
+  virtual void factor(Eigen::Index size, const std::vector<Eigen::Triplet<double>>& entries) = 0;
+  /// x = A⁻¹ b (x resized to b's size; not b). A singular matrix gives non-finite entries, which the integrator
+  /// reports as a singular Newton matrix.
+  virtual void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) = 0;
+  /// The matrix of the last factor(), sparse (for tests).
+  [[nodiscard]] const Eigen::SparseMatrix<double>& matrix() const { return matrix_; }
+
+ protected:
+  Eigen::SparseMatrix<double> matrix_;
+};
+
+class DenseReducedSolver final : public ReducedSolver {
+ public:
+  void factor(Eigen::Index size, const std::vector<Eigen::Triplet<double>>& entries) override;
+  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) override;
+
+ private:
+  PaddedMatrix inverse_;
+};
+
+class SparseReducedSolver final : public ReducedSolver {
+ public:
+  SparseReducedSolver();
+  ~SparseReducedSolver() override;
+  SparseReducedSolver(const SparseReducedSolver&) = delete;
+  SparseReducedSolver& operator=(const SparseReducedSolver&) = delete;
+  void factor(Eigen::Index size, const std::vector<Eigen::Triplet<double>>& entries) override;
+  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) override;
+  /// Symbolic analyses and pivoting factorizations done so far (the rest were refactorizations): for tests.
+  [[nodiscard]] int analyses() const { return analyses_; }
+  [[nodiscard]] int pivoting_factorizations() const { return pivoting_; }
+
+ private:
+  struct Klu;  // KLU's objects, kept out of this header
+  std::unique_ptr<Klu> klu_;
+  std::vector<int> outer_, inner_;  ///< the analysed pattern
+  bool singular_ = true;
+  double fresh_rcond_ = 0.0;  ///< KLU's pivot-ratio estimate at the last pivoting factorization
+  int analyses_ = 0, pivoting_ = 0;
+};
+
+}  // namespace flexbody::runtime::detail

@@ -1,0 +1,86 @@
+// System::sparse_constraint_jacobian: Φ_q block by block, each block over the coordinates of the bodies its rows
+// touch (FORMULATION.md section 4), so its storage grows with the scene, not with its square.
+#include "flexbody/runtime/reference_constraints.hpp"
+#include "flexbody/runtime/system.hpp"
+
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseQR>
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace flexbody::runtime {
+
+void System::sparse_constraint_jacobian(double t, const Eigen::VectorXd& q, Eigen::SparseMatrix<double>& out) const {
+  std::vector<Eigen::Triplet<double>> entries;
+  auto add_block = [&entries](Eigen::Index row, Eigen::Index column, const Eigen::Ref<const Eigen::MatrixXd>& block) {
+    for (Eigen::Index c = 0; c < block.cols(); ++c)
+      for (Eigen::Index r = 0; r < block.rows(); ++r) entries.emplace_back(row + r, column + c, block(r, c));
+  };
+  Eigen::Index row = 0;
+  for (const Body& b : bodies_) {
+    const Eigen::Index n = b.model.coordinate_count();
+    const auto q_b = q.segment(b.offset, n);
+    if (b.model.floating()) {  // pᵀp − 1 = 0
+      add_block(row++, b.offset + 3, 2.0 * q_b.segment<4>(3).transpose());
+      continue;
+    }
+    // Eq. 79 (orthogonality) over a, Eq. 78 (rotational Tisserand) over [a; ξ].
+    const Eigen::MatrixXd reference = reference_jacobian(b.model.tisserand, orientation_of(q_b), q_b.tail(n - 12));
+    add_block(row, b.offset + 3, reference.topLeftCorner(6, 9));
+    if (reference_rows(b) >= 9) add_block(row + 6, b.offset + 3, reference.middleRows(6, 3));
+    if (reference_rows(b) == 12)  // Eq. 77: Σ_f G[0, 4 + f] ξ_f, diagonal 3-blocks
+      for (Eigen::Index f = 0; f < b.model.field_count(); ++f)
+        for (int d = 0; d < 3; ++d) entries.emplace_back(row + 9 + d, b.offset + 12 + 3 * f + d, b.model.g_border(0, 4 + f));
+    row += reference_rows(b);
+  }
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const Joint& j = joints_[k];
+    const JointEvaluation& e = evaluated(k, t, q);
+    // Both markers on one body: their blocks add up (setFromTriplets sums duplicates).
+    if (j.first.body != kGround) add_block(row, offset(j.first.body), e.jacobian_first);
+    if (j.second.body != kGround) add_block(row, offset(j.second.body), e.jacobian_second);
+    row += j.rows();
+  }
+  out.resize(constraint_count(), coordinates_);
+  out.setFromTriplets(entries.begin(), entries.end());
+}
+
+Eigen::Index System::first_redundant_constraint(double t, const Eigen::VectorXd& q) const {
+  Eigen::SparseMatrix<double> jac;
+  sparse_constraint_jacobian(t, q, jac);
+  // Each row normalised (rows carry different units: m, rad, kg^½ m), then Householder QR of Φ_qᵀ with the columns
+  // (the rows of Φ_q) in their order: a column whose remainder after the ones before it is below 1e-9 of its length
+  // adds nothing (the Gram-Schmidt test, with Householder's accuracy), and SparseQR moves it behind the others. The
+  // fill is that of a Cholesky factor of Φ_q Φ_qᵀ in row order: each joint's rows touch two bodies, so it stays
+  // linear in a chain or a ladder of loops, where the dense Gram-Schmidt this replaces cost O(m² n).
+  Eigen::VectorXd length = Eigen::VectorXd::Zero(jac.rows());
+  for (Eigen::Index k = 0; k < jac.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(jac, k); it; ++it) length(it.row()) += it.value() * it.value();
+  for (Eigen::Index k = 0; k < jac.rows(); ++k)
+    if (!(length(k) > 0.0)) return k;  // a row that constrains nothing
+  length = length.cwiseSqrt().cwiseInverse();
+  Eigen::SparseMatrix<double> rows = (length.asDiagonal() * jac).transpose();  // n x m, column k = row k / |row k|
+  rows.makeCompressed();
+  // First whether any row is dependent at all, cheaply: the LDLᵀ of the rows' Gram matrix (unit diagonal) in a
+  // fill-reducing order (AMD). Its pivots are the squared remainders of the rows in that order, up to rounding that
+  // grows with the Gram matrix's condition (an exactly dependent row of a random mechanism left a pivot of 1.3e-12,
+  // sparse_newton_test). All above 1e-6 (remainders above 1e-3 of a row's length) means independent rows, beyond
+  // doubt; otherwise the QR below decides, and names the first dependent row in row order (slower: its fill grows
+  // with the scene's width; the dense Gram-Schmidt it replaces cost O(m² n) in every scene).
+  {
+    const Eigen::SparseMatrix<double> gram = rows.transpose() * rows;
+    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(gram);
+    if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 1e-6) return -1;
+  }
+  Eigen::SparseQR<Eigen::SparseMatrix<double>, Eigen::NaturalOrdering<int>> qr;
+  qr.setPivotThreshold(1e-9);
+  qr.compute(rows);
+  if (qr.info() != Eigen::Success) throw std::runtime_error("the constraint rows' QR factorization failed");
+  if (qr.rank() == rows.cols()) return -1;
+  const auto& order = qr.colsPermutation().indices();  // the independent columns first, then the dependent ones
+  return *std::min_element(order.data() + qr.rank(), order.data() + order.size());
+}
+
+}  // namespace flexbody::runtime

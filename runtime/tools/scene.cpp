@@ -13,6 +13,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <set>
 
 namespace flexbody::fbsim {
 namespace {
@@ -78,6 +79,26 @@ Scene read_scene(const std::filesystem::path& file) {
   const YAML::Node body_map = r.required(root, "bodies", "the scene");
   if (!body_map.IsMap() || body_map.size() == 0) r.fail(body_map, "bodies must be a map of names to bodies");
   std::map<std::string, format::BodyData> files;  // by canonical path
+  // A scene keeps only what its outputs use: a body's stress modes (most of a body file: 6.8 of the bracket's 7.9 MB)
+  // only where an output names one of its regions or a ParaView series shows its stresses, so that a chain of a
+  // thousand copies of a part does not hold a thousand copies of them.
+  std::set<std::string> stresses_used;
+  if (const YAML::Node outputs = root["outputs"]; outputs && outputs.IsMap())
+    for (auto it = outputs.begin(); it != outputs.end(); ++it)
+      if (it->second.IsMap() && it->second["region"] && it->second["body"] && it->second["body"].IsScalar())
+        stresses_used.insert(it->second["body"].Scalar());
+  if (const YAML::Node paraview = root["paraview"]; paraview && paraview.IsMap()) {
+    const YAML::Node stresses = paraview["stresses"];
+    if (!(stresses && stresses.IsScalar() && stresses.Scalar() == "false")) {
+      const YAML::Node list = paraview["bodies"];
+      if (list && list.IsSequence()) {
+        for (const YAML::Node& name : list)
+          if (name.IsScalar()) stresses_used.insert(name.Scalar());
+      } else {
+        for (auto it = body_map.begin(); it != body_map.end(); ++it) stresses_used.insert(it->first.Scalar());
+      }
+    }
+  }
   for (auto it = body_map.begin(); it != body_map.end(); ++it) {
     const std::string name = it->first.Scalar();
     const std::string where = fmt::format("body '{}'", name);
@@ -115,6 +136,7 @@ Scene read_scene(const std::filesystem::path& file) {
     } catch (const std::invalid_argument& e) {
       r.fail(b["modes"], e.what());
     }
+    if (!stresses_used.count(name)) model.recovery.clear();
     if (full && b["formulation"] && r.text(b["formulation"], where + " formulation") == "ffrf")
       r.fail(b["formulation"], fmt::format("{}: formulation ffrf moves modes in a floating frame; modes: full is the unreduced "
                                            "improved ACF (use a number of modes, or formulation gcms)", where));
@@ -351,7 +373,7 @@ Scene read_scene(const std::filesystem::path& file) {
   const YAML::Node integrator = r.required(root, "integrator", "the scene");
   r.expect_map(integrator, "integrator",
                {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every", "deformation_limit",
-                "spin_warning", "spin_limit", "constraints", "linear_solver"});
+                "spin_warning", "spin_limit", "constraints", "linear_solver", "coupled_step"});
   if (const YAML::Node t = integrator["type"]; t && r.text(t, "integrator type") != "generalized-alpha")
     r.fail(t, fmt::format("integrator type '{}' is unknown; use generalized-alpha", t.Scalar()));
   if (const YAML::Node rho = integrator["rho_inf"]) {
@@ -408,6 +430,13 @@ Scene read_scene(const std::filesystem::path& file) {
     else
       r.fail(solver, fmt::format("integrator linear_solver '{}' is unknown; use auto (the default: sparse from {} rows "
                                  "of the reduced Newton matrix), dense or sparse", f, runtime::kSparseFromRows));
+  }
+  if (const YAML::Node coupled = integrator["coupled_step"]) {
+    const std::string f = r.text(coupled, "integrator coupled_step");
+    if (f != "on-failure" && f != "always")
+      r.fail(coupled, fmt::format("integrator coupled_step '{}' is unknown; use on-failure (the default: the stabilised "
+                                  "form's coupled Newton step after a step fails without it) or always", f));
+    scene.integrator.coupled_from_start = f == "always";
   }
   if (const YAML::Node it = integrator["max_iterations"]) scene.integrator.max_iterations = r.count(it, "integrator max_iterations");
   if (const YAML::Node every = integrator["output_every"]) {

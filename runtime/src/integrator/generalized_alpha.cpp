@@ -309,21 +309,47 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   // and the constraint rows.
   Eigen::Index reduced_rows = m;
   for (int b = 0; b < system.body_count(); ++b) reduced_rows += system.model(b).floating() ? system.model(b).coordinate_count() : 12;
-  sparse_ = options.reduced_matrix == ReducedMatrix::sparse ||
-            (options.reduced_matrix == ReducedMatrix::automatic && reduced_rows >= kSparseFromRows);
+  sparse_ = options.newton_matrix == NewtonMatrix::constant_core &&
+            (options.reduced_matrix == ReducedMatrix::sparse ||
+             (options.reduced_matrix == ReducedMatrix::automatic && reduced_rows >= kSparseFromRows));
   projected_ = std::make_unique<detail::ConstraintProjection>(sparse_);
+  couple_ = options.coupled_from_start;
   build_solver(options.step);
 }
 
 void GeneralizedAlpha::build_solver(double h) {
   const double beta_prime = (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_));
   const double gamma_prime = gamma_ / (beta_ * h);
-  if (options_.newton_matrix == NewtonMatrix::dense)
+  sparse_core_ = nullptr;
+  if (options_.newton_matrix == NewtonMatrix::dense) {
     solver_ = std::make_unique<detail::DenseNewton>(system_, beta_prime, gamma_prime);
-  else
-    solver_ = std::make_unique<detail::ConstantCoreNewton>(system_, beta_prime, gamma_prime, sparse_);
+  } else {
+    auto core = std::make_unique<detail::ConstantCoreNewton>(system_, beta_prime, gamma_prime, sparse_);
+    if (sparse_) sparse_core_ = core.get();
+    solver_ = std::move(core);
+  }
   solver_step_ = h;
   refresh_ = true;
+}
+
+void GeneralizedAlpha::build_sparse_coupling(double t1, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                             const Eigen::VectorXd& qdd, const Eigen::VectorXd& mu, double h,
+                                             double gamma_prime) {
+  // Z/γ' = dΦ_q/dt / γ' along (1, v): central differences of the sparse Jacobian (one pattern, so the difference
+  // is entrywise), the step ∛ε over the fastest relative rate of a coordinate or over 1/h (StabilizedCoupling::build).
+  constexpr double eps = std::numeric_limits<double>::epsilon();
+  double fastest = 1.0 / h;
+  for (Eigen::Index i = 0; i < q.size(); ++i) fastest = std::max(fastest, std::abs(v(i)) / (std::abs(q(i)) + scales_(i)));
+  const double guess = std::cbrt(eps) / fastest, exact = (t1 + guess) - t1;
+  const double s = exact > 0.0 ? exact : guess;
+  Eigen::SparseMatrix<double> ahead, behind, at_start;
+  system_.sparse_constraint_jacobian(t1 + s, q + s * v, ahead);
+  system_.sparse_constraint_jacobian(t1 - s, q - s * v, behind);
+  const Eigen::SparseMatrix<double> rate = (ahead - behind) * (1.0 / (2.0 * s * gamma_prime));
+  system_.sparse_constraint_jacobian(t_, q_, at_start);  // P = W Φ_q(q_n)ᵀ: the step's direction
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> direction = squared_scales_.asDiagonal() * at_start.transpose();
+  const Eigen::SparseMatrix<double> projected = work_.jacobian * direction;
+  sparse_core_->factor_coupled(t1, q, v, qdd, mu, work_.jacobian, rate, direction, projected);
 }
 
 GeneralizedAlpha::~GeneralizedAlpha() = default;
@@ -423,7 +449,9 @@ void GeneralizedAlpha::advance(double h, double t1) {
       const bool refresh = refresh_ || !options_.reuse_newton_matrix;
       if (refresh) {
         system_.sparse_constraint_jacobian(t1, q, jacobian);
-        solver_->factor(t1, q, v, qdd, mu, jacobian);
+        // The coupled stabilised step with a sparse reduced matrix builds its own system (below).
+        const bool sparse_coupled = stabilized && couple_ && sparse_core_ != nullptr;
+        if (!sparse_coupled) solver_->factor(t1, q, v, qdd, mu, jacobian);
         if (stabilized) {
           if (!projected_->factor(jacobian, squared_scales_)) {  // Φ_q W Φ_qᵀ
             if (iterations_ > 1)  // rows independent at the predictor lost it at a diverging iterate
@@ -434,7 +462,9 @@ void GeneralizedAlpha::advance(double h, double t1) {
                               "positive definite)" + last_state_diagnosis());
           }
           coupled_ = couple_;  // the coupled step, once a step failed with the alternating one (below)
-          if (coupled_) {
+          if (sparse_coupled) {
+            build_sparse_coupling(t1, q, v, qdd, mu, h, gamma_prime);
+          } else if (coupled_) {
             evaluate_residual();
             evaluated = true;
             const Eigen::MatrixXd direction = squared_scales_.asDiagonal() * system_.constraint_jacobian(t_, q_).transpose();
@@ -469,6 +499,17 @@ void GeneralizedAlpha::advance(double h, double t1) {
         // Index-3, or the coupled stabilised step: the index-3 system's solve, then Δν from the velocity rows, which
         // couple through Z = dΦ_q/dt (stabilized_coupling.hpp).
         if (!evaluated) evaluate_residual();
+        if (stabilized && sparse_core_) {  // the sparse coupled step: [δ'; Δμ; Δν] at once, δ = δ' − P Δν
+          sparse_core_->solve_coupled(q, residual, phi, velocity_rows, work_.coupled);
+          work_.nu_step = work_.coupled.tail(m);
+          correction_of(work_.nu_step, position_step);
+          dx.resize(n + m);
+          dx.head(n) = work_.coupled.head(n) - position_step;
+          dx.tail(m) = work_.coupled.segment(n, m);
+          if (!all_finite(position_step) || !all_finite(dx)) diverged(phi);
+          work_.nu += work_.nu_step;
+          q += position_step;
+        } else {
         solver_->solve(q, residual, phi, dx);
         if (!all_finite(dx)) diverged(phi);
         if (stabilized) {
@@ -477,6 +518,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
           if (!all_finite(position_step) || !all_finite(dx)) diverged(phi);
           work_.nu += work_.nu_step;
           q += position_step;
+        }
         }
       }
       q += dx.head(n);

@@ -161,22 +161,85 @@ void ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const do
   Eigen::Map<Eigen::Matrix3Xd>(y, 3, n_f).noalias() = a * core_y;
 }
 
+struct ConstantCoreNewton::Coupling {
+  const Eigen::SparseMatrix<double>& rate;                          ///< Z/γ' (m x n)
+  const Eigen::SparseMatrix<double, Eigen::RowMajor>& direction;    ///< P = W Φ_q(q_n)ᵀ (n x m)
+  const Eigen::SparseMatrix<double>& projected;                     ///< J P (m x m)
+};
+
 void ConstantCoreNewton::factor(double time, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
                                 const Eigen::VectorXd& mu, const Eigen::SparseMatrix<double>& jacobian) {
+  // The joints' curvature ∂(Φ_qᵀ μ)/∂q (System::add_joint_hessian) is left out here: it is μ = λ/β' times the rows'
+  // second derivatives, 1e-7 of this matrix on the bench's slider-crank at h = 2e-3 s, where it changed no iteration
+  // count, while its differences cost 20 % of a step of the pendulum (fbsim, 8 modes, both formulations).
+  // The dense reference matrix has it.
+  static_cast<void>(time);
+  assemble(q, v, qdd, mu, jacobian, nullptr);
+}
+
+void ConstantCoreNewton::factor_coupled(double time, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                        const Eigen::VectorXd& qdd, const Eigen::VectorXd& mu,
+                                        const Eigen::SparseMatrix<double>& jacobian, const Eigen::SparseMatrix<double>& rate,
+                                        const Eigen::SparseMatrix<double, Eigen::RowMajor>& direction,
+                                        const Eigen::SparseMatrix<double>& projected) {
+  static_cast<void>(time);
+  const Coupling coupling{rate, direction, projected};
+  assemble(q, v, qdd, mu, jacobian, &coupling);
+}
+
+void ConstantCoreNewton::assemble(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
+                                  const Eigen::VectorXd& mu, const Eigen::SparseMatrix<double>& jacobian,
+                                  const Coupling* coupling) {
   const int n_b = system_.body_count();
   const Eigen::Index m = jacobian.rows(), n_r = kept_total_;
+  const Eigen::Index nu = n_r + m;  // where the coupled step's Δν columns and velocity rows start
+  unknowns_ = coupling ? n_r + 2 * m : n_r + m;
   entries_.clear();
   auto add_block = [this](Eigen::Index row, Eigen::Index column, const Eigen::Ref<const Eigen::MatrixXd>& block) {
     for (Eigen::Index c = 0; c < block.cols(); ++c)
       for (Eigen::Index r = 0; r < block.rows(); ++r) entries_.emplace_back(row + r, column + c, block(r, c));
   };
-  // Columns [o, o + count) of Φ_q as body b's kept coordinates (from r_b on) in the reduced matrix: J_r and J_rᵀ.
+  // Columns [o, o + count) of Φ_q as body b's kept coordinates (from r_b on) in the reduced matrix: J_r and J_rᵀ;
+  // and of Z/γ' in the velocity rows of the coupled step.
   auto add_jacobian = [&](Eigen::Index o, Eigen::Index count, Eigen::Index r_b) {
-    for (Eigen::Index c = 0; c < count; ++c)
+    for (Eigen::Index c = 0; c < count; ++c) {
       for (Eigen::SparseMatrix<double>::InnerIterator it(jacobian, o + c); it; ++it) {
         entries_.emplace_back(r_b + c, n_r + it.row(), it.value());
         entries_.emplace_back(n_r + it.row(), r_b + c, it.value());
       }
+      if (coupling)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(coupling->rate, o + c); it; ++it)
+          entries_.emplace_back(nu + it.row(), r_b + c, it.value());
+    }
+  };
+  // The rows of a column-major matrix's columns [o, o + count) with a nonzero value (sorted), and those columns as a
+  // dense |rows| x count block.
+  auto rows_of = [](const Eigen::SparseMatrix<double>& a, Eigen::Index o, Eigen::Index count, std::vector<Eigen::Index>& rows,
+                    Eigen::MatrixXd& block) {
+    rows.clear();
+    for (Eigen::Index c = 0; c < count; ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(a, o + c); it; ++it)
+        if (it.value() != 0.0) rows.push_back(it.row());
+    std::sort(rows.begin(), rows.end());
+    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    block = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), count);
+    for (Eigen::Index c = 0; c < count; ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(a, o + c); it; ++it)
+        if (it.value() != 0.0) block(std::lower_bound(rows.begin(), rows.end(), it.row()) - rows.begin(), c) = it.value();
+  };
+  // The coupled step's P_b (body b's rows of P, over the ν columns `columns` that touch them), dense.
+  auto direction_of = [&](Eigen::Index o, Eigen::Index count, std::vector<Eigen::Index>& columns) {
+    columns.clear();
+    for (Eigen::Index i = 0; i < count; ++i)
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(coupling->direction, o + i); it; ++it)
+        columns.push_back(it.col());
+    std::sort(columns.begin(), columns.end());
+    columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
+    Eigen::MatrixXd p_b = Eigen::MatrixXd::Zero(count, static_cast<Eigen::Index>(columns.size()));
+    for (Eigen::Index i = 0; i < count; ++i)
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(coupling->direction, o + i); it; ++it)
+        p_b(i, std::lower_bound(columns.begin(), columns.end(), it.col()) - columns.begin()) = it.value();
+    return p_b;
   };
   // The springs' tangents: their rigid-rigid blocks (within a body and between its two bodies) and, within a body,
   // the rigid-ξ coupling enter; their ξξ blocks cannot (the core is the body's constant).
@@ -190,15 +253,17 @@ void ConstantCoreNewton::factor(double time, const Eigen::VectorXd& q, const Eig
   auto spring_k = [&](std::size_t s) -> Eigen::Matrix3d {
     return (springs[s].stiffness + gamma_prime_ * springs[s].damping) / beta_prime_;
   };
-  // The reduced matrix in [Δq_r (12 per GCMS body, all of a floating-frame body); Δμ] after eliminating every GCMS
-  // body's ξ: each body's own block, its Jacobian columns, and the fill its elimination leaves among the rows that
-  // touch its ξ (its Tisserand rows and its joints').
+  // The reduced matrix in [Δq_r (12 per GCMS body, all of a floating-frame body); Δμ (; Δν)] after eliminating every
+  // GCMS body's ξ: each body's own block, its Jacobian columns, and the fill its elimination leaves among the rows
+  // that touch its ξ (its Tisserand rows and its joints').
+  std::vector<Eigen::Index> touched;  // the ν columns of a body's rows of P
   for (int b = 0; b < n_b; ++b) {
     const BodyModel& model = system_.model(b);
     const auto bs = static_cast<std::size_t>(b);
     const Eigen::Index r_b = kept_offset_[bs], o = system_.offset(b);
     Eliminated& e = eliminated_[bs];
     e.rows.clear();
+    e.cols.clear();
     if (model.floating()) {  // S_b = M(q) + (∂R/∂q + γ' ∂R/∂q̇ + 2 λ_p I_pp)/β', and its springs
       const Eigen::Index size = model.coordinate_count();
       const FfrfTangent t = system_.floating_frame_tangent(b, q, v, qdd);
@@ -210,6 +275,11 @@ void ConstantCoreNewton::factor(double time, const Eigen::VectorXd& q, const Eig
       }
       add_block(r_b, r_b, s_b);
       add_jacobian(o, size, r_b);
+      if (coupling) {  // −M_b P_b
+        const Eigen::MatrixXd mp = t.mass * direction_of(o, size, touched);
+        for (Eigen::Index j = 0; j < mp.cols(); ++j)
+          for (Eigen::Index i = 0; i < size; ++i) entries_.emplace_back(r_b + i, nu + touched[static_cast<std::size_t>(j)], -mp(i, j));
+      }
       continue;
     }
     const Eigen::Index n_xi = 3 * model.field_count(), n_f = model.field_count();
@@ -238,45 +308,50 @@ void ConstantCoreNewton::factor(double time, const Eigen::VectorXd& q, const Eig
       s_rr += j_b.leftCols<12>().transpose() * kj.leftCols<12>();
       if (n_xi > 0) s_rf += j_b.leftCols<12>().transpose() * kj.rightCols(n_xi);
     }
-    add_jacobian(o, 12, r_b);
-    if (n_xi == 0) {
-      add_block(r_b, r_b, s_rr);
-      continue;
-    }
-    // Eliminate ξ for S_fr and the constraint rows that involve this body's ξ (its reference rows and joints).
-    for (Eigen::Index c = 0; c < n_xi; ++c)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(jacobian, o + 12 + c); it; ++it)
-        if (it.value() != 0.0) e.rows.push_back(it.row());
-    std::sort(e.rows.begin(), e.rows.end());
-    e.rows.erase(std::unique(e.rows.begin(), e.rows.end()), e.rows.end());
-    const auto k_rows = static_cast<Eigen::Index>(e.rows.size());
-    Eigen::MatrixXd j_f = Eigen::MatrixXd::Zero(k_rows, n_xi);
-    for (Eigen::Index c = 0; c < n_xi; ++c)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(jacobian, o + 12 + c); it; ++it)
-        if (it.value() != 0.0) j_f(std::lower_bound(e.rows.begin(), e.rows.end(), it.row()) - e.rows.begin(), c) = it.value();
-    e.coupling.resize(12 + k_rows, n_xi);
-    e.coupling << s_rf, j_f;
-    e.y = core_solve(b, a, e.coupling.transpose());
-    e.coupling_kernel = PaddedMatrix(e.coupling);
-    e.y_kernel = PaddedMatrix(e.y);
-    s_rr -= s_rf * e.y.leftCols(12);
     add_block(r_b, r_b, s_rr);
-    const Eigen::MatrixXd s_rf_y = s_rf * e.y.rightCols(k_rows), j_y = j_f * e.y.leftCols(12);
-    const Eigen::MatrixXd j_yj = j_f * e.y.rightCols(k_rows);
-    for (Eigen::Index i = 0; i < k_rows; ++i) {
-      const Eigen::Index row_i = n_r + e.rows[static_cast<std::size_t>(i)];
-      for (Eigen::Index c = 0; c < 12; ++c) {
-        entries_.emplace_back(r_b + c, row_i, -s_rf_y(c, i));
-        entries_.emplace_back(row_i, r_b + c, -j_y(i, c));
-      }
-      for (Eigen::Index l = 0; l < k_rows; ++l) entries_.emplace_back(row_i, n_r + e.rows[static_cast<std::size_t>(l)], -j_yj(i, l));
+    add_jacobian(o, 12, r_b);
+    Eigen::MatrixXd mp;  // the coupled step's M_b P_b ((G ⊗ I3) P_b, column by column)
+    if (coupling) {
+      const Eigen::MatrixXd p_b = direction_of(o, 12 + n_xi, touched);
+      mp.resize(p_b.rows(), p_b.cols());
+      for (Eigen::Index j = 0; j < p_b.cols(); ++j) mass_times(model, p_b.col(j), mp.col(j));
+      for (Eigen::Index j = 0; j < mp.cols(); ++j)
+        for (Eigen::Index i = 0; i < 12; ++i) entries_.emplace_back(r_b + i, nu + touched[static_cast<std::size_t>(j)], -mp(i, j));
     }
+    if (n_xi == 0) continue;
+    // Eliminate ξ: L = [S_rf; J_f (; Z_f/γ')] over the rows that involve this body's ξ (its reference rows and
+    // joints), R = [S_fr, J_fᵀ (, −(M P)_f)].
+    std::vector<Eigen::Index> constraint_rows, rate_rows;
+    Eigen::MatrixXd j_f, z_f;
+    rows_of(jacobian, o + 12, n_xi, constraint_rows, j_f);
+    if (coupling) rows_of(coupling->rate, o + 12, n_xi, rate_rows, z_f);
+    const auto k_rows = static_cast<Eigen::Index>(constraint_rows.size()), z_rows = z_f.rows();
+    const Eigen::Index k_cols = coupling ? static_cast<Eigen::Index>(touched.size()) : 0;
+    e.left.resize(12 + k_rows + z_rows, n_xi);
+    e.left.topRows(12) = s_rf;
+    e.left.middleRows(12, k_rows) = j_f;
+    if (z_rows > 0) e.left.bottomRows(z_rows) = z_f;
+    Eigen::MatrixXd right(n_xi, 12 + k_rows + k_cols);
+    right.leftCols(12 + k_rows) = e.left.topRows(12 + k_rows).transpose();
+    if (k_cols > 0) right.rightCols(k_cols) = -mp.bottomRows(n_xi);
+    for (const Eigen::Index k : constraint_rows) {
+      e.rows.push_back(n_r + k);
+      e.cols.push_back(n_r + k);
+    }
+    for (const Eigen::Index k : rate_rows) e.rows.push_back(nu + k);
+    if (coupling)
+      for (const Eigen::Index k : touched) e.cols.push_back(nu + k);
+    e.y = core_solve(b, a, right);
+    e.left_kernel = PaddedMatrix(e.left);
+    e.y_kernel = PaddedMatrix(e.y);
+    const Eigen::MatrixXd schur = e.left * e.y;  // L S_ff⁻¹ R, subtracted
+    auto reduced_index = [r_b](const std::vector<Eigen::Index>& others, Eigen::Index i) {
+      return i < 12 ? r_b + i : others[static_cast<std::size_t>(i - 12)];
+    };
+    for (Eigen::Index c = 0; c < schur.cols(); ++c)
+      for (Eigen::Index r = 0; r < schur.rows(); ++r)
+        entries_.emplace_back(reduced_index(e.rows, r), reduced_index(e.cols, c), -schur(r, c));
   }
-  // The joints' curvature ∂(Φ_qᵀ μ)/∂q (System::add_joint_hessian) is left out here: it is μ = λ/β' times the rows'
-  // second derivatives, 1e-7 of this matrix on the bench's slider-crank at h = 2e-3 s, where it changed no iteration
-  // count, while its differences cost 20 % of a step of the pendulum (fbsim, 8 modes, both formulations).
-  // The dense reference matrix has it.
-  static_cast<void>(time);
   for (std::size_t s = 0; s < springs.size(); ++s) {  // a spring between two bodies: their rigid-rigid blocks
     const int b = springs[s].first, c = springs[s].second;
     if (b == kGround || c == kGround || b == c) continue;
@@ -287,15 +362,35 @@ void ConstantCoreNewton::factor(double time, const Eigen::VectorXd& q, const Eig
     add_block(kept_offset_[bs], kept_offset_[cs], j_b.transpose() * k * j_c);
     add_block(kept_offset_[cs], kept_offset_[bs], j_c.transpose() * k * j_b);
   }
-  reduced_->factor(n_r + m, entries_);
+  if (coupling)  // the velocity rows' −J P
+    for (Eigen::Index k = 0; k < coupling->projected.outerSize(); ++k)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(coupling->projected, k); it; ++it)
+        entries_.emplace_back(nu + it.row(), nu + it.col(), -it.value());
+  reduced_->factor(unknowns_, entries_);
 }
 
 void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
                                Eigen::VectorXd& dx) {
-  const int n_b = system_.body_count();
-  const Eigen::Index m = phi.size(), n_r = kept_total_;
-  rhs_.resize(n_r + m);
+  const Eigen::Index m = phi.size();
+  rhs_.resize(unknowns_);
   rhs_.tail(m) = -phi;
+  dx.resize(q.size() + m);
+  solve_reduced(q, residual, dx);
+}
+
+void ConstantCoreNewton::solve_coupled(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
+                                       const Eigen::VectorXd& velocity_rows, Eigen::VectorXd& dx) {
+  const Eigen::Index m = phi.size();
+  rhs_.resize(unknowns_);
+  rhs_.segment(kept_total_, m) = -phi;
+  rhs_.tail(m) = phi - velocity_rows;
+  dx.resize(q.size() + 2 * m);
+  solve_reduced(q, residual, dx);
+}
+
+void ConstantCoreNewton::solve_reduced(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, Eigen::VectorXd& dx) {
+  const int n_b = system_.body_count();
+  const Eigen::Index n_r = kept_total_, extra = unknowns_ - n_r;
   for (int b = 0; b < n_b; ++b) {
     const Eigen::Index o = system_.offset(b), n_xi = xi_count(system_.model(b));
     const Eigen::Index r_b = kept_offset_[static_cast<std::size_t>(b)], k_b = kept_[static_cast<std::size_t>(b)];
@@ -305,26 +400,25 @@ void ConstantCoreNewton::solve(const Eigen::VectorXd& q, const Eigen::VectorXd& 
     // S_ff⁻¹ r_f at the current A (the core is exact for any A; only the coupling blocks are from the factorization).
     e.residual_solution.resize(n_xi);
     core_solve(b, orientation_of(q.segment(o, 12)), residual.data() + o + 12, e.residual_solution.data());
-    e.coupled.resize(e.coupling.rows());  // per body: its size differs between bodies
-    e.coupling_kernel.multiply(e.residual_solution.data(), e.coupled.data());  // [S_rf; J_f] S_ff⁻¹ r_f
+    e.coupled.resize(e.left.rows());  // per body: its size differs between bodies
+    e.left_kernel.multiply(e.residual_solution.data(), e.coupled.data());  // L S_ff⁻¹ r_f
     rhs_.segment(r_b, 12) += e.coupled.head<12>();
-    for (std::size_t i = 0; i < e.rows.size(); ++i) rhs_(n_r + e.rows[i]) += e.coupled(12 + static_cast<Eigen::Index>(i));
+    for (std::size_t i = 0; i < e.rows.size(); ++i) rhs_(e.rows[i]) += e.coupled(12 + static_cast<Eigen::Index>(i));
   }
   reduced_->solve(rhs_, reduced_solution_);
   const Eigen::VectorXd& x = reduced_solution_;
-  // Back-substitute: Δq_f = −S_ff⁻¹ (r_f + S_fr Δq_r + J_fᵀ Δμ).
-  dx.resize(q.size() + m);
-  dx.tail(m) = x.tail(m);
+  // Back-substitute: Δq_f = −S_ff⁻¹ (r_f + R [Δq_r; x(cols)]).
+  dx.tail(extra) = x.tail(extra);
   for (int b = 0; b < n_b; ++b) {
     const Eigen::Index o = system_.offset(b), n_xi = xi_count(system_.model(b));
     const Eigen::Index r_b = kept_offset_[static_cast<std::size_t>(b)], k_b = kept_[static_cast<std::size_t>(b)];
     dx.segment(o, k_b) = x.segment(r_b, k_b);
     if (n_xi == 0) continue;
     Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
-    const auto k_rows = static_cast<Eigen::Index>(e.rows.size());
-    e.unknowns.resize(12 + k_rows);  // [Δq_r; Δμ of the rows that touch ξ]
+    const auto k_cols = static_cast<Eigen::Index>(e.cols.size());
+    e.unknowns.resize(12 + k_cols);
     e.unknowns.head<12>() = x.segment(r_b, 12);
-    for (Eigen::Index i = 0; i < k_rows; ++i) e.unknowns(12 + i) = x(n_r + e.rows[static_cast<std::size_t>(i)]);
+    for (Eigen::Index i = 0; i < k_cols; ++i) e.unknowns(12 + i) = x(e.cols[static_cast<std::size_t>(i)]);
     e.y_kernel.multiply(e.unknowns.data(), dx.data() + o + 12);
     dx.segment(o + 12, n_xi) = -(dx.segment(o + 12, n_xi) + e.residual_solution);
   }

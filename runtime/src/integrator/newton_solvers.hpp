@@ -72,16 +72,46 @@ class ConstantCoreNewton final : public NewtonSolver {
   /// The reduced matrix's solver (its last matrix: for tests).
   [[nodiscard]] const ReducedSolver& reduced() const { return *reduced_; }
 
+  /// The stabilised index-2 form's coupled step (stabilized_coupling.hpp has its derivation) as one linear system,
+  /// sparse, in the total position increment δ' = δ + P Δν, the multipliers' Δμ and Δν:
+  ///
+  ///   [S      Jᵀ   −M P] [δ' ]     [r        ]
+  ///   [J      0    0   ] [Δμ ] = − [Φ        ]      P = W Φ_q(q_n)ᵀ, Z = dΦ_q/dt along the motion,
+  ///   [Z/γ'   0    −J P] [Δν ]     [Ψ/γ' − Φ ]
+  ///
+  /// (from S δ + Jᵀ Δμ + G P Δν = −r with G = ∂r/∂q = S − M + O(damping), J δ + J P Δν = −Φ and
+  /// (J + Z/γ') δ + (Z/γ') P Δν = −Ψ/γ'). Each body's ξ is eliminated with its constant core as in factor(); the
+  /// rest is one sparse LU, where StabilizedCoupling builds m solves and an m x m LU (O(m n) and O(m³)).
+  /// `rate` is Z/γ' (m x n, the Jacobian's pattern), `direction` P (n x m, row-major), `projected` J P (m x m).
+  void factor_coupled(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a,
+                      const Eigen::VectorXd& mu, const Eigen::SparseMatrix<double>& jacobian,
+                      const Eigen::SparseMatrix<double>& rate,
+                      const Eigen::SparseMatrix<double, Eigen::RowMajor>& direction,
+                      const Eigen::SparseMatrix<double>& projected);
+  /// dx = [δ'; Δμ; Δν] (n + 2m) with the last factor_coupled(); `velocity_rows` is Ψ/γ'.
+  void solve_coupled(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
+                     const Eigen::VectorXd& velocity_rows, Eigen::VectorXd& dx);
+
  private:
   // One flexible body's part of the factorization: the constraint rows that touch its ξ, coupling = [S_rf; J_f]
   // (J_f: those rows' ξ columns) and y = S_ff⁻¹ couplingᵀ at the factorization's A.
+  // One flexible body's part of the factorization: its ξ rows read S_ff ξ + R [Δq_r; x(cols)] = −r_f, and ξ enters
+  // the reduced rows [kept; rows] as L ξ; `left` is L ((12 + |rows|) x 3 n_f), y = S_ff⁻¹ R (3 n_f x (12 + |cols|))
+  // at the factorization's A, and rows and cols are indices into the reduced system besides the body's 12 kept
+  // coordinates. Without the coupled step L = [S_rf; J_f], R = Lᵀ and rows = cols (the constraint rows on ξ).
   struct Eliminated {
-    Eigen::MatrixXd coupling, y;
-    PaddedMatrix coupling_kernel, y_kernel;  ///< the same, stored for the product kernel
-    std::vector<Eigen::Index> rows;
+    Eigen::MatrixXd left, y;
+    PaddedMatrix left_kernel, y_kernel;  ///< the same, stored for the product kernel
+    std::vector<Eigen::Index> rows, cols;
     Eigen::VectorXd residual_solution;  ///< S_ff⁻¹ r_f of the current solve (work vector)
-    Eigen::VectorXd coupled, unknowns;  ///< [S_rf; J_f] S_ff⁻¹ r_f and [Δq_r; Δμ_f] of the current solve (work)
+    Eigen::VectorXd coupled, unknowns;  ///< L S_ff⁻¹ r_f and [Δq_r; x(cols)] of the current solve (work)
   };
+  struct Coupling;  // the coupled step's extra terms (factor_coupled)
+  void assemble(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a, const Eigen::VectorXd& mu,
+                const Eigen::SparseMatrix<double>& jacobian, const Coupling* coupling);
+  /// The reduced system's solve and the back-substitution of every ξ, for the right-hand side already in rhs_'s
+  /// constraint part; dx's coordinate part is written (dx sized by the caller).
+  void solve_reduced(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, Eigen::VectorXd& dx);
   /// S_ff⁻¹ x = Â C⁻¹ Âᵀ x at the orientation a: for a block of right-hand sides (factorization), and for one
   /// (x and y of 3 n_f doubles, every iteration, through the work vectors).
   [[nodiscard]] Eigen::MatrixXd core_solve(int body, const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) const;
@@ -97,6 +127,7 @@ class ConstantCoreNewton final : public NewtonSolver {
   /// GCMS body, all 7 + n_m of a floating-frame body (whose block is dense and small: nothing to eliminate).
   std::vector<Eigen::Index> kept_offset_, kept_;
   Eigen::Index kept_total_ = 0;
+  Eigen::Index unknowns_ = 0;  ///< the reduced system's size: n_r + m, or n_r + 2 m for the coupled step
   std::unique_ptr<ReducedSolver> reduced_;  ///< of the matrix in [Δq_r; Δμ] left after eliminating every body's ξ
   std::vector<Eigen::Triplet<double>> entries_;  ///< that matrix's entries (work storage of factor())
   Eigen::VectorXd rotated_, core_y_, rhs_, reduced_solution_;  ///< work vectors of solve()

@@ -94,6 +94,10 @@ struct GeneralizedAlphaOptions {
   /// Keep the Newton matrix (and its factorization) across iterations and steps, refreshing it when the
   /// corrections stop shrinking by 4× per iteration (modified Newton: the same solution, fewer factorizations).
   bool reuse_newton_matrix = true;
+  /// ConstraintForm::stabilized_index2: solve δ, μ and ν together from the first step (stabilized_coupling.hpp)
+  /// instead of only after a step failed with the alternating step. For scenes known to need it: a chain of 64
+  /// links falling from the horizontal does (bench/README.md "scale_bench"); each Newton matrix then costs more.
+  bool coupled_from_start = false;
   /// A linear model holds for small deformations only (FORMULATION.md section 8: no geometric stiffening). A step
   /// after which a flexible body's RMS elastic displacement ‖ξ̄‖/√m exceeds this fraction of its size (the
   /// bounding-box diagonal) stops the run with a StepFailure that says so; 0 disables the check.
@@ -117,6 +121,7 @@ class StepFailure : public std::runtime_error {
 
 namespace detail {
 class NewtonSolver;
+class ConstantCoreNewton;
 class StabilizedCoupling;
 class ConstraintProjection;
 }
@@ -165,6 +170,9 @@ class GeneralizedAlpha {
  private:
   void advance(double h, double t1);  ///< one step of size h to time t1 (step, step_to)
   void build_solver(double h);        ///< the Newton solver for steps of size h (β', γ'), to be factorized
+  /// The sparse coupled stabilised step's Newton matrix at the iterate (ConstantCoreNewton::factor_coupled).
+  void build_sparse_coupling(double t1, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
+                             const Eigen::VectorXd& mu, double h, double gamma_prime);
   void check_deformation(double t, const Eigen::VectorXd& q) const;
   void check_spin(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
   [[nodiscard]] std::string last_state_diagnosis() const;
@@ -178,7 +186,8 @@ class GeneralizedAlpha {
   struct Iterate {  // step()'s Newton iterate and its residual and correction: storage reused across steps
     Eigen::VectorXd qdd, a, v, q, mu, dx, residual, predicted;
     Eigen::VectorXd phi, velocity_rows, nu, nu_step, position_step;  ///< Φ; Ψ/γ', ν, Δν, W Φ_qᵀ Δν (stabilized_index2)
-    Eigen::SparseMatrix<double> jacobian;          ///< Φ_q at the iterate
+    Eigen::SparseMatrix<double> jacobian;          ///< Φ_q at the iterate (System::sparse_constraint_jacobian)
+    Eigen::VectorXd coupled;                       ///< [δ'; Δμ; Δν] of the sparse coupled step
   } work_;
   /// ConstraintForm::stabilized_index2: Φ_q W Φ_qᵀ at the Newton matrix's iterate, factorized to detect dependent
   /// rows, and the coupling of ν to δ and μ kept with the Newton matrix (an older one only converges more slowly;
@@ -209,6 +218,9 @@ class GeneralizedAlpha {
   std::vector<std::string> warnings_;
   std::vector<char> spin_warned_;  ///< per body: its spin warning was given
   std::unique_ptr<detail::NewtonSolver> solver_;
+  /// solver_ when it is the constant core with a sparse reduced matrix: its coupled stabilised step is one sparse
+  /// system (ConstantCoreNewton::factor_coupled) instead of StabilizedCoupling's m solves; null otherwise.
+  detail::ConstantCoreNewton* sparse_core_ = nullptr;
   double solver_step_ = 0.0;  ///< the step size solver_ was built for (its β' and γ')
   int iterations_ = 0;
   long total_iterations_ = 0, factorizations_ = 0;

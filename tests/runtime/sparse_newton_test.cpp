@@ -11,6 +11,7 @@
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <cmath>
 #include <memory>
@@ -185,16 +186,16 @@ TEST(SparseNewton, AnalysesItsPatternOnceAndRefactorizes) {
 
 namespace {
 
-// A chain of 16 bodies (rigid, GCMS and FFRF in turn) side by side along x, hanging from revolute joints about z.
-std::unique_ptr<fr::System> chain() {
+// A chain of `count` bodies (rigid, GCMS and FFRF in turn) side by side along x, hanging from revolute joints about z.
+std::unique_ptr<fr::System> chain(int count = 16) {
     auto system = std::make_unique<fr::System>();
-    for (int k = 0; k < 16; ++k) {
+    for (int k = 0; k < count; ++k) {
       fr::BodyState state;
       state.position = Eigen::Vector3d(0.55 * k, 0.0, 0.0);
       system->add_body(numbered("b", k), model_of(static_cast<Kind>(k % 3)), state);
     }
     const Eigen::VectorXd q0 = system->initial_coordinates();
-    for (int k = 0; k < 16; ++k) {
+    for (int k = 0; k < count; ++k) {
       const auto [m1, p] = marker_near(*system, q0, k, Eigen::Vector3d(0.55 * k - 0.25, 0.0, 0.0));
       const int previous = k == 0 ? fr::kGround : k - 1;
       system->add_joint(fr::make_joint(numbered("j", k), fr::JointType::revolute, m1, point_on(*system, q0, previous, p),
@@ -208,6 +209,14 @@ std::unique_ptr<fr::System> chain() {
 // The chain swung for 0.1 s with the reduced matrix dense and sparse (and with the stabilised form's coupled step
 // from the start, if `coupled`: StabilizedCoupling's m solves against ConstantCoreNewton::factor_coupled); the
 // largest difference of a body's position at the end [m].
+// The chain's coordinates after `steps` steps of 1 ms with the options' reduced matrix.
+Eigen::VectorXd swing(const fr::System& system, fr::GeneralizedAlphaOptions options, int steps) {
+  options.step = 1e-3;
+  fr::GeneralizedAlpha integrator(system, options);
+  for (int s = 0; s < steps; ++s) integrator.step();
+  return integrator.coordinates();
+}
+
 double dense_against_sparse(bool coupled) {
   const auto system = chain();
   std::vector<Eigen::VectorXd> end;
@@ -234,3 +243,21 @@ double dense_against_sparse(bool coupled) {
 TEST(SparseNewton, AChainSwingsAsWithTheDenseSolve) { EXPECT_LT(dense_against_sparse(false), 1e-9); }
 
 TEST(SparseNewton, TheSparseCoupledStepMovesAChainAsTheDenseOne) { EXPECT_LT(dense_against_sparse(true), 1e-9); }
+
+// Per-body work runs on OpenMP's threads from 64 bodies on (runtime/src/kernels/parallel.hpp); each body's
+// arithmetic is the same on any thread and shared rows are summed in a fixed order, so one and two threads give the
+// same bits.
+TEST(SparseNewton, OneAndTwoThreadsGiveTheSameBits) {
+  const auto system = chain(64);
+  const int threads = omp_get_max_threads();
+  for (const bool coupled : {false, true}) {
+    fr::GeneralizedAlphaOptions options;
+    options.coupled_from_start = coupled;
+    omp_set_num_threads(1);
+    const Eigen::VectorXd one = swing(*system, options, 20);
+    omp_set_num_threads(2);
+    const Eigen::VectorXd two = swing(*system, options, 20);
+    EXPECT_TRUE(one == two) << "largest difference " << (one - two).cwiseAbs().maxCoeff();
+  }
+  omp_set_num_threads(threads);
+}

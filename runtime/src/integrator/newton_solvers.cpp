@@ -1,6 +1,7 @@
 #include "newton_solvers.hpp"
 
 #include "../kernels/dense_product.hpp"
+#include "../kernels/parallel.hpp"
 
 #include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
@@ -132,10 +133,6 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
     kept_.push_back(model.floating() ? model.coordinate_count() : 12);
     kept_total_ += kept_.back();
   }
-  Eigen::Index largest = 0;
-  for (int b = 0; b < system.body_count(); ++b) largest = std::max(largest, xi_count(system.model(b)));
-  rotated_.resize(largest);
-  core_y_.resize(largest);
 }
 
 Eigen::MatrixXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const Eigen::MatrixXd& x) const {
@@ -149,15 +146,18 @@ Eigen::MatrixXd ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& 
 
 void ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const double* x, double* y) {
   // One right-hand side (every iteration): a matrix-vector product. The 3-blocks of x are the columns of a
-  // 3 x n_f matrix, so Âᵀ x is Aᵀ X.
+  // 3 x n_f matrix, so Âᵀ x is Aᵀ X. The work vectors are the body's own (bodies run on several threads).
   const auto k = static_cast<std::size_t>(body);
   const Eigen::Index n_f = system_.model(body).field_count();
-  Eigen::Map<Eigen::Matrix3Xd> rotated(rotated_.data(), 3, n_f), core_y(core_y_.data(), 3, n_f);
+  Eliminated& e = eliminated_[k];
+  e.rotated.resize(3 * n_f);
+  e.core_y.resize(3 * n_f);
+  Eigen::Map<Eigen::Matrix3Xd> rotated(e.rotated.data(), 3, n_f), core_y(e.core_y.data(), 3, n_f);
   rotated.noalias() = a.transpose() * Eigen::Map<const Eigen::Matrix3Xd>(x, 3, n_f);
   if (sparse_cores_[k])
-    core_y_.head(3 * n_f) = sparse_cores_[k]->solve(rotated_.head(3 * n_f));
+    e.core_y = sparse_cores_[k]->solve(e.rotated);
   else
-    inverses_[k].multiply(rotated_.data(), core_y_.data());
+    inverses_[k].multiply(e.rotated.data(), e.core_y.data());
   Eigen::Map<Eigen::Matrix3Xd>(y, 3, n_f).noalias() = a * core_y;
 }
 
@@ -194,22 +194,22 @@ void ConstantCoreNewton::assemble(const Eigen::VectorXd& q, const Eigen::VectorX
   const Eigen::Index m = jacobian.rows(), n_r = kept_total_;
   const Eigen::Index nu = n_r + m;  // where the coupled step's Δν columns and velocity rows start
   unknowns_ = coupling ? n_r + 2 * m : n_r + m;
-  entries_.clear();
-  auto add_block = [this](Eigen::Index row, Eigen::Index column, const Eigen::Ref<const Eigen::MatrixXd>& block) {
+  using Entries = std::vector<Eigen::Triplet<double>>;
+  auto add_block = [](Entries& out, Eigen::Index row, Eigen::Index column, const Eigen::Ref<const Eigen::MatrixXd>& block) {
     for (Eigen::Index c = 0; c < block.cols(); ++c)
-      for (Eigen::Index r = 0; r < block.rows(); ++r) entries_.emplace_back(row + r, column + c, block(r, c));
+      for (Eigen::Index r = 0; r < block.rows(); ++r) out.emplace_back(row + r, column + c, block(r, c));
   };
   // Columns [o, o + count) of Φ_q as body b's kept coordinates (from r_b on) in the reduced matrix: J_r and J_rᵀ;
   // and of Z/γ' in the velocity rows of the coupled step.
-  auto add_jacobian = [&](Eigen::Index o, Eigen::Index count, Eigen::Index r_b) {
+  auto add_jacobian = [&](Entries& out, Eigen::Index o, Eigen::Index count, Eigen::Index r_b) {
     for (Eigen::Index c = 0; c < count; ++c) {
       for (Eigen::SparseMatrix<double>::InnerIterator it(jacobian, o + c); it; ++it) {
-        entries_.emplace_back(r_b + c, n_r + it.row(), it.value());
-        entries_.emplace_back(n_r + it.row(), r_b + c, it.value());
+        out.emplace_back(r_b + c, n_r + it.row(), it.value());
+        out.emplace_back(n_r + it.row(), r_b + c, it.value());
       }
       if (coupling)
         for (Eigen::SparseMatrix<double>::InnerIterator it(coupling->rate, o + c); it; ++it)
-          entries_.emplace_back(nu + it.row(), r_b + c, it.value());
+          out.emplace_back(nu + it.row(), r_b + c, it.value());
     }
   };
   // The rows of a column-major matrix's columns [o, o + count) with a nonzero value (sorted), and those columns as a
@@ -256,12 +256,18 @@ void ConstantCoreNewton::assemble(const Eigen::VectorXd& q, const Eigen::VectorX
   // The reduced matrix in [Δq_r (12 per GCMS body, all of a floating-frame body); Δμ (; Δν)] after eliminating every
   // GCMS body's ξ: each body's own block, its Jacobian columns, and the fill its elimination leaves among the rows
   // that touch its ξ (its Tisserand rows and its joints').
-  std::vector<Eigen::Index> touched;  // the ν columns of a body's rows of P
+  // Each body's part into its own list, on OpenMP's threads (detail::kParallelFrom); the lists are joined in body
+  // order, so the matrix is the same for any thread count.
+  body_entries_.resize(static_cast<std::size_t>(n_b));
+#pragma omp parallel for schedule(dynamic) if (n_b >= kParallelFrom)
   for (int b = 0; b < n_b; ++b) {
     const BodyModel& model = system_.model(b);
     const auto bs = static_cast<std::size_t>(b);
     const Eigen::Index r_b = kept_offset_[bs], o = system_.offset(b);
     Eliminated& e = eliminated_[bs];
+    Entries& entries = body_entries_[bs];
+    entries.clear();
+    std::vector<Eigen::Index> touched;  // the ν columns of the body's rows of P
     e.rows.clear();
     e.cols.clear();
     if (model.floating()) {  // S_b = M(q) + (∂R/∂q + γ' ∂R/∂q̇ + 2 λ_p I_pp)/β', and its springs
@@ -273,12 +279,12 @@ void ConstantCoreNewton::assemble(const Eigen::VectorXd& q, const Eigen::VectorX
         const Eigen::MatrixXd j_b = spring_jacobian(springs[s], b, size);
         s_b += j_b.transpose() * spring_k(s) * j_b;
       }
-      add_block(r_b, r_b, s_b);
-      add_jacobian(o, size, r_b);
+      add_block(entries, r_b, r_b, s_b);
+      add_jacobian(entries, o, size, r_b);
       if (coupling) {  // −M_b P_b
         const Eigen::MatrixXd mp = t.mass * direction_of(o, size, touched);
         for (Eigen::Index j = 0; j < mp.cols(); ++j)
-          for (Eigen::Index i = 0; i < size; ++i) entries_.emplace_back(r_b + i, nu + touched[static_cast<std::size_t>(j)], -mp(i, j));
+          for (Eigen::Index i = 0; i < size; ++i) entries.emplace_back(r_b + i, nu + touched[static_cast<std::size_t>(j)], -mp(i, j));
       }
       continue;
     }
@@ -308,15 +314,15 @@ void ConstantCoreNewton::assemble(const Eigen::VectorXd& q, const Eigen::VectorX
       s_rr += j_b.leftCols<12>().transpose() * kj.leftCols<12>();
       if (n_xi > 0) s_rf += j_b.leftCols<12>().transpose() * kj.rightCols(n_xi);
     }
-    add_block(r_b, r_b, s_rr);
-    add_jacobian(o, 12, r_b);
+    add_block(entries, r_b, r_b, s_rr);
+    add_jacobian(entries, o, 12, r_b);
     Eigen::MatrixXd mp;  // the coupled step's M_b P_b ((G ⊗ I3) P_b, column by column)
     if (coupling) {
       const Eigen::MatrixXd p_b = direction_of(o, 12 + n_xi, touched);
       mp.resize(p_b.rows(), p_b.cols());
       for (Eigen::Index j = 0; j < p_b.cols(); ++j) mass_times(model, p_b.col(j), mp.col(j));
       for (Eigen::Index j = 0; j < mp.cols(); ++j)
-        for (Eigen::Index i = 0; i < 12; ++i) entries_.emplace_back(r_b + i, nu + touched[static_cast<std::size_t>(j)], -mp(i, j));
+        for (Eigen::Index i = 0; i < 12; ++i) entries.emplace_back(r_b + i, nu + touched[static_cast<std::size_t>(j)], -mp(i, j));
     }
     if (n_xi == 0) continue;
     // Eliminate ξ: L = [S_rf; J_f (; Z_f/γ')] over the rows that involve this body's ξ (its reference rows and
@@ -350,8 +356,10 @@ void ConstantCoreNewton::assemble(const Eigen::VectorXd& q, const Eigen::VectorX
     };
     for (Eigen::Index c = 0; c < schur.cols(); ++c)
       for (Eigen::Index r = 0; r < schur.rows(); ++r)
-        entries_.emplace_back(reduced_index(e.rows, r), reduced_index(e.cols, c), -schur(r, c));
+        entries.emplace_back(reduced_index(e.rows, r), reduced_index(e.cols, c), -schur(r, c));
   }
+  entries_.clear();
+  for (const Entries& part : body_entries_) entries_.insert(entries_.end(), part.begin(), part.end());
   for (std::size_t s = 0; s < springs.size(); ++s) {  // a spring between two bodies: their rigid-rigid blocks
     const int b = springs[s].first, c = springs[s].second;
     if (b == kGround || c == kGround || b == c) continue;
@@ -359,8 +367,8 @@ void ConstantCoreNewton::assemble(const Eigen::VectorXd& q, const Eigen::VectorX
     const Eigen::MatrixXd j_b = spring_jacobian(springs[s], b, system_.model(b).coordinate_count()).leftCols(kept_[bs]);
     const Eigen::MatrixXd j_c = spring_jacobian(springs[s], c, system_.model(c).coordinate_count()).leftCols(kept_[cs]);
     const Eigen::Matrix3d k = spring_k(s);
-    add_block(kept_offset_[bs], kept_offset_[cs], j_b.transpose() * k * j_c);
-    add_block(kept_offset_[cs], kept_offset_[bs], j_c.transpose() * k * j_b);
+    add_block(entries_, kept_offset_[bs], kept_offset_[cs], j_b.transpose() * k * j_c);
+    add_block(entries_, kept_offset_[cs], kept_offset_[bs], j_c.transpose() * k * j_b);
   }
   if (coupling)  // the velocity rows' −J P
     for (Eigen::Index k = 0; k < coupling->projected.outerSize(); ++k)
@@ -391,24 +399,32 @@ void ConstantCoreNewton::solve_coupled(const Eigen::VectorXd& q, const Eigen::Ve
 void ConstantCoreNewton::solve_reduced(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, Eigen::VectorXd& dx) {
   const int n_b = system_.body_count();
   const Eigen::Index n_r = kept_total_, extra = unknowns_ - n_r;
+  // Per body (in parallel: each its own work vectors) S_ff⁻¹ r_f at the current A (the core is exact for any A; only
+  // the coupling blocks are from the factorization) and L S_ff⁻¹ r_f; then their sums into the shared rows, in body
+  // order.
+#pragma omp parallel for schedule(static) if (n_b >= kParallelFrom)
   for (int b = 0; b < n_b; ++b) {
     const Eigen::Index o = system_.offset(b), n_xi = xi_count(system_.model(b));
     const Eigen::Index r_b = kept_offset_[static_cast<std::size_t>(b)], k_b = kept_[static_cast<std::size_t>(b)];
     rhs_.segment(r_b, k_b) = -residual.segment(o, k_b);
     if (n_xi == 0) continue;
     Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
-    // S_ff⁻¹ r_f at the current A (the core is exact for any A; only the coupling blocks are from the factorization).
     e.residual_solution.resize(n_xi);
     core_solve(b, orientation_of(q.segment(o, 12)), residual.data() + o + 12, e.residual_solution.data());
     e.coupled.resize(e.left.rows());  // per body: its size differs between bodies
     e.left_kernel.multiply(e.residual_solution.data(), e.coupled.data());  // L S_ff⁻¹ r_f
-    rhs_.segment(r_b, 12) += e.coupled.head<12>();
+  }
+  for (int b = 0; b < n_b; ++b) {
+    if (xi_count(system_.model(b)) == 0) continue;
+    const Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
+    rhs_.segment(kept_offset_[static_cast<std::size_t>(b)], 12) += e.coupled.head<12>();
     for (std::size_t i = 0; i < e.rows.size(); ++i) rhs_(e.rows[i]) += e.coupled(12 + static_cast<Eigen::Index>(i));
   }
   reduced_->solve(rhs_, reduced_solution_);
   const Eigen::VectorXd& x = reduced_solution_;
-  // Back-substitute: Δq_f = −S_ff⁻¹ (r_f + R [Δq_r; x(cols)]).
+  // Back-substitute: Δq_f = −S_ff⁻¹ (r_f + R [Δq_r; x(cols)]), each body into its own rows.
   dx.tail(extra) = x.tail(extra);
+#pragma omp parallel for schedule(static) if (n_b >= kParallelFrom)
   for (int b = 0; b < n_b; ++b) {
     const Eigen::Index o = system_.offset(b), n_xi = xi_count(system_.model(b));
     const Eigen::Index r_b = kept_offset_[static_cast<std::size_t>(b)], k_b = kept_[static_cast<std::size_t>(b)];

@@ -105,6 +105,7 @@ class ConstantCoreNewton final : public NewtonSolver {
     std::vector<Eigen::Index> rows, cols;
     Eigen::VectorXd residual_solution;  ///< S_ff⁻¹ r_f of the current solve (work vector)
     Eigen::VectorXd coupled, unknowns;  ///< L S_ff⁻¹ r_f and [Δq_r; x(cols)] of the current solve (work)
+    Eigen::VectorXd rotated, core_y;    ///< core_solve's work vectors (the body's own: bodies run in parallel)
   };
   struct Coupling;  // the coupled step's extra terms (factor_coupled)
   void assemble(const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a, const Eigen::VectorXd& mu,
@@ -130,7 +131,8 @@ class ConstantCoreNewton final : public NewtonSolver {
   Eigen::Index unknowns_ = 0;  ///< the reduced system's size: n_r + m, or n_r + 2 m for the coupled step
   std::unique_ptr<ReducedSolver> reduced_;  ///< of the matrix in [Δq_r; Δμ] left after eliminating every body's ξ
   std::vector<Eigen::Triplet<double>> entries_;  ///< that matrix's entries (work storage of factor())
-  Eigen::VectorXd rotated_, core_y_, rhs_, reduced_solution_;  ///< work vectors of solve()
+  std::vector<std::vector<Eigen::Triplet<double>>> body_entries_;  ///< per body, its part of them
+  Eigen::VectorXd rhs_, reduced_solution_;  ///< work vectors of solve()
 };
 
 }  // namespace flexbody::runtime::detail

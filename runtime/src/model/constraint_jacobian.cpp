@@ -3,6 +3,8 @@
 #include "flexbody/runtime/reference_constraints.hpp"
 #include "flexbody/runtime/system.hpp"
 
+#include "../kernels/parallel.hpp"
+
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseQR>
@@ -35,9 +37,12 @@ void System::sparse_constraint_jacobian(double t, const Eigen::VectorXd& q, Eige
         for (int d = 0; d < 3; ++d) entries.emplace_back(row + 9 + d, b.offset + 12 + 3 * f + d, b.model.g_border(0, 4 + f));
     row += reference_rows(b);
   }
+  const auto count = static_cast<int>(joints_.size());
+#pragma omp parallel for schedule(static) if (count >= detail::kParallelFrom)  // each joint its own work storage
+  for (int k = 0; k < count; ++k) evaluated(static_cast<std::size_t>(k), t, q);
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
-    const JointEvaluation& e = evaluated(k, t, q);
+    const JointEvaluation& e = joint_work_[k];
     // Both markers on one body: their blocks add up (setFromTriplets sums duplicates).
     if (j.first.body != kGround) add_block(row, offset(j.first.body), e.jacobian_first);
     if (j.second.body != kGround) add_block(row, offset(j.second.body), e.jacobian_second);

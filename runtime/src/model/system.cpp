@@ -2,6 +2,7 @@
 
 #include "../body/gcms_elastic_padded.hpp"
 #include "../kernels/outer_sum.hpp"
+#include "../kernels/parallel.hpp"
 
 #include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
@@ -289,7 +290,11 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
 void System::dynamic_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
                               Eigen::VectorXd& out) const {
   out.resize(coordinates_);
-  for (const Body& b : bodies_) {
+  const int count = body_count();
+  // Each body writes its own slice from its own workspace (detail::kParallelFrom).
+#pragma omp parallel for schedule(static) if (count >= detail::kParallelFrom)
+  for (int k = 0; k < count; ++k) {
+    const Body& b = bodies_[static_cast<std::size_t>(k)];
     const Eigen::Index n = b.model.coordinate_count();
     auto out_b = out.segment(b.offset, n);
     if (b.model.floating()) {  // R(q, q̇, q̈) in one pass over the invariants
@@ -543,14 +548,17 @@ void System::constraints_and_rates(double t, const Eigen::VectorXd& q, const Eig
                                    Eigen::VectorXd& rate) const {
   phi.resize(constraint_count());
   rate.resize(constraint_count());
-  Eigen::Index row = reference_residuals(q, phi);
+  reference_residuals(q, phi);
   reference_rates(q, v, rate);
-  for (std::size_t k = 0; k < joints_.size(); ++k) {  // each joint evaluated once for both
-    const Joint& j = joints_[k];
-    const JointEvaluation& e = evaluated(k, t, q);
+  const auto count = static_cast<int>(joints_.size());
+  // Each joint evaluated once for both, into its own rows and work storage.
+#pragma omp parallel for schedule(static) if (count >= detail::kParallelFrom)
+  for (int k = 0; k < count; ++k) {
+    const Joint& j = joints_[static_cast<std::size_t>(k)];
+    const JointEvaluation& e = evaluated(static_cast<std::size_t>(k), t, q);
+    const Eigen::Index row = reference_total_ + joint_start_[static_cast<std::size_t>(k)];
     phi.segment(row, j.rows()) = e.residual;
     joint_rate(j, e, v, rate.segment(row, j.rows()));
-    row += j.rows();
   }
 }
 
@@ -587,9 +595,14 @@ void System::add_constraint_jacobian_transpose_product(double t, const Eigen::Ve
         out.segment<3>(b.offset + 12 + 3 * f) += b.model.g_border(0, 4 + f) * mu.segment<3>(row + 9);
     row += reference_rows(b);
   }
+  const auto count = static_cast<int>(joints_.size());
+  if (count >= detail::kParallelFrom) {  // the evaluations in parallel; the sums below in joint order
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < count; ++k) evaluated(static_cast<std::size_t>(k), t, q);
+  }
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
-    const JointEvaluation& e = evaluated(k, t, q);
+    const JointEvaluation& e = count >= detail::kParallelFrom ? joint_work_[k] : evaluated(k, t, q);
     const auto mu_j = mu.segment(row, j.rows());
     if (j.first.body != kGround)
       out.segment(offset(j.first.body), e.jacobian_first.cols()).noalias() += e.jacobian_first.transpose() * mu_j;

@@ -88,6 +88,17 @@ int main(int argc, char** argv) {
     j["newton_iterations"] = summary.newton_iterations;
     j["newton_matrices"] = summary.newton_matrices;
     j["linear_solver"] = summary.sparse ? "sparse" : "dense";
+    {
+      const flexbody::runtime::AssemblyReport& a = scene.assembly;
+      nlohmann::ordered_json assembly;
+      assembly["iterations"] = a.iterations;
+      assembly["largest_gap_m"] = a.largest_gap;
+      const int moved = a.most_moved();
+      assembly["largest_move_m"] = moved >= 0 ? a.moves[static_cast<std::size_t>(moved)] : 0.0;
+      assembly["most_moved_body"] = moved >= 0 ? scene.system.body_name(moved) : std::string();
+      assembly["moves_m"] = a.moves;
+      j["assembly"] = assembly;
+    }
     j["cpu_s"] = summary.cpu_seconds;
     j["energy_initial_j"] = summary.energy_initial;
     j["energy_final_j"] = summary.energy_final;
@@ -115,6 +126,10 @@ int main(int argc, char** argv) {
                              summary.cpu_seconds);
     std::cout << fmt::format("  {} Newton matrices, factorized {}\n", summary.newton_matrices,
                              summary.sparse ? "sparse (KLU)" : "dense");
+    if (const int moved = scene.assembly.most_moved(); scene.assembly.iterations > 0 && moved >= 0)
+      std::cout << fmt::format("  assembly: joint gaps up to {:.3g} m closed in {} steps; largest move {:.3g} m (body '{}')\n",
+                               scene.assembly.largest_gap, scene.assembly.iterations,
+                               scene.assembly.moves[static_cast<std::size_t>(moved)], scene.system.body_name(moved));
     std::cout << fmt::format("  {:.1f} us per step ({:.1f} in the integrator, the rest checks and outputs)\n",
                              1e6 * summary.wall_seconds / std::max(1.0, static_cast<double>(summary.steps)),
                              1e6 * summary.integrator_wall_seconds / std::max(1.0, static_cast<double>(summary.steps)));

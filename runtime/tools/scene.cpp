@@ -71,7 +71,8 @@ Scene read_scene(const std::filesystem::path& file) {
   const YAML::Node loaded_root = r.load("scene");
   const YAML::Node& root = loaded_root;
   r.expect_map(root, "the scene",
-               {"bodies", "joints", "forces", "springs", "gravity", "integrator", "outputs", "monitors", "paraview"});
+               {"bodies", "joints", "forces", "springs", "gravity", "integrator", "outputs", "monitors", "paraview",
+                "assembly"});
   Scene scene;
   const std::filesystem::path base = file.parent_path();
   std::map<std::string, LoadedBody> bodies;
@@ -559,6 +560,24 @@ Scene read_scene(const std::filesystem::path& file) {
   }
   scene.conserves.energy = !applied_loads && !damped_springs && !damped_bodies && !driven;
   scene.conserves.angular_momentum = scene.conserves.energy && !joints_to_ground && !springs_to_ground;
+
+  // assembly: {tolerance: fraction of a body's size}: close the joints' gaps (an interface's point comes from a mesh,
+  // micrometres off the CAD's nominal position) by the least mass-weighted move of the bodies (runtime/assembly.hpp).
+  runtime::AssemblyOptions assembly;
+  const YAML::Node assembly_node = root["assembly"];
+  if (assembly_node) {
+    r.expect_map(assembly_node, "assembly", {"tolerance"});
+    if (const YAML::Node tol = assembly_node["tolerance"]) {
+      assembly.tolerance = r.positive(tol, "assembly tolerance");
+      if (assembly.tolerance > 1.0)
+        r.fail(tol, fmt::format("assembly tolerance {} is a fraction of a body's size; at most 1", assembly.tolerance));
+    }
+  }
+  try {
+    scene.assembly = runtime::assemble(scene.system, assembly);
+  } catch (const runtime::AssemblyError& e) {
+    r.fail(e.joint < joint_nodes.size() ? joint_nodes[e.joint] : root, e.what());
+  }
   return scene;
 }
 

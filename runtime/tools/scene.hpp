@@ -2,6 +2,7 @@
 // scene.hpp: fbsim's scene file (YAML): bodies from body files, joints, forces, gravity, integrator settings and
 // outputs, read into a runtime System. Every error is one "<scene>:<line>: <problem>" line.
 
+#include "flexbody/runtime/assembly.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
 
@@ -55,6 +56,7 @@ struct Scene {
   std::vector<SurfaceSeries> paraview;  ///< DIR/<body>.pvd + DIR/<body>/*.vtu
   int paraview_every = 1;               ///< a frame every n-th step
   Conservation conserves;
+  runtime::AssemblyReport assembly;  ///< how the initial assembly moved the bodies
 };
 
 /// The most steps a scene may take: a step many orders too small (1e-20 s for 1e-4 s) would otherwise run for

@@ -97,6 +97,32 @@ TEST(FbsimCli, TheIssuesPendulumSceneRuns) {
   EXPECT_NEAR(y0 - y1, 0.0184, 0.002);
 }
 
+// Two bars, the second's root pinned to the first's tip, placed `offset` m along x beyond it: the initial assembly
+// closes a mesh-sized gap, reports it, and refuses a gap of a tenth of a bar naming the joint.
+std::string two_bars(double offset) {
+  return "bodies:\n  first: {file: bar.fbh5, modes: 4}\n  second: {file: bar.fbh5, modes: 4, position: [" +
+         std::to_string(1.0 + offset) + ", 0, 0]}\njoints:\n"
+         "  pivot: {type: revolute, body: first, interface: root, to: ground, axis: [0, 0, 1]}\n"
+         "  link: {type: revolute, body: second, interface: root, to: {body: first, interface: tip}, axis: [0, 0, 1]}\n"
+         "gravity: [0, -9.81, 0]\nintegrator: {type: generalized-alpha, step: 1.0e-3, end: 0.01}\n";
+}
+
+TEST(FbsimCli, AssemblesAMicrometreGapAndRefusesATenthOfABar) {
+  const auto& dir = bar_folder();
+  write_text(dir / "gap.yaml", two_bars(5e-6));
+  const CliRun run = run_fbsim(dir, "gap.yaml -o gap_out --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto assembly = nlohmann::json::parse(run.out)["assembly"];
+  EXPECT_GE(assembly["iterations"].get<int>(), 1);
+  EXPECT_NEAR(assembly["largest_gap_m"].get<double>(), 5e-6, 1e-9);  // the position's rounding, to_string's 6 digits
+  ASSERT_EQ(assembly["moves_m"].size(), 2u);
+  // The two bars share the 5 µm: each moves by part of it, with the lever of its turn about the pivot.
+  for (const auto& move : assembly["moves_m"]) EXPECT_LT(move.get<double>(), 2 * 5e-6);
+  EXPECT_GT(assembly["largest_move_m"].get<double>(), 1e-6);
+  expect_scene_error(two_bars(0.1), 6,
+                     "joint 'link': its markers second/root and first/tip are 0.1 m apart; closing them moves body");
+}
+
 TEST(FbsimCli, BadScenesNameTheLine) {
   const std::string head = "bodies:\n  bar: {file: bar.fbh5, modes: 2}\n";
   const std::string tail = "integrator: {step: 1.0e-3, end: 0.01}\n";

@@ -117,6 +117,9 @@ class System {
   [[nodiscard]] Eigen::Index coordinate_count() const { return coordinates_; }
   [[nodiscard]] Eigen::Index constraint_count() const;
   [[nodiscard]] Eigen::VectorXd initial_coordinates() const;
+  /// Replaces every body's initial position, orientation and deformation by those of q (assembly.hpp); the initial
+  /// velocities stay. Throws std::invalid_argument for an orientation that is not a rotation to 1e-9.
+  void set_initial_coordinates(const Eigen::VectorXd& q);
   [[nodiscard]] Eigen::VectorXd initial_velocities() const;
   /// The coordinates of one body (a copy); empty for kGround.
   [[nodiscard]] Eigen::VectorXd body_coordinates(const Eigen::VectorXd& q, int body) const;

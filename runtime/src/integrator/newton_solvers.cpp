@@ -259,8 +259,7 @@ void ConstantCoreNewton::assemble(const Eigen::VectorXd& q, const Eigen::VectorX
   // Each body's part into its own list, on OpenMP's threads (detail::kParallelFrom); the lists are joined in body
   // order, so the matrix is the same for any thread count.
   body_entries_.resize(static_cast<std::size_t>(n_b));
-#pragma omp parallel for schedule(dynamic) if (n_b >= kParallelFrom)
-  for (int b = 0; b < n_b; ++b) {
+  for_each(n_b, [&](int b) {
     const BodyModel& model = system_.model(b);
     const auto bs = static_cast<std::size_t>(b);
     const Eigen::Index r_b = kept_offset_[bs], o = system_.offset(b);
@@ -286,7 +285,7 @@ void ConstantCoreNewton::assemble(const Eigen::VectorXd& q, const Eigen::VectorX
         for (Eigen::Index j = 0; j < mp.cols(); ++j)
           for (Eigen::Index i = 0; i < size; ++i) entries.emplace_back(r_b + i, nu + touched[static_cast<std::size_t>(j)], -mp(i, j));
       }
-      continue;
+      return;
     }
     const Eigen::Index n_xi = 3 * model.field_count(), n_f = model.field_count();
     const VectorRef q_b = q.segment(o, 12 + n_xi);
@@ -324,7 +323,7 @@ void ConstantCoreNewton::assemble(const Eigen::VectorXd& q, const Eigen::VectorX
       for (Eigen::Index j = 0; j < mp.cols(); ++j)
         for (Eigen::Index i = 0; i < 12; ++i) entries.emplace_back(r_b + i, nu + touched[static_cast<std::size_t>(j)], -mp(i, j));
     }
-    if (n_xi == 0) continue;
+    if (n_xi == 0) return;
     // Eliminate ξ: L = [S_rf; J_f (; Z_f/γ')] over the rows that involve this body's ξ (its reference rows and
     // joints), R = [S_fr, J_fᵀ (, −(M P)_f)].
     std::vector<Eigen::Index> constraint_rows, rate_rows;
@@ -357,7 +356,7 @@ void ConstantCoreNewton::assemble(const Eigen::VectorXd& q, const Eigen::VectorX
     for (Eigen::Index c = 0; c < schur.cols(); ++c)
       for (Eigen::Index r = 0; r < schur.rows(); ++r)
         entries.emplace_back(reduced_index(e.rows, r), reduced_index(e.cols, c), -schur(r, c));
-  }
+  });
   entries_.clear();
   for (const Entries& part : body_entries_) entries_.insert(entries_.end(), part.begin(), part.end());
   for (std::size_t s = 0; s < springs.size(); ++s) {  // a spring between two bodies: their rigid-rigid blocks
@@ -402,18 +401,17 @@ void ConstantCoreNewton::solve_reduced(const Eigen::VectorXd& q, const Eigen::Ve
   // Per body (in parallel: each its own work vectors) S_ff⁻¹ r_f at the current A (the core is exact for any A; only
   // the coupling blocks are from the factorization) and L S_ff⁻¹ r_f; then their sums into the shared rows, in body
   // order.
-#pragma omp parallel for schedule(static) if (n_b >= kParallelFrom)
-  for (int b = 0; b < n_b; ++b) {
+  for_each(n_b, [&](int b) {
     const Eigen::Index o = system_.offset(b), n_xi = xi_count(system_.model(b));
     const Eigen::Index r_b = kept_offset_[static_cast<std::size_t>(b)], k_b = kept_[static_cast<std::size_t>(b)];
     rhs_.segment(r_b, k_b) = -residual.segment(o, k_b);
-    if (n_xi == 0) continue;
+    if (n_xi == 0) return;
     Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
     e.residual_solution.resize(n_xi);
     core_solve(b, orientation_of(q.segment(o, 12)), residual.data() + o + 12, e.residual_solution.data());
     e.coupled.resize(e.left.rows());  // per body: its size differs between bodies
     e.left_kernel.multiply(e.residual_solution.data(), e.coupled.data());  // L S_ff⁻¹ r_f
-  }
+  });
   for (int b = 0; b < n_b; ++b) {
     if (xi_count(system_.model(b)) == 0) continue;
     const Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
@@ -424,12 +422,11 @@ void ConstantCoreNewton::solve_reduced(const Eigen::VectorXd& q, const Eigen::Ve
   const Eigen::VectorXd& x = reduced_solution_;
   // Back-substitute: Δq_f = −S_ff⁻¹ (r_f + R [Δq_r; x(cols)]), each body into its own rows.
   dx.tail(extra) = x.tail(extra);
-#pragma omp parallel for schedule(static) if (n_b >= kParallelFrom)
-  for (int b = 0; b < n_b; ++b) {
+  for_each(n_b, [&](int b) {
     const Eigen::Index o = system_.offset(b), n_xi = xi_count(system_.model(b));
     const Eigen::Index r_b = kept_offset_[static_cast<std::size_t>(b)], k_b = kept_[static_cast<std::size_t>(b)];
     dx.segment(o, k_b) = x.segment(r_b, k_b);
-    if (n_xi == 0) continue;
+    if (n_xi == 0) return;
     Eliminated& e = eliminated_[static_cast<std::size_t>(b)];
     const auto k_cols = static_cast<Eigen::Index>(e.cols.size());
     e.unknowns.resize(12 + k_cols);
@@ -437,7 +434,7 @@ void ConstantCoreNewton::solve_reduced(const Eigen::VectorXd& q, const Eigen::Ve
     for (Eigen::Index i = 0; i < k_cols; ++i) e.unknowns(12 + i) = x(e.cols[static_cast<std::size_t>(i)]);
     e.y_kernel.multiply(e.unknowns.data(), dx.data() + o + 12);
     dx.segment(o + 12, n_xi) = -(dx.segment(o + 12, n_xi) + e.residual_solution);
-  }
+  });
 }
 
 }  // namespace flexbody::runtime::detail

@@ -31,7 +31,7 @@ class ReducedSolver {
   /// x = A⁻¹ b (x resized to b's size; not b). A singular matrix gives non-finite entries, which the integrator
   /// reports as a singular Newton matrix.
   virtual void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) = 0;
-  /// The matrix of the last factor(), sparse (for tests).
+  /// The matrix of the last factor(), sparse (for tests; the dense solver's has its size only).
   [[nodiscard]] const Eigen::SparseMatrix<double>& matrix() const { return matrix_; }
 
  protected:
@@ -44,6 +44,7 @@ class DenseReducedSolver final : public ReducedSolver {
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) override;
 
  private:
+  Eigen::MatrixXd dense_;
   PaddedMatrix inverse_;
 };
 

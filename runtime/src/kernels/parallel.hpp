@@ -11,4 +11,17 @@ namespace flexbody::runtime::detail {
 /// (libgomp's waiting threads lose their core), so only loops of some 64 µs and more are split.
 inline constexpr int kParallelFrom = 64;
 
+/// f(k) for k = 0 ... count − 1: on OpenMP's threads from kParallelFrom on, in a plain loop below it. (Not an
+/// `if` clause: a parallel region that runs on one thread still costs about 1 µs to enter, which made a one-body
+/// step of a rigid pendulum 2.8 times slower.)
+template <class F>
+void for_each(int count, F&& f) {
+  if (count >= kParallelFrom) {
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < count; ++k) f(k);
+  } else {
+    for (int k = 0; k < count; ++k) f(k);
+  }
+}
+
 }  // namespace flexbody::runtime::detail

@@ -15,7 +15,8 @@
 namespace flexbody::runtime {
 
 void System::sparse_constraint_jacobian(double t, const Eigen::VectorXd& q, Eigen::SparseMatrix<double>& out) const {
-  std::vector<Eigen::Triplet<double>> entries;
+  std::vector<Eigen::Triplet<double>>& entries = jacobian_work_;  // kept: its storage is reused
+  entries.clear();
   auto add_block = [&entries](Eigen::Index row, Eigen::Index column, const Eigen::Ref<const Eigen::MatrixXd>& block) {
     for (Eigen::Index c = 0; c < block.cols(); ++c)
       for (Eigen::Index r = 0; r < block.rows(); ++r) entries.emplace_back(row + r, column + c, block(r, c));
@@ -38,8 +39,7 @@ void System::sparse_constraint_jacobian(double t, const Eigen::VectorXd& q, Eige
     row += reference_rows(b);
   }
   const auto count = static_cast<int>(joints_.size());
-#pragma omp parallel for schedule(static) if (count >= detail::kParallelFrom)  // each joint its own work storage
-  for (int k = 0; k < count; ++k) evaluated(static_cast<std::size_t>(k), t, q);
+  detail::for_each(count, [&](int k) { evaluated(static_cast<std::size_t>(k), t, q); });  // each its own storage
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
     const JointEvaluation& e = joint_work_[k];

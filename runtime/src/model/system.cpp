@@ -308,21 +308,20 @@ void System::dynamic_residual(double t, const Eigen::VectorXd& q, const Eigen::V
   out.resize(coordinates_);
   const int count = body_count();
   // Each body writes its own slice from its own workspace (detail::kParallelFrom).
-#pragma omp parallel for schedule(static) if (count >= detail::kParallelFrom)
-  for (int k = 0; k < count; ++k) {
+  detail::for_each(count, [&](int k) {
     const Body& b = bodies_[static_cast<std::size_t>(k)];
     const Eigen::Index n = b.model.coordinate_count();
     auto out_b = out.segment(b.offset, n);
     if (b.model.floating()) {  // R(q, q̇, q̈) in one pass over the invariants
       ffrf_residual(*b.model.floating_frame, q.segment(b.offset, n), v.segment(b.offset, n), qdd.segment(b.offset, n),
                     gravity_, b.work, out_b);
-      continue;
+      return;
     }
     mass_times(b.model, qdd.segment(b.offset, n), out_b);
     out_b = -out_b;
     add_body_forces(b, q, v, out_b);
     out_b = -out_b;
-  }
+  });
   add_applied_forces(t, q, v, -1.0, out);
 }
 
@@ -568,14 +567,13 @@ void System::constraints_and_rates(double t, const Eigen::VectorXd& q, const Eig
   reference_rates(q, v, rate);
   const auto count = static_cast<int>(joints_.size());
   // Each joint evaluated once for both, into its own rows and work storage.
-#pragma omp parallel for schedule(static) if (count >= detail::kParallelFrom)
-  for (int k = 0; k < count; ++k) {
+  detail::for_each(count, [&](int k) {
     const Joint& j = joints_[static_cast<std::size_t>(k)];
     const JointEvaluation& e = evaluated(static_cast<std::size_t>(k), t, q);
     const Eigen::Index row = reference_total_ + joint_start_[static_cast<std::size_t>(k)];
     phi.segment(row, j.rows()) = e.residual;
     joint_rate(j, e, v, rate.segment(row, j.rows()));
-  }
+  });
 }
 
 Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) const {
@@ -612,10 +610,8 @@ void System::add_constraint_jacobian_transpose_product(double t, const Eigen::Ve
     row += reference_rows(b);
   }
   const auto count = static_cast<int>(joints_.size());
-  if (count >= detail::kParallelFrom) {  // the evaluations in parallel; the sums below in joint order
-#pragma omp parallel for schedule(static)
-    for (int k = 0; k < count; ++k) evaluated(static_cast<std::size_t>(k), t, q);
-  }
+  if (count >= detail::kParallelFrom)  // the evaluations in parallel; the sums below in joint order
+    detail::for_each(count, [&](int k) { evaluated(static_cast<std::size_t>(k), t, q); });
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
     const JointEvaluation& e = count >= detail::kParallelFrom ? joint_work_[k] : evaluated(k, t, q);

@@ -252,6 +252,7 @@ class System {
   void check_marker(const Marker& m, const std::string& what) const;
   std::deque<Body> bodies_;  ///< a deque: add_body never moves a body, so references to its model stay valid
   std::vector<Joint> joints_;
+  mutable std::vector<Eigen::Triplet<double>> jacobian_work_;  ///< sparse_constraint_jacobian's entries
   mutable std::vector<JointEvaluation> joint_work_;  ///< per joint: its last evaluation's storage
   mutable std::vector<std::array<Eigen::MatrixXd, 2>> spring_work_;  ///< per spring: its markers' position Jacobians
   std::vector<PointForce> forces_;

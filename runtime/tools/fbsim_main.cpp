@@ -5,6 +5,8 @@
 #include "run.hpp"
 #include "scene.hpp"
 
+#include "flexbody/runtime/threads.hpp"
+
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -34,6 +36,11 @@ int main(int argc, char** argv) {
   app.add_option("-o,--output", output, "directory for the CSV files (default: <scene name>_results, here)");
   app.add_flag("--json", json, "print the run summary as one JSON object on stdout");
   app.add_flag("-q,--quiet", quiet, "no progress and no summary (errors still go to stderr)");
+  int threads = 1;
+  app.add_option("--threads", threads,
+                 "threads for the per-body work of scenes of 64 bodies and more (default 1: with the cores shared, more "
+                 "threads are far slower; results are the same bits for any count)")
+      ->check(CLI::Range(1, 1024));
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -41,6 +48,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return fail(std::string(e.what()) + " (see fbsim --help)", kBadInput);
   }
+  flexbody::runtime::set_threads(threads);
   const std::filesystem::path scene_path(scene_file);
   const std::filesystem::path directory =
       output.empty() ? std::filesystem::path(scene_path.stem().string() + "_results") : std::filesystem::path(output);

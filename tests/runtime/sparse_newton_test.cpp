@@ -7,11 +7,11 @@
 #include "flexbody/runtime/ffrf_model.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
+#include "flexbody/runtime/threads.hpp"
 #include "test_bodies.hpp"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
-#include <omp.h>
 
 #include <cmath>
 #include <memory>
@@ -244,20 +244,19 @@ TEST(SparseNewton, AChainSwingsAsWithTheDenseSolve) { EXPECT_LT(dense_against_sp
 
 TEST(SparseNewton, TheSparseCoupledStepMovesAChainAsTheDenseOne) { EXPECT_LT(dense_against_sparse(true), 1e-9); }
 
-// Per-body work runs on OpenMP's threads from 64 bodies on (runtime/src/kernels/parallel.hpp); each body's
-// arithmetic is the same on any thread and shared rows are summed in a fixed order, so one and two threads give the
+// Per-body work runs on the threads set_threads asks for, from 64 bodies on (runtime/src/kernels/parallel.hpp);
+// each body's arithmetic is the same on any thread and shared rows are summed in a fixed order, so one and two threads give the
 // same bits.
 TEST(SparseNewton, OneAndTwoThreadsGiveTheSameBits) {
   const auto system = chain(64);
-  const int threads = omp_get_max_threads();
   for (const bool coupled : {false, true}) {
     fr::GeneralizedAlphaOptions options;
     options.coupled_from_start = coupled;
-    omp_set_num_threads(1);
+    fr::set_threads(1);
     const Eigen::VectorXd one = swing(*system, options, 20);
-    omp_set_num_threads(2);
+    fr::set_threads(2);
     const Eigen::VectorXd two = swing(*system, options, 20);
     EXPECT_TRUE(one == two) << "largest difference " << (one - two).cwiseAbs().maxCoeff();
   }
-  omp_set_num_threads(threads);
+  fr::set_threads(1);
 }

@@ -3,6 +3,8 @@
 // that body's storage and is the same arithmetic on any thread, so results are bit-identical for any thread count;
 // what several bodies add into shared rows (joints, springs) is summed afterwards, in body or joint order.
 
+#include "flexbody/runtime/threads.hpp"
+
 namespace flexbody::runtime::detail {
 
 /// From this many bodies (or joints) on, a per-body loop runs in parallel. A GCMS body's forces take ~1 µs at 6 modes,
@@ -13,11 +15,11 @@ inline constexpr int kParallelFrom = 64;
 
 /// f(k) for k = 0 ... count − 1: on OpenMP's threads from kParallelFrom on, in a plain loop below it. (Not an
 /// `if` clause: a parallel region that runs on one thread still costs about 1 µs to enter, which made a one-body
-/// step of a rigid pendulum 2.8 times slower.)
+/// step of a rigid pendulum 2.8 times slower.) On one thread unless set_threads asked for more (threads.hpp).
 template <class F>
 void for_each(int count, F&& f) {
-  if (count >= kParallelFrom) {
-#pragma omp parallel for schedule(static)
+  if (const int threads = runtime::threads(); threads > 1 && count >= kParallelFrom) {
+#pragma omp parallel for schedule(static) num_threads(threads)
     for (int k = 0; k < count; ++k) f(k);
   } else {
     for (int k = 0; k < count; ++k) f(k);

@@ -34,17 +34,12 @@ extern "C" void* realloc(void* pointer, std::size_t size) {
 }
 
 namespace fr = flexbody::runtime;
-namespace fp = flexbody::preprocess;
 
 namespace {
 
 // A soft bar 1 x 0.04 x 0.02 m (E 5e9 Pa, ρ 1000 kg/m³; 10 x 2 x 1 Kuhn-split cells), its first 4 free-free modes.
 const flexbody::format::BodyData& bar() {
-  static const flexbody::format::BodyData data = [] {
-    const fp::Material soft{"soft", 5e9, 0.3, 1000.0};
-    return flexbody::test::free_free_body(flexbody::test::assemble(flexbody::test::box_mesh(1.0, 0.04, 0.02, 10, 2, 1), soft),
-                                          soft, 4);
-  }();
+  static const flexbody::format::BodyData data = flexbody::test::soft_bar(1.0, 10, 4);
   return data;
 }
 

@@ -12,17 +12,12 @@
 #include <string>
 
 namespace fr = flexbody::runtime;
-namespace fp = flexbody::preprocess;
 
 namespace {
 
 // A soft bar 0.5 x 0.04 x 0.02 m (E 5e9 Pa, ρ 1000 kg/m³), its first 3 free-free modes.
 const flexbody::format::BodyData& bar() {
-  static const flexbody::format::BodyData data = [] {
-    const fp::Material soft{"soft", 5e9, 0.3, 1000.0};
-    return flexbody::test::free_free_body(flexbody::test::assemble(flexbody::test::box_mesh(0.5, 0.04, 0.02, 6, 2, 1), soft),
-                                          soft, 3);
-  }();
+  static const flexbody::format::BodyData data = flexbody::test::soft_bar(0.5, 6, 3);
   return data;
 }
 

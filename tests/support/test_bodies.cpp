@@ -22,4 +22,9 @@ format::BodyData free_free_body(const AssembledMesh& mesh, const preprocess::Mat
   return b;
 }
 
+format::BodyData soft_bar(double length, int cells, int modes) {
+  const preprocess::Material soft{"soft", 5e9, 0.3, 1000.0};
+  return free_free_body(assemble(box_mesh(length, 0.04, 0.02, cells, 2, 1), soft), soft, modes);
+}
+
 }  // namespace flexbody::test

@@ -89,7 +89,12 @@ void SparseReducedSolver::factor(Eigen::Index size, const std::vector<Eigen::Tri
   klu_->free_numeric();
   klu_->numeric = klu_factor(outer, inner, values, klu_->symbolic, &klu_->common);
   ++pivoting_;
-  if (!klu_->numeric) return;  // singular (KLU_SINGULAR) or out of memory: solve() reports it as non-finite
+  if (!klu_->numeric) {  // singular: solve() reports it as non-finite, and the integrator names it
+    if (klu_->common.status == KLU_SINGULAR) return;
+    throw std::runtime_error("KLU could not factorize the reduced Newton matrix (" + std::to_string(size) +
+                             " rows): status " + std::to_string(klu_->common.status) +
+                             (klu_->common.status == KLU_OUT_OF_MEMORY ? " (out of memory)" : ""));
+  }
   klu_rcond(klu_->symbolic, klu_->numeric, &klu_->common);
   fresh_rcond_ = klu_->common.rcond;
   singular_ = !(fresh_rcond_ > 0.0);

@@ -5,6 +5,8 @@
 
 #include "flexbody/runtime/threads.hpp"
 
+#include <exception>
+
 namespace flexbody::runtime::detail {
 
 /// From this many bodies (or joints) on, a per-body loop runs in parallel. A GCMS body's forces take ~1 µs at 6 modes,
@@ -19,8 +21,18 @@ inline constexpr int kParallelFrom = 64;
 template <class F>
 void for_each(int count, F&& f) {
   if (const int threads = runtime::threads(); threads > 1 && count >= kParallelFrom) {
+    // An exception must not leave an OpenMP region (it would end the program): the first one is kept and rethrown.
+    std::exception_ptr failure;
 #pragma omp parallel for schedule(static) num_threads(threads)
-    for (int k = 0; k < count; ++k) f(k);
+    for (int k = 0; k < count; ++k) {
+      try {
+        f(k);
+      } catch (...) {
+#pragma omp critical(flexbody_for_each_failure)
+        if (!failure) failure = std::current_exception();
+      }
+    }
+    if (failure) std::rethrow_exception(failure);
   } else {
     for (int k = 0; k < count; ++k) f(k);
   }

@@ -68,6 +68,13 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
   const Eigen::VectorXd phi0 = system.constraints(0.0, q0);
   report.largest_gap = system.joints().empty() ? 0.0 : phi0.tail(system.constraint_count() - system.joint_row(0)).cwiseAbs().maxCoeff();
   // The joint whose gap is largest against its bodies' sizes: the one a refusal names.
+  if (system.joints().empty()) {  // only the bodies' own rows: a body whose orientation is not a rotation
+    const Eigen::VectorXd phi = system.constraints(0.0, q0);
+    Eigen::Index row = 0;
+    if (phi.size() > 0 && phi.cwiseAbs().maxCoeff(&row) > 1e-8)
+      throw std::invalid_argument("assembly: " + system.constraint_name(row) + " is violated by " + std::to_string(phi(row)));
+    return report;
+  }
   auto worst_joint = [&]() -> std::size_t {
     std::size_t worst = 0;
     double worst_share = -1.0;
@@ -134,6 +141,13 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
     why << "assembly: joint '" << j.name << "' cannot be closed in " << options.max_iterations << " steps: its markers "
         << j.first.name << " and " << j.second.name << " are too far apart for the mechanism to reach";
     throw AssemblyError(why.str(), k);
+  }
+  for (int b = 0; b < n_b; ++b) {  // a GCMS body's ξ (global axes) turns with it, so that its deformation ξ̄ = Aᵀ ξ stays
+    const BodyModel& model = system.model(b);
+    if (model.floating() || model.rigid()) continue;
+    const Eigen::Index o = system.offset(b);
+    const Eigen::Matrix3d turn = orientation_at(model, q, o) * orientation_at(model, q0, o).transpose();
+    for (Eigen::Index f = 0; f < model.field_count(); ++f) q.segment<3>(o + 12 + 3 * f) = turn * q0.segment<3>(o + 12 + 3 * f);
   }
   for (int b = 0; b < n_b; ++b) {  // the largest displacement of a point: |Δτ| + |ΔA| times the body's radius
     const BodyModel& model = system.model(b);

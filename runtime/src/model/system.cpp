@@ -173,11 +173,14 @@ Eigen::VectorXd System::initial_coordinates() const {
 
 void System::set_initial_coordinates(const Eigen::VectorXd& q) {
   if (q.size() != coordinates_) throw std::invalid_argument("set_initial_coordinates: q has the wrong size");
+  for (int k = 0; k < body_count(); ++k) {  // every body checked before any is changed
+    const Eigen::Matrix3d a = orientation(k, q);
+    if (!((a.transpose() * a - Eigen::Matrix3d::Identity()).norm() <= 1e-9))
+      throw std::invalid_argument("body '" + body_name(k) + "': the new initial orientation is not a rotation");
+  }
   for (int k = 0; k < body_count(); ++k) {
     Body& b = bodies_[static_cast<std::size_t>(k)];
     const Eigen::Matrix3d a = orientation(k, q);
-    if (!((a.transpose() * a - Eigen::Matrix3d::Identity()).norm() <= 1e-9))
-      throw std::invalid_argument("body '" + b.name + "': the new initial orientation is not a rotation");
     b.initial.position = q.segment<3>(b.offset);
     b.initial.orientation = a;
     if (b.model.floating())

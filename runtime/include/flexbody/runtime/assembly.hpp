@@ -4,7 +4,7 @@
 // such gaps before the first step, and so does this.
 //
 // Among the rigid coordinates (τ and a = vec(A) of a GCMS body, τ and p of a floating-frame one; deformations stay as
-// they are), the correction Δq of least kinetic-energy norm ½ Δqᵀ M_r Δq that satisfies every joint row and keeps
+// they are in the body's frame: a GCMS body's ξ turns with A), at the time t = 0 of driven joints, the correction Δq of least kinetic-energy norm ½ Δqᵀ M_r Δq that satisfies every joint row and keeps
 // each body rigid (AᵀA = I, pᵀp = 1), found by Gauss-Newton steps on the linearised rows:
 //
 //   [M_r  J_rᵀ] [Δq]   [ 0 ]

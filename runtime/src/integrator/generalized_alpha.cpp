@@ -336,17 +336,8 @@ void GeneralizedAlpha::build_solver(double h) {
 void GeneralizedAlpha::build_sparse_coupling(double t1, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                                              const Eigen::VectorXd& qdd, const Eigen::VectorXd& mu, double h,
                                              double gamma_prime) {
-  // Z/γ' = dΦ_q/dt / γ' along (1, v): central differences of the sparse Jacobian (one pattern, so the difference
-  // is entrywise), the step ∛ε over the fastest relative rate of a coordinate or over 1/h (StabilizedCoupling::build).
-  constexpr double eps = std::numeric_limits<double>::epsilon();
-  double fastest = 1.0 / h;
-  for (Eigen::Index i = 0; i < q.size(); ++i) fastest = std::max(fastest, std::abs(v(i)) / (std::abs(q(i)) + scales_(i)));
-  const double guess = std::cbrt(eps) / fastest, exact = (t1 + guess) - t1;
-  const double s = exact > 0.0 ? exact : guess;
-  Eigen::SparseMatrix<double> ahead, behind, at_start;
-  system_.sparse_constraint_jacobian(t1 + s, q + s * v, ahead);
-  system_.sparse_constraint_jacobian(t1 - s, q - s * v, behind);
-  const Eigen::SparseMatrix<double> rate = (ahead - behind) * (1.0 / (2.0 * s * gamma_prime));
+  const Eigen::SparseMatrix<double> rate = detail::constraint_rate(system_, t1, q, v, scales_, h, gamma_prime);  // Z/γ'
+  Eigen::SparseMatrix<double> at_start;
   system_.sparse_constraint_jacobian(t_, q_, at_start);  // P = W Φ_q(q_n)ᵀ: the step's direction
   const Eigen::SparseMatrix<double, Eigen::RowMajor> direction = squared_scales_.asDiagonal() * at_start.transpose();
   const Eigen::SparseMatrix<double> projected = work_.jacobian * direction;
@@ -511,15 +502,15 @@ void GeneralizedAlpha::advance(double h, double t1) {
           work_.nu += work_.nu_step;
           q += position_step;
         } else {
-        solver_->solve(q, residual, phi, dx);
-        if (!all_finite(dx)) diverged(phi);
-        if (stabilized) {
-          coupling_->complete(dx, phi, velocity_rows, work_.nu_step);
-          correction_of(work_.nu_step, position_step);
-          if (!all_finite(position_step) || !all_finite(dx)) diverged(phi);
-          work_.nu += work_.nu_step;
-          q += position_step;
-        }
+          solver_->solve(q, residual, phi, dx);
+          if (!all_finite(dx)) diverged(phi);
+          if (stabilized) {
+            coupling_->complete(dx, phi, velocity_rows, work_.nu_step);
+            correction_of(work_.nu_step, position_step);
+            if (!all_finite(position_step) || !all_finite(dx)) diverged(phi);
+            work_.nu += work_.nu_step;
+            q += position_step;
+          }
         }
       }
       q += dx.head(n);

@@ -6,6 +6,23 @@
 
 namespace flexbody::runtime::detail {
 
+Eigen::SparseMatrix<double> constraint_rate(const System& system, double t, const Eigen::VectorXd& q,
+                                            const Eigen::VectorXd& v, const Eigen::VectorXd& scales, double h,
+                                            double gamma_prime) {
+  constexpr double eps = std::numeric_limits<double>::epsilon();
+  // Central differences, the step ∛ε over the fastest relative rate of a coordinate (|v_i| / (|q_i| + scale_i)) or
+  // over 1/h, whichever is faster. Z only sets the convergence rate.
+  double fastest = 1.0 / h;
+  for (Eigen::Index i = 0; i < q.size(); ++i) fastest = std::max(fastest, std::abs(v(i)) / (std::abs(q(i)) + scales(i)));
+  // t ± s exact: far from t = 0 the rounding of t + s would change the step of the time part (a driven joint's).
+  const double guess = std::cbrt(eps) / fastest, exact = (t + guess) - t;
+  const double s = exact > 0.0 ? exact : guess;
+  Eigen::SparseMatrix<double> ahead, behind;  // one pattern: the difference is entrywise
+  system.sparse_constraint_jacobian(t + s, q + s * v, ahead);
+  system.sparse_constraint_jacobian(t - s, q - s * v, behind);
+  return (ahead - behind) * (1.0 / (2.0 * s * gamma_prime));
+}
+
 bool StabilizedCoupling::build(const System& system, NewtonSolver& solver, double t, const Eigen::VectorXd& q,
                                const Eigen::VectorXd& v, const Eigen::VectorXd& qdd, const Eigen::VectorXd& mu,
                                const Eigen::MatrixXd& jacobian, const Eigen::MatrixXd& direction,
@@ -13,16 +30,7 @@ bool StabilizedCoupling::build(const System& system, NewtonSolver& solver, doubl
                                double gamma_prime, double h) {
   const Eigen::Index n = q.size(), m = jacobian.rows();
   constexpr double eps = std::numeric_limits<double>::epsilon();
-  // Z = dΦ_q/dt along (1, v): central differences, the step ∛ε over the fastest relative rate of a coordinate
-  // (|v_i| / (|q_i| + scale_i)) or over 1/h, whichever is faster. Z only sets the convergence rate.
-  double fastest = 1.0 / h;
-  for (Eigen::Index i = 0; i < n; ++i) fastest = std::max(fastest, std::abs(v(i)) / (std::abs(q(i)) + scales(i)));
-  // t ± s exact: far from t = 0 the rounding of t + s would change the step of the time part (a driven joint's).
-  const double guess = std::cbrt(eps) / fastest, exact = (t + guess) - t;
-  const double s = exact > 0.0 ? exact : guess;
-  rate_ = system.constraint_jacobian(t + s, q + s * v);
-  rate_ -= system.constraint_jacobian(t - s, q - s * v);
-  rate_ *= 1.0 / (2.0 * s * gamma_prime);
+  rate_ = Eigen::MatrixXd(constraint_rate(system, t, q, v, scales, h, gamma_prime));
   // G P, column by column: forward differences of r = R/β' + Jᵀ μ along each column of P, the step √ε in the
   // coordinate it moves most relative to its size.
   Eigen::MatrixXd rhs_dynamic(n, m), rhs_rows = jacobian * direction;

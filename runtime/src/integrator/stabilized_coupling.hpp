@@ -41,6 +41,12 @@
 
 namespace flexbody::runtime::detail {
 
+/// Z/γ' = dΦ_q/dt / γ' along (1, v) at (t, q), sparse (the Jacobian's pattern); `scales` are the coordinates' length
+/// scales and h the step, which set the difference step.
+[[nodiscard]] Eigen::SparseMatrix<double> constraint_rate(const System& system, double t, const Eigen::VectorXd& q,
+                                                          const Eigen::VectorXd& v, const Eigen::VectorXd& scales,
+                                                          double h, double gamma_prime);
+
 class StabilizedCoupling {
  public:
   /// Builds the coupling at the iterate (t, q, v, q̈, μ) for a fresh Newton matrix `solver` (factorized with the

@@ -398,6 +398,11 @@ void GeneralizedAlpha::advance(double h, double t1) {
         << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")" << last_state_diagnosis();
     throw StepFailure(why.str());
   };
+  if (fresh_starts_ > 0) {
+    refresh_ = true;
+    --fresh_starts_;
+  }
+  const bool kept_at_start = !refresh_ && options_.reuse_newton_matrix;  // a trial of the kept matrix
   for (int attempt = 0;; ++attempt) {
     // Predictor: q̈_{n+1} = q̈_n.
     qdd = qdd_;
@@ -562,9 +567,13 @@ void GeneralizedAlpha::advance(double h, double t1) {
       // A fresh matrix did not converge with the alternating step: once more with the coupled one, which then stays
       // for the rest of the run (stabilized_coupling.hpp; slower to build, so not used before it is needed).
       couple_ = refresh_ = true;
+      const std::string cost = sparse_core_ != nullptr
+                                   ? "one sparse factorization of n + 2m unknowns"
+                                   : "m solves";
       warnings_.push_back("t = " + std::to_string(t1) + " s: Newton did not converge with the stabilised index-2 "
-                          "form's alternating step; the run continues with its coupled step, which costs m solves "
-                          "per Newton matrix (m = " + std::to_string(m) + " constraint rows)");
+                          "form's alternating step; the run continues with its coupled step, which costs " + cost +
+                          " per Newton matrix (n = " + std::to_string(n) + " coordinates, m = " + std::to_string(m) +
+                          " constraint rows)");
       continue;
     }
     Eigen::Index worst = 0;
@@ -589,6 +598,10 @@ void GeneralizedAlpha::advance(double h, double t1) {
   // A kept matrix slowly goes stale as the bodies rotate away from where it was built: steps then need a third
   // or fourth iteration. Once such extra iterations add up to about the cost of building a new matrix (a build is
   // ~10 iterations' work: the elastic tangent and ~20 core products against 2-3 per iteration), rebuild it.
+  if (kept_at_start) {
+    fresh_start_backoff_ = fresh_this_step ? std::min(2 * fresh_start_backoff_ + 1, kLongestFreshStarts) : 0;
+    fresh_starts_ = fresh_start_backoff_;
+  }
   if (!fresh_this_step) extra_iterations_ += std::max(0, iterations_ - 2);  // a fresh matrix is not stale
   if (extra_iterations_ >= kExtraIterationsPerRebuild) refresh_ = true;
   t_ = t1;

@@ -227,6 +227,12 @@ class GeneralizedAlpha {
   bool refresh_ = true;  ///< build the Newton matrix at the next iteration
   int extra_iterations_ = 0;  ///< iterations beyond two per step since the Newton matrix was built
   static constexpr int kExtraIterationsPerRebuild = 10;
+  /// Steps that start with a fresh Newton matrix because a matrix kept from the step before went stale within a
+  /// step (the iterations spent on it are then wasted): `fresh_starts_` more steps do, and each failed trial of a
+  /// kept matrix doubles the count up to kLongestFreshStarts (a long chain's coupled stabilised step needs a matrix
+  /// a step: bench/README.md "scale_bench"); a kept matrix that serves a step resets it.
+  int fresh_starts_ = 0, fresh_start_backoff_ = 0;
+  static constexpr int kLongestFreshStarts = 16;
 };
 
 }  // namespace flexbody::runtime

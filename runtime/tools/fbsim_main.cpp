@@ -107,6 +107,12 @@ int main(int argc, char** argv) {
       assembly["moves_m"] = a.moves;
       j["assembly"] = assembly;
     }
+    {
+      nlohmann::ordered_json removed = nlohmann::ordered_json::array();
+      for (const flexbody::runtime::RemovedConstraint& c : scene.removed)
+        removed.push_back({{"joint", c.name}, {"row", c.row + 1}, {"meaning", c.meaning}});
+      j["removed_constraints"] = removed;
+    }
     j["cpu_s"] = summary.cpu_seconds;
     j["energy_initial_j"] = summary.energy_initial;
     j["energy_final_j"] = summary.energy_final;
@@ -138,6 +144,14 @@ int main(int argc, char** argv) {
       std::cout << fmt::format("  assembly: joint gaps up to {:.3g} m closed in {} steps; largest move {:.3g} m (body '{}')\n",
                                scene.assembly.largest_gap, scene.assembly.iterations,
                                scene.assembly.moves[static_cast<std::size_t>(moved)], scene.system.body_name(moved));
+    for (std::size_t k = 0; k < scene.removed.size();) {  // one line per joint
+      const std::size_t joint = scene.removed[k].joint;
+      std::string rows;
+      for (; k < scene.removed.size() && scene.removed[k].joint == joint; ++k)
+        rows += (rows.empty() ? "" : "; ") + scene.removed[k].meaning;
+      std::cout << fmt::format("  joint '{}': redundant rows left out ({}): the other joints carry them\n",
+                               scene.system.joints()[joint].name, rows);
+    }
     std::cout << fmt::format("  {:.1f} us per step ({:.1f} in the integrator, the rest checks and outputs)\n",
                              1e6 * summary.wall_seconds / std::max(1.0, static_cast<double>(summary.steps)),
                              1e6 * summary.integrator_wall_seconds / std::max(1.0, static_cast<double>(summary.steps)));

@@ -287,19 +287,17 @@ Scene read_scene(const std::filesystem::path& file) {
     }
   }
 
-  // Rows that repeat earlier ones make the DAE singular: name the joint that adds the first such row (the scan
-  // goes in row order, so that is the joint that repeats what the constraints before it impose).
-  if (const Eigen::Index row = scene.system.first_redundant_constraint(0.0, q0); row >= 0) {
-    const auto& joints = scene.system.joints();
-    std::size_t k = 0;
-    while (k + 1 < joints.size() && scene.system.joint_row(k + 1) <= row) ++k;
-    if (joints.empty() || row < scene.system.joint_row(0))  // a body's own reference rows (a degenerate body file)
-      r.fail(root["bodies"], fmt::format("{} is degenerate: its rows are linearly dependent",
-                                         scene.system.constraint_name(row)));
-    r.fail(joint_nodes.at(k), fmt::format("joint '{}' is redundant: with the joints before it, it constrains some motion "
-                                          "twice (its row {} of {}); remove it or use a joint with fewer rows",
-                                          joints[k].name, row - scene.system.joint_row(k) + 1, joints[k].rows()));
-  }
+  // Rows that repeat earlier ones would make the DAE singular: they are left out, as Adams does, and the summary says
+  // which (a planar four-bar of revolute joints repeats three). Found before the assembly, whose Newton matrix they
+  // would make singular too, and again after it (rows dependent only once the gaps are closed).
+  auto remove_redundant = [&](const Eigen::VectorXd& q) {
+    try {
+      for (runtime::RemovedConstraint& c : scene.system.remove_redundant_constraints(0.0, q)) scene.removed.push_back(std::move(c));
+    } catch (const std::invalid_argument& e) {
+      r.fail(root["bodies"], e.what());  // a degenerate body file
+    }
+  };
+  remove_redundant(q0);
 
   bool applied_loads = false, damped_springs = false, springs_to_ground = false;
   if (const YAML::Node forces = root["forces"]) {
@@ -578,6 +576,7 @@ Scene read_scene(const std::filesystem::path& file) {
   } catch (const runtime::AssemblyError& e) {
     r.fail(e.joint < joint_nodes.size() ? joint_nodes[e.joint] : root, e.what());
   }
+  if (scene.assembly.iterations > 0) remove_redundant(scene.system.initial_coordinates());
   return scene;
 }
 

@@ -57,6 +57,7 @@ struct Scene {
   int paraview_every = 1;               ///< a frame every n-th step
   Conservation conserves;
   runtime::AssemblyReport assembly;  ///< how the initial assembly moved the bodies
+  std::vector<runtime::RemovedConstraint> removed;  ///< joint rows left out as redundant (System::remove_redundant_constraints)
 };
 
 /// The most steps a scene may take: a step many orders too small (1e-20 s for 1e-4 s) would otherwise run for

@@ -271,7 +271,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   auto refuse = [&] {
     const Eigen::Index redundant = system.first_redundant_constraint(t_, q_);
     throw std::invalid_argument(redundant >= 0 ? system.constraint_name(redundant) + " is redundant: it repeats what "
-                                                     "the constraints before it already impose"
+                                                     "the constraints before it already impose (System::remove_redundant_constraints leaves such rows out)"
                                                : std::string("initial accelerations: the matrix [M J^T; J 0] is singular"));
   };
   if (!saddle.ok()) refuse();

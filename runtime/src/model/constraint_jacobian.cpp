@@ -52,19 +52,22 @@ void System::sparse_constraint_jacobian(double t, const Eigen::VectorXd& q, Eige
   out.setFromTriplets(entries.begin(), entries.end());
 }
 
-Eigen::Index System::first_redundant_constraint(double t, const Eigen::VectorXd& q) const {
-  Eigen::SparseMatrix<double> jac;
-  sparse_constraint_jacobian(t, q, jac);
-  // Each row normalised (rows carry different units: m, rad, kg^½ m), then Householder QR of Φ_qᵀ with the columns
-  // (the rows of Φ_q) in their order: a column whose remainder after the ones before it is below 1e-9 of its length
-  // adds nothing (the Gram-Schmidt test, with Householder's accuracy), and SparseQR moves it behind the others. The
-  // fill is that of a Cholesky factor of Φ_q Φ_qᵀ in row order: each joint's rows touch two bodies, so it stays
-  // linear in a chain or a ladder of loops, where the dense Gram-Schmidt this replaces cost O(m² n).
+namespace {
+
+// The rows of Φ_q that are linearly dependent on the rows before them, in row order (empty: independent rows).
+// Each row normalised (rows carry different units: m, rad, kg^½ m), then Householder QR of Φ_qᵀ with the columns
+// (the rows of Φ_q) in their order: a column whose remainder after the ones before it is below 1e-9 of its length
+// adds nothing (the Gram-Schmidt test, with Householder's accuracy), and SparseQR moves it behind the others. The
+// fill is that of a Cholesky factor of Φ_q Φ_qᵀ in row order: each joint's rows touch two bodies, so it stays
+// linear in a chain or a ladder of loops, where the dense Gram-Schmidt this replaces cost O(m² n).
+std::vector<Eigen::Index> dependent_rows(const Eigen::SparseMatrix<double>& jac) {
   Eigen::VectorXd length = Eigen::VectorXd::Zero(jac.rows());
   for (Eigen::Index k = 0; k < jac.outerSize(); ++k)
     for (Eigen::SparseMatrix<double>::InnerIterator it(jac, k); it; ++it) length(it.row()) += it.value() * it.value();
+  std::vector<Eigen::Index> dependent;
   for (Eigen::Index k = 0; k < jac.rows(); ++k)
-    if (!(length(k) > 0.0)) return k;  // a row that constrains nothing
+    if (!(length(k) > 0.0)) dependent.push_back(k);  // a row that constrains nothing
+  if (!dependent.empty()) return dependent;
   length = length.cwiseSqrt().cwiseInverse();
   Eigen::SparseMatrix<double> rows = (length.asDiagonal() * jac).transpose();  // n x m, column k = row k / |row k|
   rows.makeCompressed();
@@ -72,20 +75,63 @@ Eigen::Index System::first_redundant_constraint(double t, const Eigen::VectorXd&
   // fill-reducing order (AMD). Its pivots are the squared remainders of the rows in that order, up to rounding that
   // grows with the Gram matrix's condition (an exactly dependent row of a random mechanism left a pivot of 1.3e-12,
   // sparse_newton_test). All above 1e-6 (remainders above 1e-3 of a row's length) means independent rows, beyond
-  // doubt; otherwise the QR below decides, and names the first dependent row in row order (slower: its fill grows
+  // doubt; otherwise the QR below decides, and finds the dependent rows in row order (slower: its fill grows
   // with the scene's width; the dense Gram-Schmidt it replaces cost O(m² n) in every scene).
   {
     const Eigen::SparseMatrix<double> gram = rows.transpose() * rows;
     const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(gram);
-    if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 1e-6) return -1;
+    if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 1e-6) return dependent;
   }
   Eigen::SparseQR<Eigen::SparseMatrix<double>, Eigen::NaturalOrdering<int>> qr;
   qr.setPivotThreshold(1e-9);
   qr.compute(rows);
   if (qr.info() != Eigen::Success) throw std::runtime_error("the constraint rows' QR factorization failed");
-  if (qr.rank() == rows.cols()) return -1;
   const auto& order = qr.colsPermutation().indices();  // the independent columns first, then the dependent ones
-  return *std::min_element(order.data() + qr.rank(), order.data() + order.size());
+  dependent.assign(order.data() + qr.rank(), order.data() + order.size());
+  std::sort(dependent.begin(), dependent.end());
+  return dependent;
+}
+
+}  // namespace
+
+Eigen::Index System::first_redundant_constraint(double t, const Eigen::VectorXd& q) const {
+  Eigen::SparseMatrix<double> jac;
+  sparse_constraint_jacobian(t, q, jac);
+  const std::vector<Eigen::Index> dependent = dependent_rows(jac);
+  return dependent.empty() ? -1 : dependent.front();
+}
+
+std::vector<RemovedConstraint> System::remove_redundant_constraints(double t, const Eigen::VectorXd& q) {
+  if (q.size() != coordinates_) throw std::invalid_argument("remove_redundant_constraints: q has the wrong size");
+  Eigen::SparseMatrix<double> jac;
+  sparse_constraint_jacobian(t, q, jac);
+  const std::vector<Eigen::Index> dependent = dependent_rows(jac);
+  if (!dependent.empty() && dependent.front() < reference_total_)  // a degenerate body file, not a scene's choice
+    throw std::invalid_argument(constraint_name(dependent.front()) + " is degenerate: the body's own rows are linearly "
+                                "dependent");
+  // Each dependent row to its joint and to the joint type's row (counting the rows removed before), all decided
+  // before any joint changes, since the rows' numbering changes with each removal.
+  std::vector<RemovedConstraint> removed;
+  std::vector<unsigned> masks(joints_.size());
+  for (std::size_t k = 0; k < joints_.size(); ++k) masks[k] = joints_[k].removed;
+  for (const Eigen::Index row : dependent) {
+    std::size_t k = 0;
+    while (k + 1 < joints_.size() && joint_row(k + 1) <= row) ++k;
+    const Joint& j = joints_[k];
+    int kept = static_cast<int>(row - joint_row(k)), type_row = 0;  // the kept-th kept row of the type's rows
+    for (;; ++type_row)
+      if (!((j.removed >> type_row) & 1U) && kept-- == 0) break;
+    masks[k] |= 1U << type_row;
+    removed.push_back({k, j.name, type_row,
+                       joint_row_meaning(j, type_row, body_coordinates(q, j.first.body), body_coordinates(q, j.second.body))});
+  }
+  joint_total_ = 0;
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    joints_[k].removed = masks[k];
+    joint_start_[k] = joint_total_;
+    joint_total_ += joints_[k].rows();
+  }
+  return removed;
 }
 
 }  // namespace flexbody::runtime

@@ -3,7 +3,10 @@
 #include <Eigen/Geometry>
 
 #include <array>
+#include <bit>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 
 namespace flexbody::runtime {
@@ -54,7 +57,9 @@ void orientation_rows(Rows& rows, const Joint& j, const VectorRef& q1, const Vec
 
 }  // namespace
 
-int Joint::rows() const {
+int Joint::rows() const { return type_rows() - std::popcount(removed); }
+
+int Joint::type_rows() const {
   switch (type) {
     case JointType::spherical: return 3;
     case JointType::fixed: return 6;
@@ -99,7 +104,15 @@ Joint make_joint(const std::string& name, JointType type, Marker first, Marker s
 }
 
 void evaluate_joint(const Joint& j, double t, const VectorRef& q1, const VectorRef& q2, JointEvaluation& out) {
-  const int n_rows = j.rows();
+  // With removed rows, all rows go into the all_ storage (swapped in, so that no evaluation after the first
+  // allocates), and the kept ones are copied out below.
+  const bool some_removed = j.removed != 0;
+  if (some_removed) {
+    out.residual.swap(out.all_residual);
+    out.jacobian_first.swap(out.all_first);
+    out.jacobian_second.swap(out.all_second);
+  }
+  const int n_rows = j.type_rows();
   out.residual.resize(n_rows);
   out.jacobian_first.setZero(n_rows, j.first.body == kGround ? 0 : q1.size());
   out.jacobian_second.setZero(n_rows, j.second.body == kGround ? 0 : q2.size());
@@ -145,6 +158,56 @@ void evaluate_joint(const Joint& j, double t, const VectorRef& q1, const VectorR
       break;
     }
   }
+  if (!some_removed) return;
+  out.residual.swap(out.all_residual);
+  out.jacobian_first.swap(out.all_first);
+  out.jacobian_second.swap(out.all_second);
+  const int kept = j.rows();
+  out.residual.resize(kept);
+  out.jacobian_first.resize(kept, out.all_first.cols());
+  out.jacobian_second.resize(kept, out.all_second.cols());
+  for (int k = 0, r = 0; k < n_rows; ++k) {
+    if ((j.removed >> k) & 1U) continue;
+    out.residual(r) = out.all_residual(k);
+    out.jacobian_first.row(r) = out.all_first.row(k);
+    out.jacobian_second.row(r) = out.all_second.row(k);
+    ++r;
+  }
+}
+
+std::string joint_row_meaning(const Joint& j, int row, const VectorRef& q1, const VectorRef& q2) {
+  auto global = [](const Eigen::Vector3d& u) {  // a unit vector as [x, y, z], 2 decimals, no "-0"
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(2) << '[';
+    for (int k = 0; k < 3; ++k) out << (k ? ", " : "") << (std::abs(u(k)) < 0.005 ? 0.0 : u(k));
+    out << ']';
+    return out.str();
+  };
+  // A row u1 · w2 (u at marker 1, w at marker 2) stops the rotation of body 1 against body 2 about u × w.
+  auto rotation = [&](const Eigen::Vector3d& u_first, const Eigen::Vector3d& w_second) {
+    const Eigen::Vector3d about = marker_direction(j.first, q1, u_first).cross(marker_direction(j.second, q2, w_second));
+    return "rotation about " + global(about.normalized());
+  };
+  const bool prismatic = j.type == JointType::prismatic;
+  if (row < (prismatic ? 2 : 3)) {
+    if (prismatic) return "translation along " + global(marker_direction(j.second, q2, row == 0 ? j.normal_a : j.normal_b));
+    return std::string("translation along ") + "xyz"[row];
+  }
+  const int orientation = row - (prismatic ? 2 : 3);
+  switch (j.type) {
+    case JointType::fixed:
+    case JointType::prismatic: {
+      const Eigen::Vector3d u[3] = {j.triad_first.col(2), j.triad_first.col(2), j.triad_first.col(1)};
+      const Eigen::Vector3d w[3] = {j.triad_second.col(1), j.triad_second.col(0), j.triad_second.col(0)};
+      return rotation(u[orientation], w[orientation]);
+    }
+    case JointType::revolute:
+    case JointType::driven_revolute:
+      if (orientation == 2) return "rotation about the axis (the driven angle)";
+      return rotation(j.axis_first, orientation == 0 ? j.normal_a : j.normal_b);
+    case JointType::spherical: break;
+  }
+  return "row " + std::to_string(row + 1);
 }
 
 JointEvaluation evaluate_joint(const Joint& j, double t, const VectorRef& q1, const VectorRef& q2) {

@@ -41,9 +41,21 @@ struct Joint {
   Eigen::Vector2d offset = Eigen::Vector2d::Zero();
   /// Driven revolute: the angle about the axis [rad] as a function of time, φ(0) = 0.
   std::function<double(double)> angle;
+  /// Rows of the type's equations left out because they repeat other constraints (bit k: the type's row k), as
+  /// System::remove_redundant_constraints finds them. The constraints they repeat carry their reactions.
+  unsigned removed = 0;
 
+  /// The rows the joint imposes: its type's rows less the removed ones.
   [[nodiscard]] int rows() const;
+  /// The type's rows: spherical 3 (the gap r1 − r2), revolute 5 (the gap; the axis against two normals), prismatic
+  /// 5 (the gap along two normals; three for the orientation), fixed 6, driven revolute 6 (the revolute's and the
+  /// angle).
+  [[nodiscard]] int type_rows() const;
 };
+
+/// What the type's row `row` of joint j stops at (q1, q2), in global terms: "translation along x" (a gap row),
+/// "translation along [0.71, 0.71, 0]", "rotation about [0, 1, 0]", "rotation about the axis (the driven angle)".
+[[nodiscard]] std::string joint_row_meaning(const Joint& j, int row, const VectorRef& q1, const VectorRef& q2);
 
 /// A joint assembled at the initial body coordinates q1, q2 (empty for ground): `axis` is global (revolute,
 /// prismatic, driven revolute; ignored otherwise). Throws std::invalid_argument naming the joint for a zero axis
@@ -59,6 +71,9 @@ struct JointEvaluation {
   /// Work storage: the markers' position Jacobians and up to four direction Jacobians.
   Eigen::MatrixXd position_first, position_second;
   std::array<Eigen::MatrixXd, 4> directions;
+  /// Work storage of a joint with removed rows: all of its type's rows, before the removed ones are left out.
+  Eigen::VectorXd all_residual;
+  Eigen::MatrixXd all_first, all_second;
 };
 [[nodiscard]] JointEvaluation evaluate_joint(const Joint& joint, double t, const VectorRef& q1,
                                              const VectorRef& q2);

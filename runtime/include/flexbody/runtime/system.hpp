@@ -71,6 +71,14 @@ struct SpringDamper {
 
 /// The wrench a joint applies to the body of its first marker, in world axes: the force [N] and the moment [N m]
 /// about the marker's current point.
+/// A joint's constraint row left out because it repeats other rows (System::remove_redundant_constraints).
+struct RemovedConstraint {
+  std::size_t joint;    ///< its index in System::joints()
+  std::string name;     ///< the joint's name
+  int row;              ///< the row of the joint type's equations (Joint::type_rows), from 0
+  std::string meaning;  ///< what it stopped, in global terms at the time of removal: joint_row_meaning
+};
+
 struct JointReaction {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();
@@ -196,6 +204,16 @@ class System {
   /// the rows are independent. A dependent row makes [M Φ_qᵀ; Φ_q 0] singular: its joint repeats what earlier
   /// constraints already impose (two revolute joints on one axis, a fixed joint plus a spherical one, ...).
   [[nodiscard]] Eigen::Index first_redundant_constraint(double t, const Eigen::VectorXd& q) const;
+  /// Leaves out every joint row that is linearly dependent on the rows before it at (t, q), as Adams removes
+  /// redundant constraints: a planar linkage of revolute joints in 3D (a four-bar repeats three of its twenty rows:
+  /// the translation normal to its plane and the two tilts of its axes), two hinges on one axis. The later joint
+  /// gives way (the rows are scanned in the order the joints were added). Returns what was left out (empty for
+  /// independent rows); the joints' rows() and the row offsets change accordingly. The constraints the removed rows
+  /// repeat carry their reactions: the removed rows' reaction components are reported by the joints they repeat,
+  /// and a joint with removed rows reports none along them (Adams's convention). The test is at (t, q): rows that
+  /// are dependent only in that configuration (a linkage at a dead point) are removed too, so call it with the
+  /// assembled initial coordinates. Throws std::invalid_argument when a body's own reference rows are dependent.
+  std::vector<RemovedConstraint> remove_redundant_constraints(double t, const Eigen::VectorXd& q);
   /// What constraint row k is: "body 'bar': orthogonality", "body 'bar': Tisserand", "joint 'pivot'", "body 'bar':
   /// normalisation of the Euler parameters".
   [[nodiscard]] std::string constraint_name(Eigen::Index row) const;

@@ -15,6 +15,8 @@ namespace {
 // KLU's pivot ratio min |u_ii| / max |u_ii| falls this far below what the pivoting factorization reached; then
 // the matrix is factorized afresh with partial pivoting (KLU's default threshold, 0.001).
 constexpr double kPivotDegradation = 1e-3;
+// SparseReducedSolver's pattern grows with the nonzeros this many times at most; then it takes the blocks' zeros too.
+constexpr int kMostGrowths = 3;
 
 }  // namespace
 
@@ -53,6 +55,12 @@ struct SparseReducedSolver::Klu {
 SparseReducedSolver::SparseReducedSolver() : klu_(std::make_unique<Klu>()) {
   klu_defaults(&klu_->common);
   klu_->common.halt_if_singular = 1;  // a singular matrix: no factor (solve() then gives NaN)
+  // COLAMD on the matrix itself, without the block triangular form: KLU's default (BTF, then AMD on A + Aᵀ) took
+  // 250 ms to analyse a 1024-link rigid chain (its matching grew like N² on the saddle point's zero block) and AMD
+  // without BTF filled 23 times more; COLAMD without BTF analysed it in 4 ms and refactorized in 2.5 ms against
+  // 3.1 (bench/sparse_solver_bench, bench/README.md).
+  klu_->common.ordering = 1;
+  klu_->common.btf = 0;
 }
 
 SparseReducedSolver::~SparseReducedSolver() { klu_->free_all(); }
@@ -61,25 +69,30 @@ void SparseReducedSolver::factor(Eigen::Index size, const std::vector<Eigen::Tri
   if (size > std::numeric_limits<int>::max() / 2)
     throw std::runtime_error("the reduced Newton matrix has more rows than KLU's 32-bit indices take");
   matrix_.resize(size, size);
-  matrix_.setFromTriplets(entries.begin(), entries.end());  // sums duplicates, keeps explicit zeros: the scene's pattern
+  matrix_.setFromTriplets(entries.begin(), entries.end());  // sums duplicates; sorted rows in each column
   matrix_.makeCompressed();
   const int n = static_cast<int>(size);
-  int* outer = matrix_.outerIndexPtr();
-  int* inner = matrix_.innerIndexPtr();
-  double* values = matrix_.valuePtr();
-  const auto nonzeros = static_cast<std::size_t>(matrix_.nonZeros());
-  const bool same_pattern = klu_->symbolic && outer_.size() == static_cast<std::size_t>(n + 1) &&
-                            std::equal(outer_.begin(), outer_.end(), outer) && inner_.size() == nonzeros &&
-                            std::equal(inner_.begin(), inner_.end(), inner);
-  if (!same_pattern) {  // the ordering, once per pattern
+  // KLU factorizes on the union of the nonzeros of every matrix so far, not on the blocks' dense pattern: a rigid
+  // body's blocks are (G ⊗ I3)-shaped, two thirds zeros, and dropping them cut KLU's refactorization of a 1024-link
+  // rigid chain's matrix from 7.1 to 0.65 ms (bench/sparse_solver_bench). An entry that turns nonzero later (a
+  // rotation away from the axes, a multiplier) grows the union and triggers a new analysis: a few per run.
+  const bool same_size = klu_->symbolic && outer_.size() == static_cast<std::size_t>(n + 1);
+  if (!same_size || !scatter()) {
+    // A pattern that keeps growing (the coupled stabilised step's entries turn nonzero one by one as the bodies
+    // start to move: 29 analyses in 200 steps of a 64-link chain) takes every entry the blocks hold from its
+    // kMostGrowths-th growth on, zeros included, so that the analyses stop.
+    growths_ = same_size ? growths_ + 1 : 0;
+    grow_pattern(same_size, growths_ >= kMostGrowths);
     klu_->free_all();
-    outer_.assign(outer, outer + n + 1);
-    inner_.assign(inner, inner + nonzeros);
-    klu_->symbolic = klu_analyze(n, outer, inner, &klu_->common);
+    klu_->symbolic = klu_analyze(n, outer_.data(), inner_.data(), &klu_->common);
     ++analyses_;
     if (!klu_->symbolic) throw std::runtime_error("KLU could not analyse the reduced Newton matrix (status " +
                                                   std::to_string(klu_->common.status) + ")");
+    scatter();
   }
+  int* outer = outer_.data();
+  int* inner = inner_.data();
+  double* values = values_.data();
   singular_ = true;
   if (klu_->numeric && klu_refactor(outer, inner, values, klu_->symbolic, klu_->numeric, &klu_->common) &&
       klu_rcond(klu_->symbolic, klu_->numeric, &klu_->common) && klu_->common.rcond >= kPivotDegradation * fresh_rcond_) {
@@ -98,6 +111,48 @@ void SparseReducedSolver::factor(Eigen::Index size, const std::vector<Eigen::Tri
   klu_rcond(klu_->symbolic, klu_->numeric, &klu_->common);
   fresh_rcond_ = klu_->common.rcond;
   singular_ = !(fresh_rcond_ > 0.0);
+}
+
+bool SparseReducedSolver::scatter() {
+  values_.assign(inner_.size(), 0.0);
+  const int* outer = matrix_.outerIndexPtr();
+  const int* inner = matrix_.innerIndexPtr();
+  const double* values = matrix_.valuePtr();
+  for (Eigen::Index c = 0; c < matrix_.cols(); ++c) {
+    int p = outer_[static_cast<std::size_t>(c)];
+    const int end = outer_[static_cast<std::size_t>(c) + 1];
+    for (int k = outer[c]; k < outer[c + 1]; ++k) {
+      if (values[k] == 0.0) continue;
+      while (p < end && inner_[static_cast<std::size_t>(p)] < inner[k]) ++p;
+      if (p == end || inner_[static_cast<std::size_t>(p)] != inner[k]) return false;  // outside the pattern
+      values_[static_cast<std::size_t>(p)] = values[k];
+    }
+  }
+  return true;
+}
+
+void SparseReducedSolver::grow_pattern(bool keep, bool with_zeros) {
+  std::vector<int> outer, inner;
+  outer.reserve(static_cast<std::size_t>(matrix_.cols()) + 1);
+  inner.reserve(static_cast<std::size_t>(matrix_.nonZeros()));
+  outer.push_back(0);
+  const int* m_outer = matrix_.outerIndexPtr();
+  const int* m_inner = matrix_.innerIndexPtr();
+  const double* m_values = matrix_.valuePtr();
+  for (Eigen::Index c = 0; c < matrix_.cols(); ++c) {  // the sorted merge of the kept column and the new nonzeros
+    int p = keep ? outer_[static_cast<std::size_t>(c)] : 0;
+    const int end = keep ? outer_[static_cast<std::size_t>(c) + 1] : 0;
+    for (int k = m_outer[c]; k < m_outer[c + 1]; ++k) {
+      if (m_values[k] == 0.0 && !with_zeros) continue;
+      while (p < end && inner_[static_cast<std::size_t>(p)] < m_inner[k]) inner.push_back(inner_[static_cast<std::size_t>(p++)]);
+      if (p < end && inner_[static_cast<std::size_t>(p)] == m_inner[k]) ++p;
+      inner.push_back(m_inner[k]);
+    }
+    while (p < end) inner.push_back(inner_[static_cast<std::size_t>(p++)]);
+    outer.push_back(static_cast<int>(inner.size()));
+  }
+  outer_ = std::move(outer);
+  inner_ = std::move(inner);
 }
 
 void SparseReducedSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {

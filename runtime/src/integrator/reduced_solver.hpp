@@ -9,8 +9,11 @@
 // - sparse: SuiteSparse's KLU (Davis & Palamadai Natarajan 2010), made for circuit simulation's sequences of
 //   matrices with one pattern. Each joint's rows touch two bodies, so the matrix has O(size) entries and a chain
 //   or a loop keeps the factors O(size) under KLU's fill-reducing ordering (AMD on the pattern of A + Aᵀ). The
-//   ordering is computed once per pattern (klu_analyze); later factorizations of the same pattern reuse the pivot
+//   pattern is the union of the nonzeros seen so far (the blocks' structural zeros left out), and the ordering is
+//   computed once per pattern (klu_analyze); later factorizations of the same pattern reuse the pivot
 //   sequence too (klu_refactor) and fall back to a fresh pivoting factorization when its pivots have degraded.
+//   bench/sparse_solver_bench measured KLU against Eigen's SparseLU and a quasi-definite SimplicialLDLT on these
+//   matrices (bench/README.md, "sparse_solver_bench").
 //   klu_solve works in place on KLU's own work storage: a solve allocates nothing.
 
 #include "../kernels/dense_product.hpp"
@@ -59,11 +62,20 @@ class SparseReducedSolver final : public ReducedSolver {
   /// Symbolic analyses and pivoting factorizations done so far (the rest were refactorizations): for tests.
   [[nodiscard]] int analyses() const { return analyses_; }
   [[nodiscard]] int pivoting_factorizations() const { return pivoting_; }
+  /// Entries of the pattern KLU factorizes (the nonzeros seen so far): for tests.
+  [[nodiscard]] Eigen::Index pattern_nonzeros() const { return static_cast<Eigen::Index>(inner_.size()); }
 
  private:
   struct Klu;  // KLU's objects, kept out of this header
   std::unique_ptr<Klu> klu_;
-  std::vector<int> outer_, inner_;  ///< the analysed pattern
+  /// The matrix's values on the analysed pattern (values_); false if a nonzero lies outside it.
+  bool scatter();
+  /// The analysed pattern ∪ the matrix's nonzeros (only the nonzeros when `keep` is false: a new size), and its
+  /// zero entries too if `with_zeros`.
+  void grow_pattern(bool keep, bool with_zeros);
+  int growths_ = 0;  ///< times the pattern grew at this size
+  std::vector<int> outer_, inner_;  ///< the analysed pattern: every nonzero seen so far
+  std::vector<double> values_;      ///< the last matrix on it
   bool singular_ = true;
   double fresh_rcond_ = 0.0;  ///< KLU's pivot-ratio estimate at the last pivoting factorization
   int analyses_ = 0, pivoting_ = 0;

@@ -389,6 +389,9 @@ void GeneralizedAlpha::advance(double h, double t1) {
     system_.add_constraint_jacobian_transpose_product(t_, q_, nu, out);
     out.array() *= squared_scales_.array();
   };
+  // Why the first attempt that diverged did: the step fails with it unless a fresh matrix or the coupled step (below)
+  // gets through.
+  std::string failure;
   auto diverged = [&](const Eigen::VectorXd& phi) {
     std::ostringstream why;
     Eigen::Index worst = 0;
@@ -396,7 +399,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
     why << "t = " << t1 << " s: the Newton iteration diverged or its matrix is singular: a correction was not finite at "
         << "iteration " << iterations_ << " (largest constraint residual in "
         << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")" << last_state_diagnosis();
-    throw StepFailure(why.str());
+    if (failure.empty()) failure = why.str();
   };
   if (fresh_starts_ > 0) {
     refresh_ = true;
@@ -451,10 +454,13 @@ void GeneralizedAlpha::advance(double h, double t1) {
         if (!sparse_coupled) solver_->factor(t1, q, v, qdd, mu, jacobian);
         if (stabilized) {
           if (!projected_->factor(jacobian, squared_scales_)) {  // Φ_q W Φ_qᵀ
-            if (iterations_ > 1)  // rows independent at the predictor lost it at a diverging iterate
-              throw StepFailure("t = " + std::to_string(t1) + " s: the Newton iteration diverged: at iteration " +
-                                std::to_string(iterations_) + " the constraint rows became dependent (Φ_q W Φ_qᵀ is "
-                                "not positive definite)" + last_state_diagnosis());
+            if (iterations_ > 1) {  // rows independent at the predictor lost it at a diverging iterate
+              if (failure.empty())
+                failure = "t = " + std::to_string(t1) + " s: the Newton iteration diverged: at iteration " +
+                          std::to_string(iterations_) + " the constraint rows became dependent (Φ_q W Φ_qᵀ is not "
+                          "positive definite)" + last_state_diagnosis();
+              break;
+            }
             throw StepFailure("t = " + std::to_string(t1) + " s: the constraint rows are dependent (Φ_q W Φ_qᵀ is not "
                               "positive definite)" + last_state_diagnosis());
           }
@@ -466,9 +472,12 @@ void GeneralizedAlpha::advance(double h, double t1) {
             evaluated = true;
             const Eigen::MatrixXd direction = squared_scales_.asDiagonal() * system_.constraint_jacobian(t_, q_).transpose();
             if (!coupling_->build(system_, *solver_, t1, q, v, qdd, mu, Eigen::MatrixXd(jacobian), direction, residual,
-                                  scales_, beta_prime, gamma_prime, h))
-              throw StepFailure("t = " + std::to_string(t1) + " s: the coupling of the position and velocity rows "
-                                "(stabilised index-2) is not finite" + last_state_diagnosis());
+                                  scales_, beta_prime, gamma_prime, h)) {
+              if (failure.empty())
+                failure = "t = " + std::to_string(t1) + " s: the coupling of the position and velocity rows "
+                          "(stabilised index-2) is not finite" + last_state_diagnosis();
+              break;
+            }
           }
         }
         refresh_ = false;
@@ -486,12 +495,18 @@ void GeneralizedAlpha::advance(double h, double t1) {
         work_.nu_step = velocity_rows - phi;
         projected_->solve_in_place(work_.nu_step);
         correction_of(work_.nu_step, position_step);
-        if (!all_finite(position_step)) diverged(phi);
+        if (!all_finite(position_step)) {
+          diverged(phi);
+          break;
+        }
         work_.nu += work_.nu_step;
         q += position_step;
         evaluate_residual();
         solver_->solve(q, residual, velocity_rows, dx);
-        if (!all_finite(dx)) diverged(phi);
+        if (!all_finite(dx)) {
+          diverged(phi);
+          break;
+        }
       } else {
         // Index-3, or the coupled stabilised step: the index-3 system's solve, then Δν from the velocity rows, which
         // couple through Z = dΦ_q/dt (stabilized_coupling.hpp).
@@ -503,16 +518,25 @@ void GeneralizedAlpha::advance(double h, double t1) {
           dx.resize(n + m);
           dx.head(n) = work_.coupled.head(n) - position_step;
           dx.tail(m) = work_.coupled.segment(n, m);
-          if (!all_finite(position_step) || !all_finite(dx)) diverged(phi);
+          if (!all_finite(position_step) || !all_finite(dx)) {
+            diverged(phi);
+            break;
+          }
           work_.nu += work_.nu_step;
           q += position_step;
         } else {
           solver_->solve(q, residual, phi, dx);
-          if (!all_finite(dx)) diverged(phi);
+          if (!all_finite(dx)) {
+            diverged(phi);
+            break;
+          }
           if (stabilized) {
             coupling_->complete(dx, phi, velocity_rows, work_.nu_step);
             correction_of(work_.nu_step, position_step);
-            if (!all_finite(position_step) || !all_finite(dx)) diverged(phi);
+            if (!all_finite(position_step) || !all_finite(dx)) {
+              diverged(phi);
+              break;
+            }
             work_.nu += work_.nu_step;
             q += position_step;
           }
@@ -559,11 +583,13 @@ void GeneralizedAlpha::advance(double h, double t1) {
       previous_correction = correction;
     }
     if (converged) break;
+    // A step that failed is tried again from its predictor: with a fresh matrix if its matrix was kept, then (stabilised
+    // form) with the coupled step; a failure of the last resort stops the run with the reason.
     if (attempt == 0 && !fresh_this_step) {  // the kept matrix was too old: once more with a fresh one
       refresh_ = true;
       continue;
     }
-    if (stabilized && !coupled_) {
+    if (stabilized && !couple_) {  // (couple_, not coupled_: an attempt may fail before its matrix is built)
       // A fresh matrix did not converge with the alternating step: once more with the coupled one, which then stays
       // for the rest of the run (stabilized_coupling.hpp; slower to build, so not used before it is needed).
       couple_ = refresh_ = true;
@@ -576,6 +602,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
                           " constraint rows)");
       continue;
     }
+    if (!failure.empty()) throw StepFailure(failure);
     Eigen::Index worst = 0;
     const Eigen::VectorXd now = system_.constraints(t1, q);
     if (m > 0) now.cwiseAbs().maxCoeff(&worst);

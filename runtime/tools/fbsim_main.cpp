@@ -110,7 +110,7 @@ int main(int argc, char** argv) {
     {
       nlohmann::ordered_json removed = nlohmann::ordered_json::array();
       for (const flexbody::runtime::RemovedConstraint& c : scene.removed)
-        removed.push_back({{"joint", c.name}, {"row", c.row + 1}, {"meaning", c.meaning}});
+        removed.push_back({{"joint", c.name}, {"row", c.row + 1}, {"meaning", c.meaning}, {"gap", c.gap}});
       j["removed_constraints"] = removed;
     }
     j["cpu_s"] = summary.cpu_seconds;
@@ -147,10 +147,14 @@ int main(int argc, char** argv) {
     for (std::size_t k = 0; k < scene.removed.size();) {  // one line per joint
       const std::size_t joint = scene.removed[k].joint;
       std::string rows;
-      for (; k < scene.removed.size() && scene.removed[k].joint == joint; ++k)
+      double gap = 0.0;
+      for (; k < scene.removed.size() && scene.removed[k].joint == joint; ++k) {
         rows += (rows.empty() ? "" : "; ") + scene.removed[k].meaning;
-      std::cout << fmt::format("  joint '{}': redundant rows left out ({}): the other joints carry them\n",
-                               scene.system.joints()[joint].name, rows);
+        gap = std::max(gap, scene.removed[k].gap);
+      }
+      std::cout << fmt::format("  joint '{}': redundant rows left out ({}): the other joints carry them{}\n",
+                               scene.system.joints()[joint].name, rows,
+                               gap > 1e-9 ? fmt::format(" (they are off by up to {:.3g} at the start)", gap) : "");
     }
     std::cout << fmt::format("  {:.1f} us per step ({:.1f} in the integrator, the rest checks and outputs)\n",
                              1e6 * summary.wall_seconds / std::max(1.0, static_cast<double>(summary.steps)),

@@ -576,7 +576,17 @@ Scene read_scene(const std::filesystem::path& file) {
   } catch (const runtime::AssemblyError& e) {
     r.fail(e.joint < joint_nodes.size() ? joint_nodes[e.joint] : root, e.what());
   }
-  if (scene.assembly.iterations > 0) remove_redundant(scene.system.initial_coordinates());
+  if (scene.assembly.iterations > 0) {
+    const Eigen::VectorXd q = scene.system.initial_coordinates();
+    for (runtime::RemovedConstraint& c : scene.removed) {  // the rows removed before: their gaps once assembled
+      runtime::Joint whole = scene.system.joints()[c.joint];
+      whole.removed = 0;
+      c.gap = std::abs(runtime::evaluate_joint(whole, 0.0, scene.system.body_coordinates(q, whole.first.body),
+                                               scene.system.body_coordinates(q, whole.second.body))
+                           .residual(c.row));
+    }
+    remove_redundant(q);
+  }
   return scene;
 }
 

@@ -2,6 +2,7 @@
 // translation normal to its plane and the two tilts of its axes); System::remove_redundant_constraints leaves them
 // out of the last joint, as Adams does, and the linkage runs. Its reactions are checked against the statics of the
 // plane (free-body diagrams of the three links, solved here), and its motion against what the removed rows held.
+#include "flexbody/runtime/assembly.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
 
@@ -43,8 +44,8 @@ Link add_bar(fr::System& system, std::vector<fr::BodyModel>& models, const std::
 }
 
 // The four-bar with gravity along −y; the crank's pin is a driven revolute held at its angle (`held`: a structure)
-// or a revolute (the linkage swings).
-fr::System four_bar(std::vector<fr::BodyModel>& models, bool held) {
+// or a revolute (the linkage swings). `d_lift` [m] puts D's ground pin off the plane: the loop then does not close.
+fr::System four_bar(std::vector<fr::BodyModel>& models, bool held, double d_lift = 0.0) {
   models.reserve(3);  // the markers and the system keep pointers into the models
   fr::System system;
   const Link crank = add_bar(system, models, "crank", kA, kB, kMasses[0]);
@@ -60,7 +61,7 @@ fr::System four_bar(std::vector<fr::BodyModel>& models, bool held) {
                                   coordinates(crank.body)));
   system.add_joint(fr::make_joint("C", fr::JointType::revolute, rocker.to, coupler.to, z, coordinates(rocker.body),
                                   coordinates(coupler.body)));
-  system.add_joint(fr::make_joint("D", fr::JointType::revolute, rocker.from, fr::ground_marker(kD), z,
+  system.add_joint(fr::make_joint("D", fr::JointType::revolute, rocker.from, fr::ground_marker(kD + d_lift * z), z,
                                   coordinates(rocker.body), Eigen::VectorXd()));
   system.set_gravity(Eigen::Vector3d(0, -kGravity, 0));
   return system;
@@ -181,4 +182,86 @@ TEST(RedundantConstraints, TheFreeFourBarSwingsInItsPlaneAndConservesEnergy) {
   const double e1 = system.energies(integrator.coordinates(), integrator.velocities()).total();
   const double scale = (kMasses[0] + kMasses[1] + kMasses[2]) * kGravity * 1.0;  // m g times the linkage's size
   EXPECT_LT(std::abs(e1 - e0), 1e-6 * scale);
+}
+
+TEST(RedundantConstraints, ALoopThatDoesNotCloseIsRefusedByTheAssembly) {
+  // D's ground pin 2 mm off the plane: the rows that D keeps (x, y) are met, the removed translation along z is not.
+  // No move closes it (that row is no longer solved for), so the assembly names the joint instead of starting
+  // a run that ignores a misfit of 2 mm: above its tolerance of 1e-3 of the rocker's 0.63 m.
+  std::vector<fr::BodyModel> models;
+  fr::System system = four_bar(models, false, 2e-3);
+  ASSERT_EQ(system.remove_redundant_constraints(0.0, system.initial_coordinates()).size(), 3u);
+  fr::AssemblyOptions options;
+  options.tolerance = 1e-3;
+  try {
+    fr::assemble(system, options);
+    ADD_FAILURE() << "an inconsistent redundant row was accepted";
+  } catch (const fr::AssemblyError& e) {
+    EXPECT_EQ(e.joint, 3u);
+    EXPECT_EQ(std::string(e.what()).rfind("joint 'D': its redundant row (translation along z) is off by 0.002 m", 0), 0u)
+        << e.what();
+  }
+  // Within the tolerance it is accepted, and the removed row's gap is what remove_redundant_constraints reported.
+  std::vector<fr::BodyModel> models_small;
+  fr::System slightly = four_bar(models_small, false, 1e-5);
+  const std::vector<fr::RemovedConstraint> removed = slightly.remove_redundant_constraints(0.0, slightly.initial_coordinates());
+  ASSERT_EQ(removed.size(), 3u);
+  EXPECT_NEAR(removed[0].gap, 1e-5, 1e-15);
+  EXPECT_NO_THROW(fr::assemble(slightly, options));
+}
+
+TEST(RedundantConstraints, AJointWithEveryRowRemovedRunsOnTheDenseNewtonMatrix) {
+  // A spherical joint at a revolute joint's pivot repeats all three of its rows: it keeps none. The dense reference
+  // matrix (with the joints' curvature) and the constant core then agree on the motion of the bar.
+  std::vector<fr::BodyModel> models;
+  models.reserve(1);
+  std::vector<Eigen::VectorXd> ends;
+  for (const fr::NewtonMatrix matrix : {fr::NewtonMatrix::constant_core, fr::NewtonMatrix::dense}) {
+    fr::System system;
+    models.clear();
+    const Link bar = add_bar(system, models, "bar", kA, kB, kMasses[0]);
+    const Eigen::VectorXd q = system.initial_coordinates();
+    system.add_joint(fr::make_joint("pin", fr::JointType::revolute, bar.from, fr::ground_marker(kA), Eigen::Vector3d::UnitZ(),
+                                    system.body_coordinates(q, 0), Eigen::VectorXd()));
+    system.add_joint(fr::make_joint("ball", fr::JointType::spherical, bar.from, fr::ground_marker(kA), Eigen::Vector3d::UnitZ(),
+                                    system.body_coordinates(q, 0), Eigen::VectorXd()));
+    system.set_gravity(Eigen::Vector3d(0, -kGravity, 0));
+    ASSERT_EQ(system.remove_redundant_constraints(0.0, q).size(), 3u);
+    ASSERT_EQ(system.joints()[1].rows(), 0);
+    EXPECT_EQ(system.constraint_hessian(0.0, q, Eigen::VectorXd::Ones(system.constraint_count())).rows(), q.size());
+    fr::GeneralizedAlphaOptions options;
+    options.newton_matrix = matrix;
+    fr::GeneralizedAlpha integrator(system, options);
+    for (int i = 0; i < 100; ++i) integrator.step();
+    const fr::JointReaction r = system.joint_reaction(1, integrator.time(), integrator.coordinates(), integrator.multipliers());
+    EXPECT_EQ(r.force.norm(), 0.0);  // it carries nothing: the pin does
+    ends.push_back(integrator.coordinates());
+  }
+  // The same Newton solution, to the iteration's tolerance (1e-6 of each step's predictor-corrector distance).
+  EXPECT_LT((ends[0] - ends[1]).norm(), 1e-8);
+}
+
+TEST(RedundantConstraints, ASecondCallMapsRowsPastTheOnesRemovedBefore) {
+  // A fixed joint at a revolute joint's pivot, whose type rows 1 and 3 were removed by an earlier call: of its
+  // kept rows 0, 2, 4 and 5, the first three repeat the revolute's (x, z, the tilt about y), the last (the rotation
+  // about the axis) does not. The dependent rows of the compacted joint map to type rows 0, 2 and 4.
+  std::vector<fr::BodyModel> models;
+  models.reserve(1);
+  fr::System system;
+  const Link bar = add_bar(system, models, "bar", kA, kB, kMasses[0]);
+  const Eigen::VectorXd q = system.initial_coordinates();
+  system.add_joint(fr::make_joint("pin", fr::JointType::revolute, bar.from, fr::ground_marker(kA), Eigen::Vector3d::UnitZ(),
+                                  system.body_coordinates(q, 0), Eigen::VectorXd()));
+  fr::Joint clamp = fr::make_joint("clamp", fr::JointType::fixed, bar.from, fr::ground_marker(kA), Eigen::Vector3d::UnitZ(),
+                                   system.body_coordinates(q, 0), Eigen::VectorXd());
+  clamp.removed = 0b01010;
+  system.add_joint(clamp);
+  const std::vector<fr::RemovedConstraint> removed = system.remove_redundant_constraints(0.0, q);
+  ASSERT_EQ(removed.size(), 3u);
+  EXPECT_EQ(removed[0].row, 0);
+  EXPECT_EQ(removed[1].row, 2);
+  EXPECT_EQ(removed[2].row, 4);
+  EXPECT_EQ(system.joints()[1].removed, 0b11111u);
+  EXPECT_EQ(system.joints()[1].rows(), 1);
+  EXPECT_EQ(system.first_redundant_constraint(0.0, q), -1);
 }

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -83,6 +84,7 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
       double size = std::numeric_limits<double>::infinity();
       for (const Marker* m : {&j.first, &j.second})
         if (m->body != kGround) size = std::min(size, body_size(system.model(m->body)));
+      if (j.rows() == 0) continue;  // every row removed as redundant
       const double gap = phi0.segment(system.joint_row(k), j.rows()).cwiseAbs().maxCoeff();
       if (gap / size > worst_share) worst_share = gap / size, worst = k;
     }
@@ -159,10 +161,34 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
       const Joint& j = system.joints()[k];
       std::ostringstream why;
       why << "joint '" << j.name << "': its markers " << j.first.name << " and " << j.second.name << " are "
-          << phi0.segment(system.joint_row(k), j.rows()).cwiseAbs().maxCoeff()
+          << (j.rows() > 0 ? phi0.segment(system.joint_row(k), j.rows()).cwiseAbs().maxCoeff() : 0.0)
           << " m apart; closing them moves body '" << system.body_name(b) << "' by " << report.moves[static_cast<std::size_t>(b)]
           << " m, more than the assembly tolerance (" << 100.0 * options.tolerance << " % of its size, "
           << body_size(model) << " m): the scene must start nearly assembled";
+      throw AssemblyError(why.str(), k);
+    }
+  }
+  // Rows left out as redundant (System::remove_redundant_constraints) are not closed by the assembly: they hold
+  // only if the loop closes. One off by more than the tolerance (a length against the smaller body's size, a
+  // direction row as it is, about an angle) is an inconsistent redundant constraint: the parts do not fit.
+  for (std::size_t k = 0; k < system.joints().size(); ++k) {
+    const Joint& j = system.joints()[k];
+    if (j.removed == 0) continue;
+    Joint whole = j;
+    whole.removed = 0;
+    const Eigen::VectorXd q1 = system.body_coordinates(q, j.first.body), q2 = system.body_coordinates(q, j.second.body);
+    const Eigen::VectorXd all = evaluate_joint(whole, 0.0, q1, q2).residual;
+    double size = std::numeric_limits<double>::infinity();
+    for (const Marker* m : {&j.first, &j.second})
+      if (m->body != kGround) size = std::min(size, body_size(system.model(m->body)));
+    for (int row = 0; row < j.type_rows(); ++row) {
+      if (!((j.removed >> row) & 1U)) continue;
+      const bool length = row < (j.type == JointType::prismatic ? 2 : 3);
+      if (std::abs(all(row)) <= options.tolerance * (length ? size : 1.0)) continue;
+      std::ostringstream why;
+      why << "joint '" << j.name << "': its redundant row (" << joint_row_meaning(j, row, q1, q2) << ") is off by "
+          << std::abs(all(row)) << (length ? " m" : "") << " once the other joints are closed, more than the assembly "
+          << "tolerance: the parts do not fit (an inconsistent redundant constraint)";
       throw AssemblyError(why.str(), k);
     }
   }

@@ -10,6 +10,7 @@
 #include <Eigen/SparseQR>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace flexbody::runtime {
@@ -65,10 +66,15 @@ std::vector<Eigen::Index> dependent_rows(const Eigen::SparseMatrix<double>& jac)
   for (Eigen::Index k = 0; k < jac.outerSize(); ++k)
     for (Eigen::SparseMatrix<double>::InnerIterator it(jac, k); it; ++it) length(it.row()) += it.value() * it.value();
   std::vector<Eigen::Index> dependent;
-  for (Eigen::Index k = 0; k < jac.rows(); ++k)
-    if (!(length(k) > 0.0)) dependent.push_back(k);  // a row that constrains nothing
-  if (!dependent.empty()) return dependent;
-  length = length.cwiseSqrt().cwiseInverse();
+  bool empty_rows = false;  // a row that constrains nothing: dependent, and the QR below finds the others too
+  for (Eigen::Index k = 0; k < jac.rows(); ++k) {
+    if (length(k) > 0.0) {
+      length(k) = 1.0 / std::sqrt(length(k));
+    } else {
+      length(k) = 1.0;
+      empty_rows = true;
+    }
+  }
   Eigen::SparseMatrix<double> rows = (length.asDiagonal() * jac).transpose();  // n x m, column k = row k / |row k|
   rows.makeCompressed();
   // First whether any row is dependent at all, cheaply: the LDLᵀ of the rows' Gram matrix (unit diagonal) in a
@@ -77,7 +83,7 @@ std::vector<Eigen::Index> dependent_rows(const Eigen::SparseMatrix<double>& jac)
   // sparse_newton_test). All above 1e-6 (remainders above 1e-3 of a row's length) means independent rows, beyond
   // doubt; otherwise the QR below decides, and finds the dependent rows in row order (slower: its fill grows
   // with the scene's width; the dense Gram-Schmidt it replaces cost O(m² n) in every scene).
-  {
+  if (!empty_rows) {
     const Eigen::SparseMatrix<double> gram = rows.transpose() * rows;
     const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(gram);
     if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 1e-6) return dependent;
@@ -122,8 +128,11 @@ std::vector<RemovedConstraint> System::remove_redundant_constraints(double t, co
     for (;; ++type_row)
       if (!((j.removed >> type_row) & 1U) && kept-- == 0) break;
     masks[k] |= 1U << type_row;
-    removed.push_back({k, j.name, type_row,
-                       joint_row_meaning(j, type_row, body_coordinates(q, j.first.body), body_coordinates(q, j.second.body))});
+    const Eigen::VectorXd q1 = body_coordinates(q, j.first.body), q2 = body_coordinates(q, j.second.body);
+    Joint whole = j;
+    whole.removed = 0;
+    removed.push_back({k, j.name, type_row, joint_row_meaning(j, type_row, q1, q2),
+                       std::abs(evaluate_joint(whole, t, q1, q2).residual(type_row))});
   }
   joint_total_ = 0;
   for (std::size_t k = 0; k < joints_.size(); ++k) {

@@ -688,6 +688,7 @@ void System::add_joint_hessian(double t, const Eigen::VectorXd& q, const Eigen::
                                Eigen::MatrixXd& out) const {
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
+    if (j.rows() == 0) continue;  // every row removed as redundant
     const Eigen::VectorXd l = lambda.segment(joint_row(k), j.rows());
     if (!(l.cwiseAbs().maxCoeff() > 0.0)) continue;
     // A spherical joint between GCMS bodies (or ground) has rows linear in q: no curvature.

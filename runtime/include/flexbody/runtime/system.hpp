@@ -69,16 +69,17 @@ struct SpringDamper {
   double rest_length = 0.0;  ///< ℓ0 [m]
 };
 
-/// The wrench a joint applies to the body of its first marker, in world axes: the force [N] and the moment [N m]
-/// about the marker's current point.
 /// A joint's constraint row left out because it repeats other rows (System::remove_redundant_constraints).
 struct RemovedConstraint {
   std::size_t joint;    ///< its index in System::joints()
   std::string name;     ///< the joint's name
   int row;              ///< the row of the joint type's equations (Joint::type_rows), from 0
   std::string meaning;  ///< what it stopped, in global terms at the time of removal: joint_row_meaning
+  double gap = 0.0;     ///< its residual where it was removed: a length [m] for a gap row, else a direction's cosine
 };
 
+/// The wrench a joint applies to the body of its first marker, in world axes: the force [N] and the moment [N m]
+/// about the marker's current point.
 struct JointReaction {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();
@@ -212,7 +213,9 @@ class System {
   /// repeat carry their reactions: the removed rows' reaction components are reported by the joints they repeat,
   /// and a joint with removed rows reports none along them (Adams's convention). The test is at (t, q): rows that
   /// are dependent only in that configuration (a linkage at a dead point) are removed too, so call it with the
-  /// assembled initial coordinates. Throws std::invalid_argument when a body's own reference rows are dependent.
+  /// assembled initial coordinates (runtime::assemble refuses removed rows that the closed loop leaves off by more
+  /// than its tolerance), and before a GeneralizedAlpha is built on the system: the row count changes. Rows once
+  /// removed stay removed. Throws std::invalid_argument when a body's own reference rows are dependent.
   std::vector<RemovedConstraint> remove_redundant_constraints(double t, const Eigen::VectorXd& q);
   /// What constraint row k is: "body 'bar': orthogonality", "body 'bar': Tisserand", "joint 'pivot'", "body 'bar':
   /// normalisation of the Euler parameters".

@@ -579,11 +579,9 @@ Scene read_scene(const std::filesystem::path& file) {
   if (scene.assembly.iterations > 0) {
     const Eigen::VectorXd q = scene.system.initial_coordinates();
     for (runtime::RemovedConstraint& c : scene.removed) {  // the rows removed before: their gaps once assembled
-      runtime::Joint whole = scene.system.joints()[c.joint];
-      whole.removed = 0;
-      c.gap = std::abs(runtime::evaluate_joint(whole, 0.0, scene.system.body_coordinates(q, whole.first.body),
-                                               scene.system.body_coordinates(q, whole.second.body))
-                           .residual(c.row));
+      const runtime::Joint& j = scene.system.joints()[c.joint];
+      c.gap = std::abs(runtime::joint_type_residuals(j, 0.0, scene.system.body_coordinates(q, j.first.body),
+                                                     scene.system.body_coordinates(q, j.second.body))(c.row));
     }
     remove_redundant(q);
   }

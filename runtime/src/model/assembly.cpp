@@ -76,16 +76,19 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
       throw std::invalid_argument("assembly: " + system.constraint_name(row) + " is violated by " + std::to_string(phi(row)));
     return report;
   }
+  auto smaller_size = [&](const Joint& j) {  // of the joint's bodies [m]
+    double size = std::numeric_limits<double>::infinity();
+    for (const Marker* m : {&j.first, &j.second})
+      if (m->body != kGround) size = std::min(size, body_size(system.model(m->body)));
+    return size;
+  };
   auto worst_joint = [&]() -> std::size_t {
     std::size_t worst = 0;
     double worst_share = -1.0;
     for (std::size_t k = 0; k < system.joints().size(); ++k) {
       const Joint& j = system.joints()[k];
-      double size = std::numeric_limits<double>::infinity();
-      for (const Marker* m : {&j.first, &j.second})
-        if (m->body != kGround) size = std::min(size, body_size(system.model(m->body)));
       if (j.rows() == 0) continue;  // every row removed as redundant
-      const double gap = phi0.segment(system.joint_row(k), j.rows()).cwiseAbs().maxCoeff();
+      const double gap = phi0.segment(system.joint_row(k), j.rows()).cwiseAbs().maxCoeff(), size = smaller_size(j);
       if (gap / size > worst_share) worst_share = gap / size, worst = k;
     }
     return worst;
@@ -174,17 +177,12 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
   for (std::size_t k = 0; k < system.joints().size(); ++k) {
     const Joint& j = system.joints()[k];
     if (j.removed == 0) continue;
-    Joint whole = j;
-    whole.removed = 0;
     const Eigen::VectorXd q1 = system.body_coordinates(q, j.first.body), q2 = system.body_coordinates(q, j.second.body);
-    const Eigen::VectorXd all = evaluate_joint(whole, 0.0, q1, q2).residual;
-    double size = std::numeric_limits<double>::infinity();
-    for (const Marker* m : {&j.first, &j.second})
-      if (m->body != kGround) size = std::min(size, body_size(system.model(m->body)));
+    const Eigen::VectorXd all = joint_type_residuals(j, 0.0, q1, q2);
     for (int row = 0; row < j.type_rows(); ++row) {
       if (!((j.removed >> row) & 1U)) continue;
-      const bool length = row < (j.type == JointType::prismatic ? 2 : 3);
-      if (std::abs(all(row)) <= options.tolerance * (length ? size : 1.0)) continue;
+      const bool length = row < j.length_rows();
+      if (std::abs(all(row)) <= options.tolerance * (length ? smaller_size(j) : 1.0)) continue;
       std::ostringstream why;
       why << "joint '" << j.name << "': its redundant row (" << joint_row_meaning(j, row, q1, q2) << ") is off by "
           << std::abs(all(row)) << (length ? " m" : "") << " once the other joints are closed, more than the assembly "

@@ -129,10 +129,8 @@ std::vector<RemovedConstraint> System::remove_redundant_constraints(double t, co
       if (!((j.removed >> type_row) & 1U) && kept-- == 0) break;
     masks[k] |= 1U << type_row;
     const Eigen::VectorXd q1 = body_coordinates(q, j.first.body), q2 = body_coordinates(q, j.second.body);
-    Joint whole = j;
-    whole.removed = 0;
     removed.push_back({k, j.name, type_row, joint_row_meaning(j, type_row, q1, q2),
-                       std::abs(evaluate_joint(whole, t, q1, q2).residual(type_row))});
+                       std::abs(joint_type_residuals(j, t, q1, q2)(type_row))});
   }
   joint_total_ = 0;
   for (std::size_t k = 0; k < joints_.size(); ++k) {

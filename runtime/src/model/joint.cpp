@@ -189,11 +189,11 @@ std::string joint_row_meaning(const Joint& j, int row, const VectorRef& q1, cons
     return "rotation about " + global(about.normalized());
   };
   const bool prismatic = j.type == JointType::prismatic;
-  if (row < (prismatic ? 2 : 3)) {
+  if (row < j.length_rows()) {
     if (prismatic) return "translation along " + global(marker_direction(j.second, q2, row == 0 ? j.normal_a : j.normal_b));
     return std::string("translation along ") + "xyz"[row];
   }
-  const int orientation = row - (prismatic ? 2 : 3);
+  const int orientation = row - j.length_rows();
   switch (j.type) {
     case JointType::fixed:
     case JointType::prismatic: {
@@ -208,6 +208,12 @@ std::string joint_row_meaning(const Joint& j, int row, const VectorRef& q1, cons
     case JointType::spherical: break;
   }
   return "row " + std::to_string(row + 1);
+}
+
+Eigen::VectorXd joint_type_residuals(const Joint& j, double t, const VectorRef& q1, const VectorRef& q2) {
+  Joint whole = j;
+  whole.removed = 0;
+  return evaluate_joint(whole, t, q1, q2).residual;
 }
 
 JointEvaluation evaluate_joint(const Joint& j, double t, const VectorRef& q1, const VectorRef& q2) {

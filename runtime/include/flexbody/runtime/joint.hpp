@@ -51,6 +51,9 @@ struct Joint {
   /// 5 (the gap along two normals; three for the orientation), fixed 6, driven revolute 6 (the revolute's and the
   /// angle).
   [[nodiscard]] int type_rows() const;
+  /// The type's first rows that are lengths [m]: the gap r1 − r2 (3), or a prismatic joint's gap along its two
+  /// normals (2); the rest compare directions (cosines, dimensionless).
+  [[nodiscard]] int length_rows() const { return type == JointType::prismatic ? 2 : 3; }
 };
 
 /// What the type's row `row` of joint j stops at (q1, q2), in global terms: "translation along x" (a gap row),
@@ -80,5 +83,7 @@ struct JointEvaluation {
 /// The same into `out`: an evaluation reused for the same joint allocates nothing (the Newton iteration's
 /// joints, System).
 void evaluate_joint(const Joint& joint, double t, const VectorRef& q1, const VectorRef& q2, JointEvaluation& out);
+/// Every row of the joint's type at (t, q1, q2), the removed ones included (type_rows()): how far a removed row is off.
+[[nodiscard]] Eigen::VectorXd joint_type_residuals(const Joint& joint, double t, const VectorRef& q1, const VectorRef& q2);
 
 }  // namespace flexbody::runtime

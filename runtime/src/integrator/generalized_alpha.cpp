@@ -337,9 +337,8 @@ void GeneralizedAlpha::build_sparse_coupling(double t1, const Eigen::VectorXd& q
                                              const Eigen::VectorXd& qdd, const Eigen::VectorXd& mu, double h,
                                              double gamma_prime) {
   const Eigen::SparseMatrix<double> rate = detail::constraint_rate(system_, t1, q, v, scales_, h, gamma_prime);  // Z/γ'
-  Eigen::SparseMatrix<double> at_start;
-  system_.sparse_constraint_jacobian(t_, q_, at_start);  // P = W Φ_q(q_n)ᵀ: the step's direction
-  const Eigen::SparseMatrix<double, Eigen::RowMajor> direction = squared_scales_.asDiagonal() * at_start.transpose();
+  // P = W Φ_q(q_f)ᵀ: the direction of ν's correction (advance's correction_of), with q_f this iterate
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> direction = squared_scales_.asDiagonal() * work_.jacobian.transpose();
   const Eigen::SparseMatrix<double> projected = work_.jacobian * direction;
   sparse_core_->factor_coupled(t1, q, v, qdd, mu, work_.jacobian, rate, direction, projected);
 }
@@ -380,13 +379,17 @@ void GeneralizedAlpha::advance(double h, double t1) {
   const bool stabilized = options_.constraints == ConstraintForm::stabilized_index2 && m > 0;
   Eigen::SparseMatrix<double>& jacobian = work_.jacobian;
   Eigen::VectorXd &velocity_rows = work_.velocity_rows, &position_step = work_.position_step;
-  // The position correction W Φ_q(q_n)ᵀ ν: its direction is fixed for the step, so that the correction is normal to
-  // the constraint manifold at q_n. (Taken from an older Newton matrix, it turned the correction along the manifold:
-  // a drift that put a rigid pendulum's error at h = 1e-5 s 5000 times above its second-order value.) Applied as
-  // W Φ_qᵀ ν without forming Φ_q, O(n_f) per body: forming it every step cost a fifth of a 20-mode step.
+  // The position correction W Φ_q(q_f)ᵀ ν along the Jacobian of the kept Newton matrix (q_f the iterate where it was
+  // built), the one its factor of Φ_q W Φ_qᵀ holds: then a correction Δν meets the position rows up to
+  // (Φ_q(q) − Φ_q(q_f)) W Φ_q(q_f)ᵀ Δν. With the direction Φ_q(q_n) of the step's start and the factor from q_f, the
+  // mismatch had both Jacobians in it and, through (Φ_q W Φ_qᵀ)⁻¹, grew with the scene's weakest constraint mode: a
+  // chain of 64 rigid links (its out-of-plane bending) contracted by 0.86 per iteration and needed the coupled step
+  // at t = 0.019 s; with this direction it converges in 4.6 iterations per step (bench/README.md "scale_bench").
+  // The converged step then moves along q_f's normal rather than q_n's: bench/convergence_bench's errors changed
+  // by -0.3 to +1.1 % (rigid pendulum, heavy top, flexible pendulum, 4e-4 to 1e-5 s), the orders not at all.
+  // `work_.shift` is the whole W Φ_q(q_f)ᵀ ν in q; a new Newton matrix moves it to the new Jacobian's direction.
   auto correction_of = [&](const Eigen::VectorXd& nu, Eigen::VectorXd& out) {
-    out.setZero(n);
-    system_.add_constraint_jacobian_transpose_product(t_, q_, nu, out);
+    out.noalias() = jacobian.transpose() * nu;
     out.array() *= squared_scales_.array();
   };
   // Why the first attempt that diverged did: the step fails with it unless a fresh matrix or the coupled step (below)
@@ -419,9 +422,12 @@ void GeneralizedAlpha::advance(double h, double t1) {
       // the last step's ν leaves the first iteration a small Δν, whose effect on the dynamic rows is only seen at the
       // next iteration (measured: a flexible pendulum needed 3.1-3.6 iterations per step from ν = 0).
       if (nu_.size() != m) nu_ = Eigen::VectorXd::Zero(m);
-      correction_of(nu_, position_step);
-      q += position_step;
       work_.nu = nu_;
+      if (jacobian.rows() == m)
+        correction_of(nu_, work_.shift);
+      else
+        work_.shift.setZero(n);  // the first step: no Newton matrix yet, and ν = 0
+      q += work_.shift;
     }
     // The world's extent [m]: joints and springs compare positions of this size, so their residuals round at ε times
     // it, wherever the body is (a pendulum pivoted 100 m from the origin).
@@ -433,13 +439,6 @@ void GeneralizedAlpha::advance(double h, double t1) {
     bool slow = false;  // a correction shrank less than fourfold in this attempt: the kept matrix may be stale
     for (iterations_ = 1; iterations_ <= options_.max_iterations; ++iterations_) {
       Eigen::VectorXd& phi = work_.phi;
-      if (stabilized) {
-        system_.constraints_and_rates(t1, q, v, phi, velocity_rows);  // Φ and Φ_q v, each joint evaluated once
-        if (time_dependent_) system_.add_constraint_time_derivative(t1, q, velocity_rows);
-        velocity_rows /= gamma_prime;
-      } else {
-        system_.constraints(t1, q, phi);
-      }
       auto evaluate_residual = [&] {  // the scaled dynamic rows at the iterate: (M q̈ − f)/β' + Φ_qᵀ μ
         system_.dynamic_residual(t1, q, v, qdd, residual);  // a floating-frame body's in one pass
         residual *= 1.0 / beta_prime;  // a product: a division per entry costs more than the rest of this line
@@ -449,6 +448,11 @@ void GeneralizedAlpha::advance(double h, double t1) {
       const bool refresh = refresh_ || !options_.reuse_newton_matrix;
       if (refresh) {
         system_.sparse_constraint_jacobian(t1, q, jacobian);
+        if (stabilized) {  // ν's correction so far, along the new Jacobian (correction_of)
+          q -= work_.shift;
+          correction_of(work_.nu, work_.shift);
+          q += work_.shift;
+        }
         // The coupled stabilised step with a sparse reduced matrix builds its own system (below).
         const bool sparse_coupled = stabilized && couple_ && sparse_core_ != nullptr;
         if (!sparse_coupled) solver_->factor(t1, q, v, qdd, mu, jacobian);
@@ -470,7 +474,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
           } else if (coupled_) {
             evaluate_residual();
             evaluated = true;
-            const Eigen::MatrixXd direction = squared_scales_.asDiagonal() * system_.constraint_jacobian(t_, q_).transpose();
+            const Eigen::MatrixXd direction = squared_scales_.asDiagonal() * Eigen::MatrixXd(jacobian).transpose();
             if (!coupling_->build(system_, *solver_, t1, q, v, qdd, mu, Eigen::MatrixXd(jacobian), direction, residual,
                                   scales_, beta_prime, gamma_prime, h)) {
               if (failure.empty())
@@ -484,6 +488,14 @@ void GeneralizedAlpha::advance(double h, double t1) {
         extra_iterations_ = 0;
         fresh_this_step = true;
         ++factorizations_;
+      }
+      // The rows after a new Newton matrix, which may have moved ν's correction to its Jacobian's direction.
+      if (stabilized) {
+        system_.constraints_and_rates(t1, q, v, phi, velocity_rows);  // Φ and Φ_q v, each joint evaluated once
+        if (time_dependent_) system_.add_constraint_time_derivative(t1, q, velocity_rows);
+        velocity_rows /= gamma_prime;
+      } else {
+        system_.constraints(t1, q, phi);
       }
       if (stabilized && !coupled_) {
         // Alternating: position rows first. The Newmark correction δ (v += γ' δ, q̈ += β' δ) will meet the velocity
@@ -500,6 +512,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
           break;
         }
         work_.nu += work_.nu_step;
+        work_.shift += position_step;
         q += position_step;
         evaluate_residual();
         solver_->solve(q, residual, velocity_rows, dx);
@@ -523,6 +536,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
             break;
           }
           work_.nu += work_.nu_step;
+          work_.shift += position_step;
           q += position_step;
         } else {
           solver_->solve(q, residual, phi, dx);
@@ -538,6 +552,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
               break;
             }
             work_.nu += work_.nu_step;
+            work_.shift += position_step;
             q += position_step;
           }
         }

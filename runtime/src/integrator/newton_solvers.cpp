@@ -163,7 +163,7 @@ void ConstantCoreNewton::core_solve(int body, const Eigen::Matrix3d& a, const do
 
 struct ConstantCoreNewton::Coupling {
   const Eigen::SparseMatrix<double>& rate;                          ///< Z/γ' (m x n)
-  const Eigen::SparseMatrix<double, Eigen::RowMajor>& direction;    ///< P = W Φ_q(q_n)ᵀ (n x m)
+  const Eigen::SparseMatrix<double, Eigen::RowMajor>& direction;    ///< P = W Φ_q(q_f)ᵀ (n x m)
   const Eigen::SparseMatrix<double>& projected;                     ///< J P (m x m)
 };
 

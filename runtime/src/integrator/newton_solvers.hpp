@@ -76,7 +76,7 @@ class ConstantCoreNewton final : public NewtonSolver {
   /// sparse, in the total position increment δ' = δ + P Δν, the multipliers' Δμ and Δν:
   ///
   ///   [S      Jᵀ   −M P] [δ' ]     [r        ]
-  ///   [J      0    0   ] [Δμ ] = − [Φ        ]      P = W Φ_q(q_n)ᵀ, Z = dΦ_q/dt along the motion,
+  ///   [J      0    0   ] [Δμ ] = − [Φ        ]      P = W Φ_q(q_f)ᵀ, Z = dΦ_q/dt along the motion,
   ///   [Z/γ'   0    −J P] [Δν ]     [Ψ/γ' − Φ ]
   ///
   /// (from S δ + Jᵀ Δμ + G P Δν = −r with G = ∂r/∂q = S − M + O(damping), J δ + J P Δν = −Φ and

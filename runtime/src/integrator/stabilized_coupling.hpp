@@ -3,8 +3,9 @@
 // stabilized_index2) with its three kinds of rows coupled, from the Newton solver of [S Jᵀ; J 0] and an m x m system.
 //
 // One iteration corrects the Newmark increment δ (q += δ, v += γ' δ, q̈ += β' δ), the scaled multipliers μ and the
-// position multipliers ν (q += P Δν, P = W Φ_q(q_n)ᵀ). Linearised, with r the scaled dynamic residual, G = ∂r/∂q,
-// Ψ = Φ_q v + Φ_t the velocity rows and Z = ∂Ψ/∂q = dΦ_q/dt (the Jacobian's rate along the motion):
+// position multipliers ν (q += P Δν, P = W Φ_q(q_f)ᵀ with q_f the iterate where the Newton matrix was built).
+// Linearised, with r the scaled dynamic residual, G = ∂r/∂q, Ψ = Φ_q v + Φ_t the velocity rows and Z = ∂Ψ/∂q =
+// dΦ_q/dt (the Jacobian's rate along the motion):
 //
 //   S δ + Jᵀ Δμ + G P Δν = −r,      J δ + J P Δν = −Φ,      (J + Z/γ') δ + (Z/γ') P Δν = −Ψ/γ'.
 //
@@ -14,8 +15,8 @@
 //
 //   (J P − (Z/γ') (X + P)) Δν = Ψ/γ' − Φ + (Z/γ') δ₀.
 //
-// Without Z and X this is J W Φ_q(q_n)ᵀ Δν = Ψ/γ' − Φ, nearly the projection J W Jᵀ Δν = Ψ/γ' − Φ (J at the
-// iterate) of the alternating step (generalized_alpha.cpp):
+// Without Z and X this is J W Φ_q(q_f)ᵀ Δν = Ψ/γ' − Φ, the projection of the alternating step (generalized_alpha.cpp,
+// its factor Φ_q W Φ_qᵀ at q_f):
 // Δν first, then the dynamic rows with the velocity rows at the moved positions. That alternation is cheaper (no
 // solves to build) and converges in two iterations in most scenes, but not where the velocity rows move fast with the
 // positions: a slider-crank whose 0.01 kg carriage (1 cm gyration radius) guides a slider at up to 11 m/s converged
@@ -50,7 +51,7 @@ namespace flexbody::runtime::detail {
 class StabilizedCoupling {
  public:
   /// Builds the coupling at the iterate (t, q, v, q̈, μ) for a fresh Newton matrix `solver` (factorized with the
-  /// Jacobian `jacobian` there). `direction` is P = W Φ_q(q_n)ᵀ (n x m); `residual` the scaled dynamic residual r at
+  /// Jacobian `jacobian` there). `direction` is P = W Φ_q(q_f)ᵀ (n x m); `residual` the scaled dynamic residual r at
   /// the iterate; `scales` the coordinates' length scales (difference steps); h the step. Returns false when a part
   /// is not finite.
   bool build(const System& system, NewtonSolver& solver, double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v,

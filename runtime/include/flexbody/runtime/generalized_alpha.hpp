@@ -186,12 +186,13 @@ class GeneralizedAlpha {
   struct Iterate {  // step()'s Newton iterate and its residual and correction: storage reused across steps
     Eigen::VectorXd qdd, a, v, q, mu, dx, residual, predicted;
     Eigen::VectorXd phi, velocity_rows, nu, nu_step, position_step;  ///< Φ; Ψ/γ', ν, Δν, W Φ_qᵀ Δν (stabilized_index2)
+    Eigen::VectorXd shift;  ///< W Φ_q(q_f)ᵀ ν: ν's whole correction in the iterate q (stabilized_index2)
     Eigen::SparseMatrix<double> jacobian;          ///< Φ_q at the iterate (System::sparse_constraint_jacobian)
     Eigen::VectorXd coupled;                       ///< [δ'; Δμ; Δν] of the sparse coupled step
   } work_;
-  /// ConstraintForm::stabilized_index2: Φ_q W Φ_qᵀ at the Newton matrix's iterate, factorized to detect dependent
-  /// rows, and the coupling of ν to δ and μ kept with the Newton matrix (an older one only converges more slowly;
-  /// the direction W Φ_q(q_n)ᵀ of each step decides the result).
+  /// ConstraintForm::stabilized_index2: Φ_q W Φ_qᵀ at the Newton matrix's iterate q_f, factorized (dependent rows
+  /// show there), and the coupling of ν to δ and μ, kept with the Newton matrix; ν corrects the positions along
+  /// W Φ_q(q_f)ᵀ, the same Jacobian (advance's correction_of).
   std::unique_ptr<detail::ConstraintProjection> projected_;
   bool sparse_ = false;  ///< the reduced Newton matrix and Φ_q W Φ_qᵀ are factorized sparse
   std::unique_ptr<detail::StabilizedCoupling> coupling_;

@@ -1,5 +1,7 @@
 #include "flexbody/runtime/joint.hpp"
 
+#include "marker_frame.hpp"
+
 #include <Eigen/Geometry>
 
 #include <array>
@@ -17,9 +19,9 @@ struct Direction {
   Eigen::Vector3d value;
   const Eigen::MatrixXd* jacobian;
 };
-Direction direction(const Marker& m, const VectorRef& q, const Eigen::Vector3d& d, Eigen::MatrixXd& storage) {
-  marker_direction_jacobian(m, q, d, storage);
-  return {marker_direction(m, q, d), &storage};
+Direction direction(const detail::MarkerFrame& frame, const Eigen::Vector3d& d, Eigen::MatrixXd& storage) {
+  frame.jacobian(d, storage);
+  return {frame.direction(d), &storage};
 }
 
 // The frame of a marker's body: A for a body, identity for ground (directions are fixed in it at assembly).
@@ -44,12 +46,12 @@ struct Rows {
 };
 
 // The three rows that keep two triads aligned: z1·y2, z1·x2, y1·x2.
-void orientation_rows(Rows& rows, const Joint& j, const VectorRef& q1, const VectorRef& q2) {
+void orientation_rows(Rows& rows, const Joint& j, const detail::MarkerFrame& f1, const detail::MarkerFrame& f2) {
   std::array<Eigen::MatrixXd, 4>& d = rows.out.directions;
-  const Direction x2 = direction(j.second, q2, j.triad_second.col(0), d[0]);
-  const Direction y2 = direction(j.second, q2, j.triad_second.col(1), d[1]);
-  const Direction y1 = direction(j.first, q1, j.triad_first.col(1), d[2]);
-  const Direction z1 = direction(j.first, q1, j.triad_first.col(2), d[3]);
+  const Direction x2 = direction(f2, j.triad_second.col(0), d[0]);
+  const Direction y2 = direction(f2, j.triad_second.col(1), d[1]);
+  const Direction y1 = direction(f1, j.triad_first.col(1), d[2]);
+  const Direction z1 = direction(f1, j.triad_first.col(2), d[3]);
   rows.dot(z1, y2);
   rows.dot(z1, x2);
   rows.dot(y1, x2);
@@ -129,31 +131,36 @@ void evaluate_joint(const Joint& j, double t, const VectorRef& q1, const VectorR
     }
   rows.next = j.type == JointType::prismatic ? 0 : 3;
   std::array<Eigen::MatrixXd, 4>& d = out.directions;
+  detail::MarkerFrame f1, f2;  // each marker's rotation, shared by its directions
+  if (j.type != JointType::spherical) {
+    f1.evaluate(j.first, q1, out.frames[0]);
+    f2.evaluate(j.second, q2, out.frames[1]);
+  }
   switch (j.type) {
     case JointType::spherical: break;
-    case JointType::fixed: orientation_rows(rows, j, q1, q2); break;
+    case JointType::fixed: orientation_rows(rows, j, f1, f2); break;
     case JointType::prismatic: {
       for (int k = 0; k < 2; ++k) {  // gap · n with n at marker 2: ∂/∂q1 = nᵀ J_r1, ∂/∂q2 = −nᵀ J_r2 + gapᵀ J_n
-        const Direction n = direction(j.second, q2, k == 0 ? j.normal_a : j.normal_b, d[0]);
+        const Direction n = direction(f2, k == 0 ? j.normal_a : j.normal_b, d[0]);
         out.residual(k) = gap.dot(n.value) - j.offset(k);
         set_row(out.jacobian_first, k, n.value, jr1);
         for (Eigen::Index c = 0; c < n.jacobian->cols(); ++c)
           out.jacobian_second(k, c) = -n.value.dot(jr2.col(c)) + gap.dot(n.jacobian->col(c));
       }
       rows.next = 2;
-      orientation_rows(rows, j, q1, q2);
+      orientation_rows(rows, j, f1, f2);
       break;
     }
     case JointType::revolute:
     case JointType::driven_revolute: {
-      const Direction axis = direction(j.first, q1, j.axis_first, d[0]);
-      rows.dot(axis, direction(j.second, q2, j.normal_a, d[1]));
-      rows.dot(axis, direction(j.second, q2, j.normal_b, d[1]));
+      const Direction axis = direction(f1, j.axis_first, d[0]);
+      rows.dot(axis, direction(f2, j.normal_a, d[1]));
+      rows.dot(axis, direction(f2, j.normal_b, d[1]));
       if (j.type == JointType::driven_revolute) {
         // u1 · (cos φ n_b − sin φ n_a) = 0 holds when marker 1 has turned by φ about the axis.
         const double phi = j.angle(t);
-        rows.dot(direction(j.first, q1, j.reference_first, d[2]),
-                 direction(j.second, q2, std::cos(phi) * j.normal_b - std::sin(phi) * j.normal_a, d[3]));
+        rows.dot(direction(f1, j.reference_first, d[2]),
+                 direction(f2, std::cos(phi) * j.normal_b - std::sin(phi) * j.normal_a, d[3]));
       }
       break;
     }

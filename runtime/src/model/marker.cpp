@@ -3,6 +3,8 @@
 #include "flexbody/runtime/ffrf_dynamics.hpp"
 #include "flexbody/runtime/gcms_elastic.hpp"
 
+#include "marker_frame.hpp"
+
 #include <Eigen/Geometry>
 
 #include <cmath>
@@ -130,76 +132,82 @@ Eigen::MatrixXd marker_position_jacobian(const Marker& m, const VectorRef& q_b) 
   return jac;
 }
 
-namespace {
-
-// R ξ̄ = Σ_f R_f Aᵀ ξ_f, the marker's small rotation, without forming ξ̄.
-Eigen::Vector3d small_rotation(const Marker& m, const Eigen::Matrix3d& a, const VectorRef& xi) {
-  Eigen::Vector3d theta = Eigen::Vector3d::Zero();
-  for (Eigen::Index f = 0; f < xi.size() / 3; ++f) {
-    const Eigen::Vector3d xi_bar = a.transpose() * xi.segment<3>(3 * f);
-    theta.noalias() += m.rotation.middleCols<3>(3 * f) * xi_bar;
-  }
-  return theta;
-}
-
-}  // namespace
-
-Eigen::Vector3d marker_direction(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d) {
-  if (m.body == kGround) return d;
-  check_coordinates(m, q_b);
-  if (m.floating) {  // A(p) (d − [d]× Θ_c η)
-    const Eigen::Vector3d theta = m.modal_rotation * q_b.tail(q_b.size() - 7);
-    return euler_rotation(euler_of(q_b)) * (d - skew(d) * theta);
-  }
-  const Eigen::Matrix3d a = orientation_of(q_b);
-  const auto xi = q_b.tail(q_b.size() - 12);
-  if (xi.size() == 0) return a * d;
-  return a * (d - skew(d) * small_rotation(m, a, xi));
-}
-
-void marker_direction_jacobian(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d, Eigen::MatrixXd& jac) {
+void detail::MarkerFrame::evaluate(const Marker& m, const VectorRef& q_b, Eigen::MatrixXd& storage) {
+  marker_ = &m;
+  turned_ = nullptr;
+  small_.setZero();
   if (m.body == kGround) {
+    kind_ = Kind::ground;
+    size_ = 0;
+    return;
+  }
+  check_coordinates(m, q_b);
+  size_ = q_b.size();
+  if (m.floating) {
+    kind_ = Kind::floating;
+    euler_ = euler_of(q_b);
+    rotation_ = euler_rotation(euler_);
+    small_.noalias() = m.modal_rotation * q_b.tail(size_ - 7);
+    return;
+  }
+  kind_ = Kind::gcms;
+  rotation_ = orientation_of(q_b);
+  const Eigen::Index n_xi = size_ - 12;
+  if (n_xi == 0) return;
+  // R ξ̄ = Σ_f R_f Aᵀ ξ_f without forming ξ̄; ∂(R ξ̄)/∂A(i, j) = Σ_f R_f(:, j) ξ_f(i) (ξ̄_f = Aᵀ ξ_f); R_f Aᵀ, which
+  // ∂u/∂ξ_f = −A [d]× R_f Aᵀ takes for every direction d.
+  storage.resize(3, n_xi);
+  small_by_a_.setZero();
+  for (Eigen::Index f = 0; f < n_xi / 3; ++f) {
+    const Eigen::Vector3d xi_f = q_b.segment<3>(12 + 3 * f);
+    const auto r_f = m.rotation.middleCols<3>(3 * f);
+    small_.noalias() += r_f * (rotation_.transpose() * xi_f);
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) small_by_a_.col(3 * j + i) += xi_f(i) * r_f.col(j);
+    storage.middleCols<3>(3 * f).noalias() = r_f * rotation_.transpose();
+  }
+  turned_ = &storage;
+}
+
+Eigen::Vector3d detail::MarkerFrame::direction(const Eigen::Vector3d& d) const {
+  if (kind_ == Kind::ground) return d;
+  return rotation_ * (d - skew(d) * small_);
+}
+
+void detail::MarkerFrame::jacobian(const Eigen::Vector3d& d, Eigen::MatrixXd& jac) const {
+  if (kind_ == Kind::ground) {
     jac.resize(3, 0);
     return;
   }
-  check_coordinates(m, q_b);
-  if (m.floating) {
-    const Eigen::Index n = q_b.size() - 7;
-    const Eigen::Vector4d p = euler_of(q_b);
-    const Eigen::Matrix3d dx = skew(d);
-    const Eigen::Vector3d theta = m.modal_rotation * q_b.tail(n);
-    jac.setZero(3, q_b.size());
-    jac.middleCols<4>(3) = euler_rotation_derivative(p, d - dx * theta);
-    const Eigen::Matrix3d turn = -euler_rotation(p) * dx;
-    jac.rightCols(n).noalias() = turn * m.modal_rotation;
+  const Eigen::Matrix3d dx = skew(d);
+  const Eigen::Vector3d v = d - dx * small_;
+  jac.setZero(3, size_);
+  if (kind_ == Kind::floating) {
+    jac.middleCols<4>(3) = euler_rotation_derivative(euler_, v);
+    jac.rightCols(size_ - 7).noalias() = (-rotation_ * dx) * marker_->modal_rotation;
     return;
   }
-  const Eigen::Index n = q_b.size(), n_xi = n - 12;
-  const Eigen::Matrix3d a = orientation_of(q_b);
-  const auto xi = q_b.tail(n_xi);
-  jac.setZero(3, n);
-  Eigen::Vector3d v = d;
-  Eigen::Matrix<double, 3, 9> dv_da = Eigen::Matrix<double, 3, 9>::Zero();
-  if (n_xi > 0) {
-    const Eigen::Matrix3d dx = skew(d);
-    v -= dx * small_rotation(m, a, xi);
-    // ∂(R ξ̄)/∂A(i, j) = Σ_f R_f(:, j) ξ_f(i) (ξ̄_f = Aᵀ ξ_f), column 3j + i; then ∂v/∂a = −[d]× of it.
-    Eigen::Matrix<double, 3, 9> r_d = Eigen::Matrix<double, 3, 9>::Zero();
-    for (Eigen::Index f = 0; f < n_xi / 3; ++f) {
-      const Eigen::Vector3d xi_f = xi.segment<3>(3 * f);
-      for (int j = 0; j < 3; ++j)
-        for (int i = 0; i < 3; ++i) r_d.col(3 * j + i) += xi_f(i) * m.rotation.col(3 * f + j);
-    }
-    dv_da.noalias() = -dx * r_d;
-    // ∂u/∂ξ_f = −A [d]× R_f Aᵀ
-    const Eigen::Matrix3d turn = -a * dx;
-    for (Eigen::Index f = 0; f < n_xi / 3; ++f)
-      jac.block<3, 3>(0, 12 + 3 * f).noalias() = turn * m.rotation.middleCols<3>(3 * f) * a.transpose();
-  }
-  // ∂(A v)/∂A(i, j) = e_i v_j + A ∂v/∂A(i, j), column 3 + 3j + i.
+  // ∂(A v)/∂A(i, j) = e_i v_j + A ∂v/∂A(i, j), column 3 + 3j + i, with ∂v/∂A = −[d]× ∂(R ξ̄)/∂A.
   for (int j = 0; j < 3; ++j)
-    for (int i = 0; i < 3; ++i) jac(i, 3 + 3 * j + i) += v(j);
-  jac.middleCols<9>(3).noalias() += a * dv_da;
+    for (int i = 0; i < 3; ++i) jac(i, 3 + 3 * j + i) = v(j);
+  if (turned_ == nullptr) return;
+  const Eigen::Matrix3d turn = -rotation_ * dx;
+  jac.middleCols<9>(3).noalias() += turn * small_by_a_;
+  jac.rightCols(size_ - 12).noalias() = turn * *turned_;
+}
+
+Eigen::Vector3d marker_direction(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d) {
+  detail::MarkerFrame frame;
+  Eigen::MatrixXd storage;
+  frame.evaluate(m, q_b, storage);
+  return frame.direction(d);
+}
+
+void marker_direction_jacobian(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d, Eigen::MatrixXd& jac) {
+  detail::MarkerFrame frame;
+  Eigen::MatrixXd storage;
+  frame.evaluate(m, q_b, storage);
+  frame.jacobian(d, jac);
 }
 
 Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d) {

@@ -71,9 +71,11 @@ struct Joint {
 struct JointEvaluation {
   Eigen::VectorXd residual;
   Eigen::MatrixXd jacobian_first, jacobian_second;
-  /// Work storage: the markers' position Jacobians and up to four direction Jacobians.
+  /// Work storage: the markers' position Jacobians, up to four direction Jacobians, and each marker's rotations of
+  /// its fields (R_f Aᵀ, shared by its directions).
   Eigen::MatrixXd position_first, position_second;
   std::array<Eigen::MatrixXd, 4> directions;
+  std::array<Eigen::MatrixXd, 2> frames;
   /// Work storage of a joint with removed rows: all of its type's rows, before the removed ones are left out.
   Eigen::VectorXd all_residual;
   Eigen::MatrixXd all_first, all_second;

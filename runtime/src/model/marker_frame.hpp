@@ -1,0 +1,37 @@
+#pragma once
+// marker_frame.hpp (internal): what every body-fixed direction at one marker shares at one q_b (the body's rotation,
+// the marker's small rotation R ξ̄ and its derivatives), so that a joint's two or three directions at a marker cost
+// little more than one. marker_direction and marker_direction_jacobian (marker.hpp) are its one-direction form;
+// evaluate_joint (joint.cpp) keeps a frame per marker.
+
+#include "flexbody/runtime/marker.hpp"
+
+#include <Eigen/Core>
+
+namespace flexbody::runtime::detail {
+
+class MarkerFrame {
+ public:
+  /// The frame of marker `m` at its body's coordinates q_b (12 + 3 n_f, or 7 + n_m on a floating-frame body; ignored
+  /// on ground). `storage` holds R_f Aᵀ of a GCMS marker's fields (3 x 3 n_f): the caller keeps it, so that a frame
+  /// evaluated again for the same marker allocates nothing. Throws std::invalid_argument for a q_b of the wrong size.
+  void evaluate(const Marker& m, const VectorRef& q_b, Eigen::MatrixXd& storage);
+  /// A body-fixed direction d (body frame) in the global frame: A (d − [d]× R ξ̄), A(p) (d − [d]× Θ_c η), or d on
+  /// ground.
+  [[nodiscard]] Eigen::Vector3d direction(const Eigen::Vector3d& d) const;
+  /// Its Jacobian ∂/∂q_b into `jac` (3 x q_b.size(); 3 x 0 on ground), resized only when its size differs.
+  void jacobian(const Eigen::Vector3d& d, Eigen::MatrixXd& jac) const;
+
+ private:
+  enum class Kind { ground, floating, gcms };
+  Kind kind_ = Kind::ground;
+  const Marker* marker_ = nullptr;
+  Eigen::Index size_ = 0;                    ///< q_b.size()
+  Eigen::Matrix3d rotation_;                 ///< A (GCMS) or A(p) (floating frame)
+  Eigen::Vector4d euler_;                    ///< p (floating frame)
+  Eigen::Vector3d small_ = Eigen::Vector3d::Zero();  ///< R ξ̄ = Σ_f R_f Aᵀ ξ_f (GCMS) or Θ_c η (floating frame)
+  Eigen::Matrix<double, 3, 9> small_by_a_;   ///< ∂(R ξ̄)/∂A(i, j) in column 3j + i (GCMS with fields)
+  const Eigen::MatrixXd* turned_ = nullptr;  ///< [R_1 Aᵀ, R_2 Aᵀ, ...] (GCMS with fields), in the caller's storage
+};
+
+}  // namespace flexbody::runtime::detail

@@ -68,6 +68,10 @@ class SparseReducedSolver final : public ReducedSolver {
  private:
   struct Klu;  // KLU's objects, kept out of this header
   std::unique_ptr<Klu> klu_;
+  /// matrix_ from `entries`: summed into its kept entries along places_ when the entries' (row, column) sequence is
+  /// the last one's (the Newton matrix's blocks come in the same order at every build), else by setFromTriplets, whose
+  /// sort and transposition took most of a 64-link rigid chain's build outside KLU.
+  void assemble(Eigen::Index size, const std::vector<Eigen::Triplet<double>>& entries);
   /// The matrix's values on the analysed pattern (values_); false if a nonzero lies outside it.
   bool scatter();
   /// The analysed pattern ∪ the matrix's nonzeros (only the nonzeros when `keep` is false: a new size), and its
@@ -76,6 +80,7 @@ class SparseReducedSolver final : public ReducedSolver {
   int growths_ = 0;  ///< times the pattern grew at this size
   std::vector<int> outer_, inner_;  ///< the analysed pattern: every nonzero seen so far
   std::vector<double> values_;      ///< the last matrix on it
+  std::vector<int> rows_, columns_, places_;  ///< the last entries' positions, and each one's index in matrix_
   bool singular_ = true;
   double fresh_rcond_ = 0.0;  ///< KLU's pivot-ratio estimate at the last pivoting factorization
   int analyses_ = 0, pivoting_ = 0;

@@ -14,7 +14,9 @@ Per run: us_per_step and integrator_us_per_step from fbsim --json, and the peak 
 (os.wait4's rusage of the child). The cost is capped: each run's step count is chosen so that it takes about
 --budget seconds (at least 20 steps, at most --max-steps), predicted from the previous size's measured cost and the
 growth seen so far (local exponent, never below --min-exponent: the dense solver grows like N^3); a size whose
-predicted 20-step run exceeds --max-run seconds is skipped and recorded with that prediction.
+predicted 20-step run exceeds --max-run seconds is skipped and recorded with that prediction. With --repeat R each
+chain runs R times and the fastest run is kept: this virtual machine's neighbours only ever add time, and a short
+one-body run varied by up to 60 % between runs.
 
 Writes bench/results/scale_bench.csv and scale_bench.png (µs per step and peak memory against N, log-log, the growth
 exponent fitted from N = 16 to the largest measured N in the legend) and prints a table. See bench/README.md.
@@ -363,6 +365,21 @@ def ladder_runs(args, kind, body_file, bracket, history):
     return rows
 
 
+def fastest_run(args, kind, name, text_of, n_bodies, steps, timeout):
+    """one_run --repeat times; the row of the fastest (the first failure ends the repeats)."""
+    def cost(summary):
+        return summary.get("integrator_us_per_step", summary["us_per_step"])
+
+    best = None
+    for _ in range(max(1, args.repeat)):
+        row, summary = one_run(args, kind, name, text_of, n_bodies, steps, timeout)
+        if summary is None:
+            return row, summary
+        if best is None or cost(summary) < cost(best[1]):
+            best = (row, summary)
+    return best
+
+
 def measure(args):
     work = Path(args.work).resolve()
     work.mkdir(parents=True, exist_ok=True)
@@ -403,7 +420,7 @@ def measure(args):
                 setup = float(probe["setup_s"])
                 steps = steps_for(cost, setup, args.budget, args.max_steps)
                 predicted = setup + steps * cost * 1e-6
-            row, summary = one_run(args, kind, name, text_of, n, steps, max(4 * args.max_run, 4 * predicted))
+            row, summary = fastest_run(args, kind, name, text_of, n, steps, max(4 * args.max_run, 4 * predicted))
             row["predicted_s"] = f"{predicted:.1f}"
             rows.append(row)
             print_row(row)
@@ -507,6 +524,7 @@ def main():
     parser.add_argument("--sizes", type=int, nargs="+", default=[1, 4, 16, 64, 256, 1024])
     parser.add_argument("--kinds", nargs="+", choices=list(KINDS), default=list(KINDS))
     parser.add_argument("--budget", type=float, default=60.0, help="wall seconds a run should take at most (about)")
+    parser.add_argument("--repeat", type=int, default=1, help="runs per chain; the fastest is kept")
     parser.add_argument("--max-run", type=float, default=600.0,
                         help="skip a size whose predicted 20-step run takes longer [s]")
     parser.add_argument("--max-steps", type=int, default=10000, help="the most steps a run takes (small N)")

@@ -366,7 +366,7 @@ void GeneralizedAlpha::step_to(double t_end) {
 void GeneralizedAlpha::advance(double h, double t1) {
   const Eigen::Index n = q_.size(), m = lambda_.size();
   // β' and γ' of the solver's matrix are those of the step it was built for; a step size changed beyond rounding
-  // rebuilds it (step_to), a kept one is a modified Newton matrix and gives the same solution.
+  // rebuilds it (step_to), a kept one is a modified Newton matrix (GeneralizedAlphaOptions::reuse_newton_matrix).
   if (std::abs(h - solver_step_) > kStepToSlack * solver_step_) build_solver(h);
   const double beta_prime = (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_));
   const double gamma_prime = gamma_ / (beta_ * h);
@@ -380,7 +380,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
   Eigen::SparseMatrix<double>& jacobian = work_.jacobian;
   Eigen::VectorXd &velocity_rows = work_.velocity_rows, &position_step = work_.position_step;
   // The position correction W Φ_q(q_f)ᵀ ν along the Jacobian of the kept Newton matrix (q_f the iterate where it was
-  // built), the one its factor of Φ_q W Φ_qᵀ holds: then a correction Δν meets the position rows up to
+  // built, before ν's correction was turned to it), the one its factor of Φ_q W Φ_qᵀ holds: then a correction Δν meets the position rows up to
   // (Φ_q(q) − Φ_q(q_f)) W Φ_q(q_f)ᵀ Δν. With the direction Φ_q(q_n) of the step's start and the factor from q_f, the
   // mismatch had both Jacobians in it and, through (Φ_q W Φ_qᵀ)⁻¹, grew with the scene's weakest constraint mode: a
   // chain of 64 rigid links (its out-of-plane bending) contracted by 0.86 per iteration and needed the coupled step
@@ -598,8 +598,9 @@ void GeneralizedAlpha::advance(double h, double t1) {
       previous_correction = correction;
     }
     if (converged) break;
-    // A step that failed is tried again from its predictor: with a fresh matrix if its matrix was kept, then (stabilised
-    // form) with the coupled step; a failure of the last resort stops the run with the reason.
+    // A step that failed is tried again from its predictor (in the stabilised form moved by the last step's ν along the
+    // last Jacobian built, which a fresh matrix then turns to its own): with a fresh matrix if its matrix was kept,
+    // then (stabilised form) with the coupled step; a failure of the last resort stops the run with the reason.
     if (attempt == 0 && !fresh_this_step) {  // the kept matrix was too old: once more with a fresh one
       refresh_ = true;
       continue;

@@ -31,7 +31,7 @@
 // converges (5.6 iterations per step at h = 1e-3 s, with the matrix kept), the coupled one took 5.1 iterations and
 // 1.5 times as long.
 // The matrix parts (X, Y, Z, the m x m factor) are kept with the Newton matrix: from an older matrix the iteration
-// converges more slowly, not elsewhere.
+// converges more slowly, and P, the kept matrix's, sets where the step ends (generalized_alpha.cpp, correction_of).
 
 #include "flexbody/runtime/system.hpp"
 

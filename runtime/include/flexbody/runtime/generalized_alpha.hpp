@@ -4,10 +4,11 @@
 // scaled as Bottasso, Bauchau & Cardona (2007) propose so that the Newton matrix stays O(1) as h → 0, and consistent
 // initial velocities, accelerations and multipliers.
 //
-//   q_{n+1} = q_n + h v_n + h² (½ − β) a_n + h² β a_{n+1} + W Φ_q(q_n)ᵀ ν_{n+1},
+//   q_{n+1} = q_n + h v_n + h² (½ − β) a_n + h² β a_{n+1} + W Φ_q(q̂)ᵀ ν_{n+1},
 //   v_{n+1} = v_n + h (1 − γ) a_n + h γ a_{n+1},   (1 − α_m) a_{n+1} + α_m a_n = (1 − α_f) q̈_{n+1} + α_f q̈_n,
 //   M q̈_{n+1} − Q(q_{n+1}) + Φ_qᵀ λ_{n+1} = 0,   Φ(q_{n+1}, t_{n+1}) = 0,   Φ_q v_{n+1} + Φ_t = 0,
 //
+// q̂ the iterate where the Newton matrix in use was built (within the last few steps),
 // with α_m = (2ρ∞ − 1)/(ρ∞ + 1), α_f = ρ∞/(ρ∞ + 1), γ = ½ + α_f − α_m, β = ¼ (γ + ½)²: second order, and
 // unconditionally stable for linear problems, with high-frequency damping set by ρ∞ ∈ [0, 1]. The index-3 form
 // (Arnold & Brüls 2007; ConstraintForm::index3) drops ν and the velocity rows.
@@ -53,8 +54,8 @@ enum class ConstraintForm {
   /// Φ(q_{n+1}) = 0 and Φ_q v_{n+1} + Φ_t = 0: the stabilised index-2 form of Arnold, Cardona & Brüls (2016, the
   /// GGL form of generalized-α). The velocity constraints are met at every step by the Newmark update itself, and
   /// the position constraints by a second multiplier ν that moves the positions off the Newmark update,
-  /// q_{n+1} = (Newmark) + W Φ_q(q_n)ᵀ ν, W = diag(scale²)/(m r²) per body (the coordinates' length scales,
-  /// divided by each body's m r²; ν → 0 with h). Each Newton iteration first alternates (ν, then the dynamic rows);
+  /// q_{n+1} = (Newmark) + W Φ_q(q̂)ᵀ ν (q̂ where the Newton matrix was built), W = diag(scale²)/(m r²) per body
+  /// (the coordinates' length scales, divided by each body's m r²; ν → 0 with h). Each Newton iteration first alternates (ν, then the dynamic rows);
   /// after a step fails that way with a fresh Newton matrix, the run solves δ, μ and ν together (a light carriage
   /// under a fast slider needs it; runtime/src/integrator/stabilized_coupling.hpp). Without
   /// the velocity rows the velocities drift off the hidden constraints and, at ρ∞ near 1, a spinning body gains
@@ -92,11 +93,13 @@ struct GeneralizedAlphaOptions {
   /// no longer do.
   double tolerance = 1e-6;
   /// Keep the Newton matrix (and its factorization) across iterations and steps, refreshing it when the
-  /// corrections stop shrinking by 4× per iteration (modified Newton: the same solution, fewer factorizations).
+  /// corrections stop shrinking by 4× per iteration (modified Newton: fewer factorizations, the same solution in the
+  /// index-3 form; in the stabilised form the kept matrix's Jacobian also sets ν's direction W Φ_q(q̂)ᵀ, which moved
+  /// bench/convergence_bench's errors by −0.3 to +1.1 %).
   bool reuse_newton_matrix = true;
   /// ConstraintForm::stabilized_index2: solve δ, μ and ν together from the first step (stabilized_coupling.hpp)
-  /// instead of only after a step failed with the alternating step. For scenes known to need it: a chain of 64
-  /// links falling from the horizontal does (bench/README.md "scale_bench"); each Newton matrix then costs more.
+  /// instead of only after a step failed with the alternating step. For scenes known to need it (a light carriage
+  /// guiding a fast slider: stabilized_coupling.hpp); each Newton matrix then costs more.
   bool coupled_from_start = false;
   /// A linear model holds for small deformations only (FORMULATION.md section 8: no geometric stiffening). A step
   /// after which a flexible body's RMS elastic displacement ‖ξ̄‖/√m exceeds this fraction of its size (the
@@ -147,7 +150,7 @@ class GeneralizedAlpha {
   /// kStepToSlack rebuilds it (a factorization of the constant core; generalized-α takes a change of h between
   /// steps, its a ≈ q̈(t + (α_m − α_f) h) then lags by O(h) for one step, a local error of O(h³) that keeps second
   /// order); a difference below that (t_end a whole number of steps, up to rounding) keeps it, as a modified Newton
-  /// matrix (the same solution). Later step()s take steps of h from t_end. Throws std::invalid_argument for a
+  /// matrix (reuse_newton_matrix). Later step()s take steps of h from t_end. Throws std::invalid_argument for a
   /// t_end out of that range, and StepFailure as step() does.
   void step_to(double t_end);
   /// The relative difference of step sizes that step_to() treats as rounding.

@@ -53,7 +53,8 @@ void marker_position_jacobian(const Marker& m, const VectorRef& q_b, Eigen::Matr
 /// Its Jacobian (3 x (12 + 3 n_f)); zero columns for τ.
 [[nodiscard]] Eigen::MatrixXd marker_direction_jacobian(const Marker& m, const VectorRef& q_b,
                                                         const Eigen::Vector3d& d);
-/// The same into `jac` (3 x 0 on ground), resized only when its size differs.
+/// The same into `jac` (3 x 0 on ground), resized only when its size differs (a GCMS marker with fields allocates a
+/// work buffer per call: joints keep one per marker, runtime/src/model/marker_frame.hpp).
 void marker_direction_jacobian(const Marker& m, const VectorRef& q_b, const Eigen::Vector3d& d, Eigen::MatrixXd& jac);
 
 /// The orientation A of the marker's body (identity for ground): mat(a), or A(p) on a floating-frame body.

@@ -10,6 +10,10 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <limits>
+#include <string>
+
 #include <cfloat>
 #include <numbers>
 
@@ -192,6 +196,35 @@ TEST(FreeFreeModes, BlockSolveEqualsColumnByColumnSolves) {
   EXPECT_EQ(op.stats().solve_passes, 6);
   // The same triangular solves, by BLAS 3 against BLAS 2 kernels: round-off apart.
   EXPECT_LT((block - single).cwiseAbs().maxCoeff(), 1e-13 * single.cwiseAbs().maxCoeff());
+}
+
+// The factor's size comes from CHOLMOD's symbolic analysis, in the constructor: a factor that cannot fit is refused
+// there, before the numeric work, in one line with the estimate and the ways out (issue 28: a part at a quarter of
+// the default size failed with "CHOLMOD factorization failed (status -2)" after up to 80 s).
+TEST(FreeFreeModes, AFactorLargerThanTheMemoryIsRefusedBeforeTheNumericWork) {
+  const fp::Material material{"steel", 210e9, 0.3, 7850.0};
+  const auto a = flexbody::test::assemble(flexbody::test::box_mesh(0.4, 0.1, 0.05, 8, 2, 2), material);
+  fp::CholmodShiftSolve sized(a.stiffness, a.scalar_mass, Eigen::MatrixXd(),
+                              std::numeric_limits<std::uint64_t>::max());
+  const double estimate = sized.stats().factor_estimate_megabytes;
+  sized.set_shift(fp::automatic_shift(a.mesh.nodes, material));
+  // At least the factor's values (8 bytes per entry of L), and within a small multiple of them: the supernodes'
+  // explicit zeros, their integer structure and the largest update matrix.
+  const double values = 8e-6 * sized.stats().factor_nonzeros;
+  EXPECT_GE(estimate, values);
+  EXPECT_LT(estimate, 3.0 * values);
+  const auto half = static_cast<std::uint64_t>(0.5 * estimate * 1e6);
+  try {
+    fp::CholmodShiftSolve refused(a.stiffness, a.scalar_mass, Eigen::MatrixXd(), half);
+    ADD_FAILURE() << "a factor twice the memory allowed was not refused";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("would need about"), std::string::npos) << what;
+    EXPECT_NE(what.find("--mesh-size"), std::string::npos) << what;
+    EXPECT_NE(what.find("--order 1"), std::string::npos) << what;
+    EXPECT_NE(what.find("out-of-core"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
 }
 
 TEST(FreeFreeModes, UpsilonHasTheListLayoutOfEq49) {

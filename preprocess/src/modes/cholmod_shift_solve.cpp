@@ -2,6 +2,8 @@
 
 #include "flexbody/preprocess/assembly.hpp"
 
+#include "available_memory.hpp"
+
 #include <cholmod.h>
 #include <fmt/format.h>
 
@@ -30,6 +32,22 @@ cholmod_dense dense_view(double* data, std::size_t rows, std::size_t cols) {
   view.xtype = CHOLMOD_REAL;
   view.dtype = CHOLMOD_DOUBLE;
   return view;
+}
+
+// CHOLMOD's status codes (Common->status) in words, for the one line a failure prints.
+std::string status_text(int status) {
+  switch (status) {
+    case CHOLMOD_OK: return "no error";
+    case CHOLMOD_NOT_INSTALLED: return "a CHOLMOD module it needs is not installed (status -1)";
+    case CHOLMOD_OUT_OF_MEMORY: return "out of memory (status -2): use a coarser mesh, linear elements, or the slepc "
+                                       "eigensolver with MUMPS's out-of-core factor";
+    case CHOLMOD_TOO_LARGE: return "the problem is too large for CHOLMOD's integer size (status -3)";
+    case CHOLMOD_INVALID: return "CHOLMOD was given invalid input (status -4)";
+    case CHOLMOD_GPU_PROBLEM: return "a GPU error (status -5)";
+    case CHOLMOD_NOT_POSDEF: return "the matrix is not positive definite (status 1)";
+    case CHOLMOD_DSMALL: return "a pivot was tiny: the matrix is nearly singular (status 2)";
+    default: return "status " + std::to_string(status);
+  }
 }
 
 }  // namespace
@@ -145,7 +163,7 @@ struct CholmodShiftSolve::Impl {
 };
 
 CholmodShiftSolve::CholmodShiftSolve(const SparseMatrix& stiffness_upper, const SparseMatrix& scalar_mass_upper,
-                                     Eigen::MatrixXd deflation)
+                                     Eigen::MatrixXd deflation, std::optional<std::uint64_t> memory_bytes)
     : impl_(std::make_unique<Impl>(stiffness_upper, scalar_mass_upper)) {
   if (stiffness_upper.rows() != 3 * scalar_mass_upper.rows() || !stiffness_upper.isCompressed() ||
       !scalar_mass_upper.isCompressed())
@@ -166,8 +184,24 @@ CholmodShiftSolve::CholmodShiftSolve(const SparseMatrix& stiffness_upper, const 
 
   const auto start = std::chrono::steady_clock::now();
   impl_->factor = impl_->analyze_by_nodes();
-  if (impl_->factor == nullptr) throw std::runtime_error("shift-invert: CHOLMOD analysis failed (out of memory?)");
+  if (impl_->factor == nullptr)
+    throw std::runtime_error("shift-invert: CHOLMOD's analysis of K - sigma M failed: " + status_text(impl_->common.status));
   stats_.analyze_seconds = seconds_since(start);
+  // The factor's size before any numeric work: a supernodal factor's values (xsize), the supernodes' integer
+  // structure (ssize) and the largest update matrix the factorization works in (maxcsize); 8 bytes each.
+  const cholmod_factor& l = *impl_->factor;
+  const double bytes = l.is_super ? 8.0 * (static_cast<double>(l.xsize) + static_cast<double>(l.ssize) +
+                                           static_cast<double>(l.maxcsize))
+                                  : 16.0 * impl_->common.lnz;  // simplicial: a value and a row index per entry
+  stats_.factor_estimate_megabytes = bytes * 1e-6;
+  const std::optional<std::uint64_t> room = memory_bytes ? memory_bytes : detail::available_memory_bytes();
+  if (room && bytes > static_cast<double>(*room))
+    throw std::runtime_error(fmt::format(
+        "shift-invert: the factor of K - sigma M ({} rows, {:.3g} entries after ordering) would need about {:.3g} GB, "
+        "more than the {:.3g} GB {}; use a coarser mesh (--mesh-size), linear elements (--order 1), or the slepc "
+        "eigensolver with MUMPS's out-of-core factor (README: \"On several processes\")",
+        n, impl_->common.lnz, bytes * 1e-9, static_cast<double>(*room) * 1e-9,
+        memory_bytes ? "allowed" : "this process can still take"));
 }
 
 CholmodShiftSolve::~CholmodShiftSolve() = default;
@@ -194,8 +228,8 @@ void CholmodShiftSolve::set_shift(double sigma) {
                                  ? fmt::format("shift-invert: K - sigma M is not positive definite at sigma = {:.6g}", sigma) +
                                        " (column " +
                                        std::to_string(impl_->factor->minor) + ")"
-                                 : "shift-invert: CHOLMOD factorization failed (status " +
-                                       std::to_string(impl_->common.status) + ")");
+                                 : "shift-invert: CHOLMOD's factorization of K - sigma M failed: " +
+                                       status_text(impl_->common.status));
   stats_.factor_nonzeros = impl_->common.lnz;
   stats_.factor_flops = impl_->common.fl;
 }
@@ -208,7 +242,7 @@ void CholmodShiftSolve::perform_block(const double* x, double* y, Eigen::Index c
   const auto start = std::chrono::steady_clock::now();
   if (!cholmod_l_solve2(CHOLMOD_A, impl_->factor, &rhs, nullptr, &impl_->x, nullptr, &impl_->y, &impl_->e,
                         &impl_->common))
-    throw std::runtime_error("shift-invert: CHOLMOD solve failed");
+    throw std::runtime_error("shift-invert: CHOLMOD's solve failed: " + status_text(impl_->common.status));
   stats_.solve_seconds += seconds_since(start);
   stats_.solves += columns;
   ++stats_.solve_passes;

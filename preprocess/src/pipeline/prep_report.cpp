@@ -123,8 +123,9 @@ std::string PrepSummary::full_report() const {
                                       "{:.2f} s", factor.factor_nonzeros, factor.factor_flops * 1e-9,
                                       factor.factor_megabytes, factor.factorize_seconds));
   else
-    line("factorization", fmt::format("nnz(L) = {:.3g}, {:.3g} GFlop; ordering {:.2f} s, numeric {:.2f} s",
-                                      factor.factor_nonzeros, factor.factor_flops * 1e-9, factor.analyze_seconds,
+    line("factorization", fmt::format("nnz(L) = {:.3g}, {:.3g} GFlop, {:.0f} MB; ordering {:.2f} s, numeric {:.2f} s",
+                                      factor.factor_nonzeros, factor.factor_flops * 1e-9,
+                                      factor.factor_estimate_megabytes, factor.analyze_seconds,
                                       factor.factorize_seconds));
   if (factor.solve_passes < factor.solves)  // block Lanczos: several right-hand sides per pass over the factor
     line("solves", fmt::format("{} in {:.2f} s, {} passes over the factor ({} block steps, {} solver run{})",
@@ -222,6 +223,10 @@ std::string PrepSummary::json() const {
   // MUMPS's own count of the memory its factorization used, all ranks (null for CHOLMOD).
   j["factor_mb"] = factor.factor_megabytes > 0.0 ? nlohmann::ordered_json(factor.factor_megabytes)
                                                 : nlohmann::ordered_json(nullptr);
+  // CHOLMOD's size of the factor from its symbolic analysis, before the numeric work (null for MUMPS).
+  j["factor_estimate_mb"] = factor.factor_estimate_megabytes > 0.0
+                                ? nlohmann::ordered_json(factor.factor_estimate_megabytes)
+                                : nlohmann::ordered_json(nullptr);
   j["mpi_ranks"] = factor.processes;
   // peak_memory_mb is rank 0's; this is the largest of the other ranks' (null on one process).
   j["peak_memory_other_ranks_mb"] = factor.processes > 1 ? nlohmann::ordered_json(factor.other_ranks_peak_megabytes)

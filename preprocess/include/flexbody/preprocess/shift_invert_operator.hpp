@@ -14,6 +14,7 @@
 #include <concepts>
 #include <cstdint>
 #include <memory>
+#include <optional>
 
 namespace flexbody::preprocess {
 
@@ -61,6 +62,9 @@ struct ShiftSolveStats {
   int processes = 1;                       ///< MPI ranks the factor is distributed over
   /// Memory the factorization used [MB], summed over the ranks (MUMPS's INFOG(22)); 0 where not known.
   double factor_megabytes = 0.0;
+  /// CHOLMOD: the factor's size from the symbolic analysis [MB] (its values, supernodes' structure and the largest
+  /// update matrix), known before the numeric work; 0 for MUMPS.
+  double factor_estimate_megabytes = 0.0;
   /// The largest peak resident memory of the MPI ranks other than 0 [MB] (rank 0's is the process' own); 0 on one.
   double other_ranks_peak_megabytes = 0.0;
 };
@@ -97,11 +101,16 @@ class ShiftSolve {
 class CholmodShiftSolve final : public ShiftSolve {
  public:
   /// K and M_s are borrowed (stored as upper triangles) and must outlive the operator. `deflation`
-  /// (3 n_n x r, M̄-orthonormal) may be empty.
+  /// (3 n_n x r, M̄-orthonormal) may be empty. The symbolic analysis runs here and sizes the factor
+  /// (ShiftSolveStats::factor_estimate_megabytes); a factor larger than `memory_bytes` (default: the memory this
+  /// process can still take, from the kernel and its cgroup) is refused with std::runtime_error before any numeric
+  /// work, naming the estimate and the ways out.
   CholmodShiftSolve(const SparseMatrix& stiffness_upper, const SparseMatrix& scalar_mass_upper,
-                    Eigen::MatrixXd deflation);
-  CholmodShiftSolve(SparseMatrix&&, const SparseMatrix&, Eigen::MatrixXd) = delete;  // borrows K and M_s
-  CholmodShiftSolve(const SparseMatrix&, SparseMatrix&&, Eigen::MatrixXd) = delete;
+                    Eigen::MatrixXd deflation, std::optional<std::uint64_t> memory_bytes = std::nullopt);
+  CholmodShiftSolve(SparseMatrix&&, const SparseMatrix&, Eigen::MatrixXd,
+                    std::optional<std::uint64_t> = std::nullopt) = delete;  // borrows K and M_s
+  CholmodShiftSolve(const SparseMatrix&, SparseMatrix&&, Eigen::MatrixXd,
+                    std::optional<std::uint64_t> = std::nullopt) = delete;
   ~CholmodShiftSolve() override;
 
   [[nodiscard]] Eigen::Index rows() const override;

@@ -1,0 +1,15 @@
+#pragma once
+// available_memory.hpp (internal): how much memory this process can still take, so that a factorization that cannot
+// fit is refused before the work (issue 28: CHOLMOD's "status -2" came after up to 80 s).
+
+#include <cstdint>
+#include <optional>
+
+namespace flexbody::preprocess::detail {
+
+/// The memory this process can still allocate without swapping or being killed [bytes]: the smaller of the kernel's
+/// MemAvailable (/proc/meminfo) and the room left under the process's cgroup v2 limit (memory.max − memory.current,
+/// where a container or a batch system sets one); nullopt where neither can be read.
+[[nodiscard]] std::optional<std::uint64_t> available_memory_bytes();
+
+}  // namespace flexbody::preprocess::detail

@@ -8,8 +8,9 @@
 namespace flexbody::preprocess::detail {
 
 /// The memory this process can still allocate without swapping or being killed [bytes]: the smaller of the kernel's
-/// MemAvailable (/proc/meminfo) and the room left under the process's cgroup v2 limit (memory.max − memory.current,
-/// where a container or a batch system sets one); nullopt where neither can be read.
+/// MemAvailable (/proc/meminfo) and the room left under the memory limits of its cgroup and every cgroup above it
+/// (v2 or v1; a container, a batch system or a systemd slice sets them), the inactive page cache counted as free;
+/// nullopt where neither can be read.
 [[nodiscard]] std::optional<std::uint64_t> available_memory_bytes();
 
 }  // namespace flexbody::preprocess::detail

@@ -39,8 +39,8 @@ std::string status_text(int status) {
   switch (status) {
     case CHOLMOD_OK: return "no error";
     case CHOLMOD_NOT_INSTALLED: return "a CHOLMOD module it needs is not installed (status -1)";
-    case CHOLMOD_OUT_OF_MEMORY: return "out of memory (status -2): use a coarser mesh, linear elements, or the slepc "
-                                       "eigensolver with MUMPS's out-of-core factor";
+    case CHOLMOD_OUT_OF_MEMORY: return "out of memory (status -2): use a coarser mesh, linear elements, or MUMPS's "
+                                       "out-of-core factor (--eigensolver slepc)";
     case CHOLMOD_TOO_LARGE: return "the problem is too large for CHOLMOD's integer size (status -3)";
     case CHOLMOD_INVALID: return "CHOLMOD was given invalid input (status -4)";
     case CHOLMOD_GPU_PROBLEM: return "a GPU error (status -5)";
@@ -187,19 +187,21 @@ CholmodShiftSolve::CholmodShiftSolve(const SparseMatrix& stiffness_upper, const 
   if (impl_->factor == nullptr)
     throw std::runtime_error("shift-invert: CHOLMOD's analysis of K - sigma M failed: " + status_text(impl_->common.status));
   stats_.analyze_seconds = seconds_since(start);
-  // The factor's size before any numeric work: a supernodal factor's values (xsize), the supernodes' integer
-  // structure (ssize) and the largest update matrix the factorization works in (maxcsize); 8 bytes each.
+  // What the numeric factorization will allocate, known before it (the analysis is supernodal: common.supernodal):
+  // the factor's values (xsize), the largest update matrix it works in (maxcsize), and the permuted copy of the
+  // matrix it factorizes (cholmod_factorize's ptranspose: a value and a row index per entry, and the column
+  // pointers); 8 bytes each. The supernodes' structure (ssize) is already allocated by the analysis.
   const cholmod_factor& l = *impl_->factor;
-  const double bytes = l.is_super ? 8.0 * (static_cast<double>(l.xsize) + static_cast<double>(l.ssize) +
-                                           static_cast<double>(l.maxcsize))
-                                  : 16.0 * impl_->common.lnz;  // simplicial: a value and a row index per entry
+  const double bytes = 8.0 * (static_cast<double>(l.xsize) + static_cast<double>(l.maxcsize) +
+                              2.0 * static_cast<double>(nnz) + static_cast<double>(n + 1));
   stats_.factor_estimate_megabytes = bytes * 1e-6;
   const std::optional<std::uint64_t> room = memory_bytes ? memory_bytes : detail::available_memory_bytes();
   if (room && bytes > static_cast<double>(*room))
     throw std::runtime_error(fmt::format(
         "shift-invert: the factor of K - sigma M ({} rows, {:.3g} entries after ordering) would need about {:.3g} GB, "
-        "more than the {:.3g} GB {}; use a coarser mesh (--mesh-size), linear elements (--order 1), or the slepc "
-        "eigensolver with MUMPS's out-of-core factor (README: \"On several processes\")",
+        "more than the {:.3g} GB {}; use a coarser mesh (--mesh-size), linear elements (--order 1) if they are "
+        "quadratic, or MUMPS's out-of-core factor (--eigensolver slepc in a build with FLEXBODY_WITH_SLEPC; README: "
+        "\"On several processes\")",
         n, impl_->common.lnz, bytes * 1e-9, static_cast<double>(*room) * 1e-9,
         memory_bytes ? "allowed" : "this process can still take"));
 }

@@ -62,8 +62,8 @@ struct ShiftSolveStats {
   int processes = 1;                       ///< MPI ranks the factor is distributed over
   /// Memory the factorization used [MB], summed over the ranks (MUMPS's INFOG(22)); 0 where not known.
   double factor_megabytes = 0.0;
-  /// CHOLMOD: the factor's size from the symbolic analysis [MB] (its values, supernodes' structure and the largest
-  /// update matrix), known before the numeric work; 0 for MUMPS.
+  /// CHOLMOD: what the numeric factorization will allocate, from the symbolic analysis [MB] (the factor's values, the
+  /// largest update matrix, the permuted copy of K - sigma M), known before the numeric work; 0 for MUMPS.
   double factor_estimate_megabytes = 0.0;
   /// The largest peak resident memory of the MPI ranks other than 0 [MB] (rank 0's is the process' own); 0 on one.
   double other_ranks_peak_megabytes = 0.0;

@@ -54,8 +54,9 @@ std::optional<std::uint64_t> cgroup_room() {
     if (line.compare(0, 3, "0::") == 0)
       hierarchies.push_back({{"/sys/fs/cgroup", "memory.max", "memory.current", "inactive_file"}, relative});
     else if (("," + controllers + ",").find(",memory,") != std::string::npos)
-      hierarchies.push_back(
-          {{"/sys/fs/cgroup/memory", "memory.limit_in_bytes", "memory.usage_in_bytes", "total_inactive_file"}, relative});
+      hierarchies.push_back({{"/sys/fs/cgroup/memory", "memory.limit_in_bytes", "memory.usage_in_bytes",
+                              "total_inactive_file"},
+                             relative});
   }
   std::optional<std::uint64_t> room;
   for (const auto& [layout, relative] : hierarchies) {

@@ -185,7 +185,8 @@ CholmodShiftSolve::CholmodShiftSolve(const SparseMatrix& stiffness_upper, const 
   const auto start = std::chrono::steady_clock::now();
   impl_->factor = impl_->analyze_by_nodes();
   if (impl_->factor == nullptr)
-    throw std::runtime_error("shift-invert: CHOLMOD's analysis of K - sigma M failed: " + status_text(impl_->common.status));
+    throw std::runtime_error("shift-invert: CHOLMOD's analysis of K - sigma M failed: " +
+                             status_text(impl_->common.status));
   stats_.analyze_seconds = seconds_since(start);
   // What the numeric factorization will allocate, known before it (the analysis is supernodal: common.supernodal):
   // the factor's values (xsize), the largest update matrix it works in (maxcsize), and the permuted copy of the

@@ -123,7 +123,8 @@ std::string PrepSummary::full_report() const {
                                       "{:.2f} s", factor.factor_nonzeros, factor.factor_flops * 1e-9,
                                       factor.factor_megabytes, factor.factorize_seconds));
   else
-    line("factorization", fmt::format("nnz(L) = {:.3g}, {:.3g} GFlop, about {:.3g} MB; ordering {:.2f} s, numeric {:.2f} s",
+    line("factorization", fmt::format("nnz(L) = {:.3g}, {:.3g} GFlop, about {:.3g} MB; ordering {:.2f} s, "
+                                      "numeric {:.2f} s",
                                       factor.factor_nonzeros, factor.factor_flops * 1e-9,
                                       factor.factor_estimate_megabytes, factor.analyze_seconds,
                                       factor.factorize_seconds));

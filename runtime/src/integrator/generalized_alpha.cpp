@@ -380,11 +380,12 @@ void GeneralizedAlpha::advance(double h, double t1) {
   Eigen::SparseMatrix<double>& jacobian = work_.jacobian;
   Eigen::VectorXd &velocity_rows = work_.velocity_rows, &position_step = work_.position_step;
   // The position correction W Φ_q(q_f)ᵀ ν along the Jacobian of the kept Newton matrix (q_f the iterate where it was
-  // built, before ν's correction was turned to it), the one its factor of Φ_q W Φ_qᵀ holds: then a correction Δν meets the position rows up to
-  // (Φ_q(q) − Φ_q(q_f)) W Φ_q(q_f)ᵀ Δν. With the direction Φ_q(q_n) of the step's start and the factor from q_f, the
-  // mismatch had both Jacobians in it and, through (Φ_q W Φ_qᵀ)⁻¹, grew with the scene's weakest constraint mode: a
-  // chain of 64 rigid links (its out-of-plane bending) contracted by 0.86 per iteration and needed the coupled step
-  // at t = 0.019 s; with this direction it converges in 4.6 iterations per step (bench/README.md "scale_bench").
+  // built, before ν's correction was turned to it), the one its factor of Φ_q W Φ_qᵀ holds: then a correction Δν
+  // meets the position rows up to (Φ_q(q) − Φ_q(q_f)) W Φ_q(q_f)ᵀ Δν. With the direction Φ_q(q_n) of the step's
+  // start and the factor from q_f, the mismatch had both Jacobians in it and, through (Φ_q W Φ_qᵀ)⁻¹, grew with the
+  // scene's weakest constraint mode: a chain of 64 rigid links (its out-of-plane bending) contracted by 0.86 per
+  // iteration and needed the coupled step at t = 0.019 s; with this direction it converges in 4.6 iterations per
+  // step (bench/README.md "scale_bench").
   // The converged step then moves along q_f's normal rather than q_n's: bench/convergence_bench's errors changed
   // by -0.3 to +1.1 % (rigid pendulum, heavy top, flexible pendulum, 4e-4 to 1e-5 s), the orders not at all.
   // `work_.shift` is the whole W Φ_q(q_f)ᵀ ν in q; a new Newton matrix moves it to the new Jacobian's direction.

@@ -55,9 +55,10 @@ enum class ConstraintForm {
   /// GGL form of generalized-α). The velocity constraints are met at every step by the Newmark update itself, and
   /// the position constraints by a second multiplier ν that moves the positions off the Newmark update,
   /// q_{n+1} = (Newmark) + W Φ_q(q̂)ᵀ ν (q̂ where the Newton matrix was built), W = diag(scale²)/(m r²) per body
-  /// (the coordinates' length scales, divided by each body's m r²; ν → 0 with h). Each Newton iteration first alternates (ν, then the dynamic rows);
-  /// after a step fails that way with a fresh Newton matrix, the run solves δ, μ and ν together (a light carriage
-  /// under a fast slider needs it; runtime/src/integrator/stabilized_coupling.hpp). Without
+  /// (the coordinates' length scales, divided by each body's m r²; ν → 0 with h). Each Newton iteration first
+  /// alternates (ν, then the dynamic rows); after a step fails that way with a fresh Newton matrix, the run solves δ,
+  /// μ and ν together (a light carriage under a fast slider needs it; runtime/src/integrator/stabilized_coupling.hpp).
+  /// Without
   /// the velocity rows the velocities drift off the hidden constraints and, at ρ∞ near 1, a spinning body gains
   /// energy and angular momentum (issue 12: a heavy top at 150 rad/s diverges at ρ∞ = 1, a flipping plate gains
   /// 17.6 % energy at ρ∞ = 0.99).

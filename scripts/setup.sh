@@ -22,6 +22,7 @@ packages=(
   libgtest-dev           # the test suite
   calculix-ccx           # independent FE code the tests compare against
   python3-matplotlib python3-h5py   # benchmark plots (bench/ only)
+  freecad-common gmsh-doc           # public CAD parts for the corpus test and bench (FreeCAD's Idf models, gmsh's demos)
 )
 # --with-slepc: also what the optional slepc eigensolver backend needs (-DFLEXBODY_WITH_SLEPC=ON); the test
 # suite builds it. PETSc brings Open MPI (mpirun) and MUMPS.

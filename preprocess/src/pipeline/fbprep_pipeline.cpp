@@ -111,6 +111,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.meshed_here = imported.meshed_here;
   summary.mesh_size_m = imported.mesh_size_m;
   summary.mesher = options.mesh.algorithm;
+  summary.curved_repair = imported.curved_repair;
   // Quadratic tetrahedra (--order 2) number their corners first; every stage below takes all nodes.
   const std::optional<Tet10Mesh>& quadratic = imported.quadratic;
   const RowMatrixX3d& input_nodes = quadratic ? quadratic->nodes : imported.mesh.nodes;

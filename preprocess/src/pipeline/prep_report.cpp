@@ -17,6 +17,19 @@ std::string vector3(const Eigen::Vector3d& v) { return fmt::format("[{:.6g}, {:.
 
 std::vector<double> to_std(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 
+// "50 of 6271 after raising the order; gmsh's elastic smoothing left 18; 25 straightened (...)": the straightened
+// elements' largest node move bounds how far the mesh left the CAD surface there.
+std::string curved_repair_text(const CurvedElementRepair& c, double element_size_m) {
+  std::string text = fmt::format("{} of {} after raising the order", c.folded, c.elements);
+  if (c.after_elastic >= 0)
+    text += fmt::format("; gmsh's elastic smoothing left {}{}", c.after_elastic, c.elastic_message.empty() ? "" : " (it failed)");
+  if (c.straightened.elements > 0)
+    text += fmt::format("; {} straightened ({} mid-edge nodes moved onto their edges, by up to {:.3g} m: {:.2g} % of "
+                        "the element size)", c.straightened.elements, c.straightened.nodes,
+                        c.straightened.largest_move_m, 100.0 * c.straightened.largest_move_m / element_size_m);
+  return text + fmt::format(" ({:.1f} s)", c.seconds);
+}
+
 std::vector<std::vector<double>> to_rows(const Eigen::Matrix3d& m) {
   return {{m(0, 0), m(0, 1), m(0, 2)}, {m(1, 0), m(1, 1), m(1, 2)}, {m(2, 0), m(2, 1), m(2, 2)}};
 }
@@ -65,6 +78,7 @@ std::string PrepSummary::full_report() const {
   line("radius ratio", fmt::format("min {:.3f} (element {}), mean {:.3f}; {} below 0.1, {} below 0.3{}",
                                    quality.min_radius_ratio, quality.worst_element, quality.mean_radius_ratio,
                                    quality.below_0_1, quality.below_0_3, element_order == 2 ? " (of the corners)" : ""));
+  if (curved_repair && curved_repair->folded > 0) line("folded elements", curved_repair_text(*curved_repair, mesh_size_m));
   if (element_order == 2)
     line("Jacobian ratio", fmt::format("min {:.3f} (element {}): min/max of det J over Gauss points and nodes",
                                        quality.min_jacobian_ratio, quality.worst_jacobian_element));
@@ -180,6 +194,19 @@ std::string PrepSummary::json() const {
   j["elements"] = elements;
   j["dofs"] = dofs;
   j["surface_triangles"] = surface_triangles;
+  if (curved_repair) {
+    const CurvedElementRepair& c = *curved_repair;
+    auto count = [](Eigen::Index n) { return n >= 0 ? nlohmann::ordered_json(n) : nlohmann::ordered_json(nullptr); };
+    j["folded_elements"] = {{"after_order_2", c.folded},
+                            {"after_gmsh_elastic", count(c.after_elastic)},
+                            {"gmsh_message", c.elastic_message},
+                            {"straightened_elements", c.straightened.elements},
+                            {"straightened_nodes", c.straightened.nodes},
+                            {"largest_move_m", c.straightened.largest_move_m},
+                            {"seconds", c.seconds}};
+  } else {
+    j["folded_elements"] = nullptr;
+  }
   j["mesh_quality"] = {{"measure", "radius ratio 3 r_in / r_circ"},
                        {"min", quality.min_radius_ratio},
                        {"mean", quality.mean_radius_ratio},

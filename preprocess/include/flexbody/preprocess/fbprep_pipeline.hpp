@@ -90,6 +90,8 @@ struct PrepSummary {
   double mesh_size_m = 0.0;
   MeshAlgorithm mesher = MeshAlgorithm::delaunay;  ///< gmsh's 3D algorithm (when meshed_here)
   int element_order = 1;  ///< 1: linear tetrahedra, 2: quadratic (10 nodes; nodes and DOFs count the mid-edge nodes)
+  /// Element order 2, meshed here: folded elements and what cured them (gmsh_import.hpp).
+  std::optional<CurvedElementRepair> curved_repair;
   /// Surface triangles: with element order 2, four per 6-node boundary face (formats/SCHEMA.md, Mesh).
   Eigen::Index nodes = 0, elements = 0, dofs = 0, surface_triangles = 0;
   MeshQuality quality;

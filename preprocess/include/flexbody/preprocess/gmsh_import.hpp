@@ -2,6 +2,7 @@
 // flexbody/preprocess/gmsh_import.hpp: CAD or mesh file -> linear tetrahedral mesh in metres (gmsh).
 
 #include "flexbody/preprocess/cad_surface.hpp"
+#include "flexbody/preprocess/curved_mesh_repair.hpp"
 #include "flexbody/preprocess/length_unit.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
 
@@ -45,11 +46,26 @@ struct GmshImportOptions {
   std::function<void(const std::string&)> progress;
 };
 
+/// What the import did about quadratic tetrahedra folded by their curved edges (curved_mesh_repair.hpp): gmsh's
+/// elastic smoothing of the high-order nodes, then straightening of what it left.
+struct CurvedElementRepair {
+  Eigen::Index elements = 0;        ///< quadratic tetrahedra in the mesh
+  Eigen::Index folded = 0;          ///< folded when gmsh raised the order
+  Eigen::Index after_elastic = -1;  ///< folded after gmsh's elastic smoothing ("HighOrderElastic"; -1: not needed)
+  std::string elastic_message;      ///< gmsh's error, if the smoothing failed (its mesh is used as it was left)
+  Straightening straightened;       ///< what the smoothing left, straightened
+  double seconds = 0.0;             ///< wall time of all of it
+  /// Folded elements the smoothing left (to be straightened).
+  [[nodiscard]] Eigen::Index left() const { return after_elastic >= 0 ? after_elastic : folded; }
+};
+
 struct ImportedMesh {
   TetMesh mesh;  ///< nodes in metres, in the input's frame; with order 2 the quadratic mesh's corners
   /// With order 2: the 10-node tetrahedra, their mid-edge nodes on the CAD surfaces where the edge lies on one
   /// (curved elements), nodes numbered as `mesh`'s first, each element's Jacobian checked positive.
   std::optional<Tet10Mesh> quadratic;
+  /// With order 2 and a mesh made here: what was done about folded elements (nothing when `folded` is 0).
+  std::optional<CurvedElementRepair> curved_repair;
   InputFormat format = InputFormat::step;
   LengthUnit unit = LengthUnit::metre;  ///< the unit the geometry was read in (and every input length)
   std::string unit_reason;              ///< why that unit (for the report)

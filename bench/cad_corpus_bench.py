@@ -1,0 +1,109 @@
+#!/usr/bin/python3
+"""fbprep at its defaults on public CAD parts that nobody here wrote, with linear and quadratic tetrahedra (issue 28).
+
+The corpus: every STEP and IGES model of FreeCAD's Idf component library (Debian package freecad-common,
+/usr/share/freecad/Mod/Idf/Idflibs) and gmsh's demo part component8.step (gmsh-doc, gunzipped into the work
+folder). scripts/setup.sh does not install these packages; `apt-get install freecad-common gmsh-doc` does.
+
+Each part runs `fbprep PART --order O --json` for O = 1 and 2 (default modes, mesh size and material). Per run:
+the outcome (a body file, or fbprep's one-line refusal), wall time, DOFs, mass, the first elastic frequency, the
+mesh's volume and what was done about folded quadratic elements. Writes bench/results/cad_corpus_bench.csv and prints
+a table with the first frequency's change from linear to quadratic elements.
+
+    /usr/bin/python3 bench/cad_corpus_bench.py [--build build] [--work bench/results/work/corpus] [--only NAME ...]
+"""
+import argparse
+import csv
+import gzip
+import json
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+FREECAD = Path("/usr/share/freecad/Mod/Idf/Idflibs")
+GMSH_DEMOS = Path("/usr/share/doc/gmsh-doc/doc/gmsh/demos/boolean")
+
+
+def corpus(work):
+    parts = sorted(p for p in FREECAD.glob("*") if p.suffix.lower() in (".stp", ".step", ".igs", ".iges"))
+    demo = GMSH_DEMOS / "component8.step.gz"
+    if demo.exists():
+        target = work / "component8.step"
+        if not target.exists():
+            with gzip.open(demo, "rb") as src, open(target, "wb") as dst:
+                shutil.copyfileobj(src, dst)
+        parts.append(target)
+    return parts
+
+
+def run(fbprep, part, order, work):
+    out = work / f"{part.stem}_{part.suffix[1:].lower()}_o{order}.fbh5"
+    start = time.monotonic()
+    proc = subprocess.run([str(fbprep), str(part), "--order", str(order), "--json", "-o", str(out)],
+                          capture_output=True, text=True)
+    seconds = time.monotonic() - start
+    row = {"part": part.name, "order": order, "seconds": round(seconds, 2)}
+    if proc.returncode != 0:
+        lines = [l for l in proc.stderr.splitlines() if l.strip()]
+        row["outcome"] = "refused"
+        row["message"] = lines[-1] if lines else f"exit {proc.returncode}"
+        return row
+    d = json.loads(proc.stdout)
+    folded = d.get("folded_elements") or {}
+    row.update(outcome="body file", mesh_size_m=d["mesh_size_m"], dofs=d["dofs"], mass_kg=d["mass_kg"],
+               volume_m3=d["mesh_quality"]["volume_m3"],
+               first_hz=d["frequencies_hz"][0] if d["frequencies_hz"] else "",
+               folded=folded.get("after_order_2", ""), folded_after_gmsh=folded.get("after_gmsh_elastic", ""),
+               straightened=folded.get("straightened_elements", ""),
+               largest_move_m=folded.get("largest_move_m", ""))
+    return row
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    here = Path(__file__).resolve().parent
+    ap.add_argument("--build", default=str(here.parent / "build"))
+    ap.add_argument("--work", default=str(here / "results" / "work" / "corpus"))
+    ap.add_argument("--only", nargs="*", help="part file names to run (default: all)")
+    args = ap.parse_args()
+    fbprep = Path(args.build) / "bin" / "fbprep"
+    work = Path(args.work)
+    work.mkdir(parents=True, exist_ok=True)
+    if not FREECAD.is_dir():
+        sys.exit(f"cad_corpus_bench: {FREECAD} is missing: apt-get install freecad-common gmsh-doc")
+    parts = [p for p in corpus(work) if not args.only or p.name in args.only]
+    rows = []
+    for part in parts:
+        for order in (1, 2):
+            row = run(fbprep, part, order, work)
+            rows.append(row)
+            print(f"{row['part']:<34} order {order}: {row['outcome']:<9} {row['seconds']:6.1f} s  "
+                  + (row.get("message", "") if row["outcome"] == "refused"
+                     else f"{row['dofs']:>7} DOFs  f1 {row['first_hz']:.5g} Hz  folded {row['folded']}"
+                          f"/{row['folded_after_gmsh']}/{row['straightened']}"), flush=True)
+    fields = ["part", "order", "outcome", "seconds", "mesh_size_m", "dofs", "mass_kg", "volume_m3", "first_hz", "folded",
+              "folded_after_gmsh", "straightened", "largest_move_m", "message"]
+    results = here / "results" / "cad_corpus_bench.csv"
+    with open(results, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields)
+        w.writeheader()
+        w.writerows(rows)
+    by_part = {}
+    for r in rows:
+        by_part.setdefault(r["part"], {})[r["order"]] = r
+    both = [(p, o) for p, o in by_part.items() if o[1]["outcome"] == "body file"]
+    linear_only = [p for p, o in by_part.items() if o[1]["outcome"] == "body file" and o[2]["outcome"] != "body file"]
+    print(f"\n{len(both)} parts give body files with linear elements; {len(linear_only)} of them not with quadratic "
+          f"ones{': ' + ', '.join(linear_only) if linear_only else ''}")
+    print(f"\n{'part':<34} {'f1 linear':>11} {'f1 quadratic':>13} {'change':>8}")
+    for p, o in both:
+        if o[2]["outcome"] == "body file" and o[1]["first_hz"] and o[2]["first_hz"]:
+            print(f"{p:<34} {o[1]['first_hz']:11.5g} {o[2]['first_hz']:13.5g} "
+                  f"{100 * (o[1]['first_hz'] / o[2]['first_hz'] - 1):7.1f}%")
+    print(f"\nwrote {results}")
+
+
+if __name__ == "__main__":
+    main()

@@ -3,7 +3,8 @@
 
 The corpus: every STEP and IGES model of FreeCAD's Idf component library (Debian package freecad-common,
 /usr/share/freecad/Mod/Idf/Idflibs) and gmsh's demo part component8.step (gmsh-doc, gunzipped into the work
-folder). scripts/setup.sh does not install these packages; `apt-get install freecad-common gmsh-doc` does.
+folder), and the 18 solids of gmsh's demo assembly as1-tu-203, each written on its own as BREP by the gmsh command
+(read with --unit mm). scripts/setup.sh installs freecad-common and gmsh-doc.
 
 Each part runs `fbprep PART --order O --json` for O = 1 and 2 (default modes, mesh size and material). Per run:
 the outcome (a body file, or fbprep's one-line refusal), wall time, DOFs, mass, the first elastic frequency, the
@@ -26,22 +27,49 @@ FREECAD = Path("/usr/share/freecad/Mod/Idf/Idflibs")
 GMSH_DEMOS = Path("/usr/share/doc/gmsh-doc/doc/gmsh/demos/boolean")
 
 
+# Writes solid K of a STEP assembly on its own as BREP (the gmsh command; BREP carries no unit: read as mm).
+SPLIT_GEO = """SetFactory("OpenCASCADE");
+v() = ShapeFromFile(Source);
+For i In {0:#v()-1}
+  If (i != K)
+    Recursive Delete { Volume{v(i)}; }
+  EndIf
+EndFor
+Save StrCat(Target, "");
+"""
+
+
+def gunzipped(gz, work):
+    target = work / gz.name[:-3]
+    if not target.exists():
+        with gzip.open(gz, "rb") as src, open(target, "wb") as dst:
+            shutil.copyfileobj(src, dst)
+    return target
+
+
 def corpus(work):
-    parts = sorted(p for p in FREECAD.glob("*") if p.suffix.lower() in (".stp", ".step", ".igs", ".iges"))
-    demo = GMSH_DEMOS / "component8.step.gz"
-    if demo.exists():
-        target = work / "component8.step"
-        if not target.exists():
-            with gzip.open(demo, "rb") as src, open(target, "wb") as dst:
-                shutil.copyfileobj(src, dst)
-        parts.append(target)
+    """(path, extra fbprep arguments) of every part."""
+    parts = [(p, []) for p in sorted(FREECAD.glob("*")) if p.suffix.lower() in (".stp", ".step", ".igs", ".iges")]
+    if (GMSH_DEMOS / "component8.step.gz").exists():
+        parts.append((gunzipped(GMSH_DEMOS / "component8.step.gz", work), []))
+    if (GMSH_DEMOS / "as1-tu-203.stp.gz").exists():  # the assembly's 18 solids, each as its own file
+        assembly = gunzipped(GMSH_DEMOS / "as1-tu-203.stp.gz", work)
+        script = work / "split_solid.geo"
+        script.write_text(SPLIT_GEO)
+        for k in range(18):
+            target = work / f"as1-tu-203_solid{k:02d}.brep"
+            if not target.exists():
+                subprocess.run(["gmsh", "-setstring", "Source", str(assembly), "-setstring", "Target", str(target),
+                                "-setnumber", "K", str(k), "-0", str(script), "-o", str(work / "split.geo_unrolled")],
+                               check=True, capture_output=True)
+            parts.append((target, ["--unit", "mm"]))
     return parts
 
 
-def run(fbprep, part, order, work):
+def run(fbprep, part, extra, order, work):
     out = work / f"{part.stem}_{part.suffix[1:].lower()}_o{order}.fbh5"
     start = time.monotonic()
-    proc = subprocess.run([str(fbprep), str(part), "--order", str(order), "--json", "-o", str(out)],
+    proc = subprocess.run([str(fbprep), str(part), "--order", str(order), "--json", "-o", str(out)] + extra,
                           capture_output=True, text=True)
     seconds = time.monotonic() - start
     row = {"part": part.name, "order": order, "seconds": round(seconds, 2)}
@@ -53,7 +81,8 @@ def run(fbprep, part, order, work):
     d = json.loads(proc.stdout)
     folded = d.get("folded_elements") or {}
     row.update(outcome="body file", mesh_size_m=d["mesh_size_m"], dofs=d["dofs"], mass_kg=d["mass_kg"],
-               volume_m3=d["mesh_quality"]["volume_m3"],
+               volume_m3=d["mesh_quality"]["volume_m3"], cad_volume_m3=d["cad_volume_m3"],
+               volume_error=d["volume_error"],
                first_hz=d["frequencies_hz"][0] if d["frequencies_hz"] else "",
                folded=folded.get("after_order_2", ""), folded_after_gmsh=folded.get("after_gmsh_elastic", ""),
                straightened=folded.get("straightened_elements", ""),
@@ -73,17 +102,18 @@ def main():
     work.mkdir(parents=True, exist_ok=True)
     if not FREECAD.is_dir():
         sys.exit(f"cad_corpus_bench: {FREECAD} is missing: apt-get install freecad-common gmsh-doc")
-    parts = [p for p in corpus(work) if not args.only or p.name in args.only]
+    parts = [(p, extra) for p, extra in corpus(work) if not args.only or p.name in args.only]
     rows = []
-    for part in parts:
+    for part, extra in parts:
         for order in (1, 2):
-            row = run(fbprep, part, order, work)
+            row = run(fbprep, part, extra, order, work)
             rows.append(row)
             print(f"{row['part']:<34} order {order}: {row['outcome']:<9} {row['seconds']:6.1f} s  "
                   + (row.get("message", "") if row["outcome"] == "refused"
-                     else f"{row['dofs']:>7} DOFs  f1 {row['first_hz']:.5g} Hz  folded {row['folded']}"
+                     else f"{row['dofs']:>7} DOFs  f1 {row['first_hz']:.5g} Hz  volume "
+                          f"{100 * (row['volume_error'] or 0):+.2f} %  folded {row['folded']}"
                           f"/{row['folded_after_gmsh']}/{row['straightened']}"), flush=True)
-    fields = ["part", "order", "outcome", "seconds", "mesh_size_m", "dofs", "mass_kg", "volume_m3", "first_hz", "folded",
+    fields = ["part", "order", "outcome", "seconds", "mesh_size_m", "dofs", "mass_kg", "volume_m3", "cad_volume_m3", "volume_error", "first_hz", "folded",
               "folded_after_gmsh", "straightened", "largest_move_m", "message"]
     results = here / "results" / "cad_corpus_bench.csv"
     with open(results, "w", newline="") as f:

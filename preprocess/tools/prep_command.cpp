@@ -29,7 +29,7 @@ int prep_command(int argc, char** argv) {
              "  fbprep export-vtu FILE.fbh5 -o DIR  mesh, mode shapes, fields, interfaces for ParaView\n"
              "  fbprep list-surfaces INPUT          CAD surface tags, areas, centroids (for body specs)");
   std::string input, output, unit_text, material_text = "steel", solver_text = "auto", mesher_text = "delaunay";
-  double mesh_size = 0.0, fmax = 0.0;
+  double mesh_size = 0.0, fmax = 0.0, volume_tolerance = 5e-3;
   int order = 1, modes = 0;
   bool json = false, quiet = false;
   app.add_option("INPUT", input, "STEP/STP, IGES/IGS, BREP, gmsh .geo, gmsh .msh with tetrahedra, or a body spec "
@@ -40,6 +40,9 @@ int prep_command(int argc, char** argv) {
                                       "for IGES. --mesh-size and a spec's lengths are in it");
   app.add_option("--mesh-size", mesh_size, "largest element size in the input's unit (default: bounding-box "
                                            "diagonal / 25; a .msh is used as it is)");
+  app.add_option("--volume-tolerance", volume_tolerance, "how far the mesh's volume may be from the CAD solid's, "
+                                                         "relative (default 0.005): the default size is refined "
+                                                         "until it holds, a --mesh-size that misses is refused");
   app.add_option("--order", order, "element order: 1 (linear tetrahedra, 4 nodes) or 2 (quadratic, 10 nodes, "
                                   "curved on the CAD surfaces; default 1)");
   app.add_option("--mesher", mesher_text, "gmsh's 3D algorithm: delaunay (default, reproducible) or hxt (faster; differs per run)");
@@ -111,6 +114,11 @@ int prep_command(int argc, char** argv) {
       options.mesh.mesh_size = mesh_size;
       record("mesh_size", fmt::format("{}", mesh_size));
     }
+    if (given("--volume-tolerance") && !(std::isfinite(volume_tolerance) && volume_tolerance > 0.0 && volume_tolerance < 1.0))
+      throw std::invalid_argument(fmt::format("--volume-tolerance must be a fraction of the CAD volume between 0 and 1 "
+                                              "(0.005: 0.5 %), got {}", volume_tolerance));
+    if (!from_spec || given("--volume-tolerance")) options.mesh.volume_tolerance = volume_tolerance;
+    record("volume_tolerance", fmt::format("{}", options.mesh.volume_tolerance));
     if (!from_spec || given("--order")) options.mesh.order = order;  // like every flag, it replaces the spec's
     record("element_order", std::to_string(options.mesh.order));
     if (!from_spec || given("--mesher")) {
@@ -151,6 +159,8 @@ int prep_command(int argc, char** argv) {
         std::fprintf(stderr, "[%7.2f s] %s\n", t, message.c_str());
       };
     }
+    if (!quiet)  // on stderr whatever it is, and beside --json's stdout
+      options.mesh.warning = [](const std::string& message) { std::fprintf(stderr, "fbprep: warning: %s\n", message.c_str()); };
     const fp::PrepSummary summary = fp::run_fbprep(options);
     if (json) std::cout << summary.json() << '\n';
     else if (!quiet) std::cout << summary.full_report();

@@ -123,7 +123,7 @@ TEST(ScaleInvariance, SubMillimetreBracket) {
   const auto dir = flexbody::test::scratch_dir();
   flexbody::test::write_text(dir / "bracket-mm.geo", bracket_geo(1e-2));  // 0.9 mm, numbers in mm
   flexbody::test::write_text(dir / "bracket-mm.yaml",
-                             "input: bracket-mm.geo\nunit: mm\nmaterial: steel\nmesh: {size: 0.06}\n"
+                             "input: bracket-mm.geo\nunit: mm\nmaterial: steel\nmesh: {size: 0.06, volume_tolerance: 0.01}\n"
                              "reduction: {kind: free-free, modes: 6}\n"
                              "interfaces:\n"
                              "  bore_1: {select: {cylinder: {point: [0.45, 0.2, 0], direction: [0, 0, 1], radius: 0.05}}}\n"
@@ -136,7 +136,7 @@ TEST(ScaleInvariance, SubMillimetreBracket) {
   EXPECT_TRUE(body.gcms.condition_mass_scaled_before.has_value());
 
   flexbody::test::write_text(dir / "bracket-m.geo", bracket_geo(1e-5));  // the same 0.9 mm, numbers in metres
-  const flexbody::test::CliRun m = flexbody::test::run_fbprep(dir, "bracket-m.geo --unit m --mesh-size 6e-5 --modes 6 -o bracket-m.fbh5");
+  const flexbody::test::CliRun m = flexbody::test::run_fbprep(dir, "bracket-m.geo --unit m --mesh-size 6e-5 --volume-tolerance 0.01 --modes 6 -o bracket-m.fbh5");
   if (m.exit_code != 0) {  // gmsh 4.8; a later gmsh may mesh it cleanly, which is fine too
     EXPECT_NE(m.err.find("zero-volume"), std::string::npos) << m.err;
     EXPECT_NE(m.err.find("write a part this small in mm and pass --unit mm"), std::string::npos) << m.err;

@@ -120,8 +120,14 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
                                                   options.material.density));
   }
   if (const YAML::Node mesh = root["mesh"]) {
-    r.expect_map(mesh, "mesh", {"size", "order", "algorithm"});
+    r.expect_map(mesh, "mesh", {"size", "order", "algorithm", "volume_tolerance"});
     if (mesh["size"]) options.mesh.mesh_size = r.positive(mesh["size"], "mesh size");
+    if (mesh["volume_tolerance"]) {
+      options.mesh.volume_tolerance = r.positive(mesh["volume_tolerance"], "mesh volume_tolerance");
+      if (!(options.mesh.volume_tolerance < 1.0))
+        r.fail(mesh["volume_tolerance"], fmt::format("mesh volume_tolerance {} is a fraction of the CAD volume below 1 "
+                                                     "(0.005: 0.5 %)", options.mesh.volume_tolerance));
+    }
     if (mesh["order"]) {
       options.mesh.order = r.count(mesh["order"], "mesh order");
       if (options.mesh.order != 1 && options.mesh.order != 2)

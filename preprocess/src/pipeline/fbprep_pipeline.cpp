@@ -112,6 +112,11 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.mesh_size_m = imported.mesh_size_m;
   summary.mesher = options.mesh.algorithm;
   summary.curved_repair = imported.curved_repair;
+  summary.cad_volume_m3 = imported.cad_volume_m3;
+  summary.extent_m = imported.extent_m;
+  summary.size_warning = imported.size_warning;
+  summary.refined_from_m = imported.refined_from_m;
+  summary.first_volume_error = imported.first_volume_error;
   // Quadratic tetrahedra (--order 2) number their corners first; every stage below takes all nodes.
   const std::optional<Tet10Mesh>& quadratic = imported.quadratic;
   const RowMatrixX3d& input_nodes = quadratic ? quadratic->nodes : imported.mesh.nodes;

@@ -67,9 +67,14 @@ std::string PrepSummary::full_report() const {
   line("sha256", input_sha256);
   line("length unit", fmt::format("{}: {}", unit, unit_reason));
   if (meshed_here) line("volumes", std::to_string(volumes));
+  if (meshed_here) line("size", fmt::format("{:.4g} m across (bounding-box diagonal)", extent_m));
+  if (!size_warning.empty()) line("warning", size_warning);
   r += element_order == 2 ? "\nMesh (quadratic tetrahedra, 10 nodes)\n" : "\nMesh (linear tetrahedra)\n";
   line("source", meshed_here ? fmt::format("gmsh ({}), element size {:.4g} m", to_string(mesher), mesh_size_m)
                              : "tetrahedra read from the .msh");
+  if (refined_from_m > 0.0 && first_volume_error)
+    line("", fmt::format("(the default {:.4g} m held {:.2f} % of the CAD solid's volume: refined)", refined_from_m,
+                         100.0 * (1.0 + *first_volume_error)));
   line("nodes", fmt::format("{}", nodes));
   line("elements", fmt::format("{}", elements));
   line("DOFs", fmt::format("{}", dofs));
@@ -83,7 +88,10 @@ std::string PrepSummary::full_report() const {
     line("Jacobian ratio", fmt::format("min {:.3f} (element {}): min/max of det J over Gauss points and nodes",
                                        quality.min_jacobian_ratio, quality.worst_jacobian_element));
   line("edge length", fmt::format("{:.4g} .. {:.4g} m", quality.min_edge_m, quality.max_edge_m));
-  line("volume", fmt::format("{:.6g} m^3", quality.volume_m3));
+  line("volume", fmt::format("{:.6g} m^3", quality.volume_m3) +
+                    (cad_volume_m3 ? fmt::format(" ({:+.2f} % of the CAD solid's {:.6g} m^3)", 100.0 * volume_error(),
+                                                 *cad_volume_m3)
+                                   : std::string()));
   r += "\nMaterial\n";
   line(material.name, fmt::format("E = {:.4g} Pa, nu = {:.4g}, rho = {:.6g} kg/m^3", material.youngs_modulus,
                                   material.poisson_ratio, material.density));
@@ -187,6 +195,8 @@ std::string PrepSummary::json() const {
   j["declared_unit"] = declared_unit.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(declared_unit);
   j["unit_overrides_declared"] = unit_overrides_declared;
   j["volumes"] = volumes;
+  j["extent_m"] = meshed_here ? nlohmann::ordered_json(extent_m) : nlohmann::ordered_json(nullptr);
+  j["size_warning"] = size_warning.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(size_warning);
   j["mesh_size_m"] = mesh_size_m;
   j["mesher"] = meshed_here ? nlohmann::ordered_json(std::string(to_string(mesher))) : nlohmann::ordered_json(nullptr);
   j["element_order"] = element_order;
@@ -218,6 +228,10 @@ std::string PrepSummary::json() const {
                        {"volume_m3", quality.volume_m3},
                        {"min_jacobian_ratio", quality.min_jacobian_ratio},
                        {"worst_jacobian_element", quality.worst_jacobian_element}};
+  j["cad_volume_m3"] = cad_volume_m3 ? nlohmann::ordered_json(*cad_volume_m3) : nlohmann::ordered_json(nullptr);
+  j["volume_error"] = cad_volume_m3 ? nlohmann::ordered_json(volume_error()) : nlohmann::ordered_json(nullptr);
+  j["mesh_size_refined_from_m"] = refined_from_m > 0.0 ? nlohmann::ordered_json(refined_from_m) : nlohmann::ordered_json(nullptr);
+  j["first_volume_error"] = first_volume_error ? nlohmann::ordered_json(*first_volume_error) : nlohmann::ordered_json(nullptr);
   j["material"] = {{"name", material.name},
                    {"E_pa", material.youngs_modulus},
                    {"nu", material.poisson_ratio},

@@ -90,6 +90,16 @@ struct PrepSummary {
   double mesh_size_m = 0.0;
   MeshAlgorithm mesher = MeshAlgorithm::delaunay;  ///< gmsh's 3D algorithm (when meshed_here)
   int element_order = 1;  ///< 1: linear tetrahedra, 2: quadratic (10 nodes; nodes and DOFs count the mid-edge nodes)
+  /// The CAD solids' volume [m³], when the input is a CAD model (gmsh_import.hpp); the mesh's is quality.volume_m3.
+  std::optional<double> cad_volume_m3;
+  double extent_m = 0.0;      ///< the CAD model's bounding-box diagonal [m] (0 for .msh)
+  std::string size_warning;  ///< set when extent_m is implausible for its unit (gmsh_import.hpp)
+  /// The default element size was refined from this one [m] (0: not), whose mesh was off the CAD volume by
+  /// first_volume_error (relative).
+  double refined_from_m = 0.0;
+  std::optional<double> first_volume_error;
+  /// quality.volume_m3 / cad_volume_m3 − 1 (0 without a CAD volume).
+  [[nodiscard]] double volume_error() const { return cad_volume_m3 ? quality.volume_m3 / *cad_volume_m3 - 1.0 : 0.0; }
   /// Element order 2, meshed here: folded elements and what cured them (gmsh_import.hpp).
   std::optional<CurvedElementRepair> curved_repair;
   /// Surface triangles: with element order 2, four per 6-node boundary face (formats/SCHEMA.md, Mesh).

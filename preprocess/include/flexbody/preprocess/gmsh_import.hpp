@@ -40,10 +40,15 @@ struct GmshImportOptions {
   double mesh_size = 0.0;
   /// Element order: 1 (linear tetrahedra) or 2 (quadratic, ImportedMesh::quadratic).
   int order = 1;
+  /// How far the mesh's volume may be from the CAD solid's, relative to it (dimensionless): the default element size is
+  /// halved until the mesh holds it, a size the user gave is refused if it does not (with a size that would do).
+  double volume_tolerance = 5e-3;
   /// The 3D algorithm (ignored for a .msh, whose tetrahedra are used as they are).
   MeshAlgorithm algorithm = MeshAlgorithm::delaunay;
   /// Called with a short message before each long step.
   std::function<void(const std::string&)> progress;
+  /// Called with a warning the user must see before the work goes on (a part's implausible size).
+  std::function<void(const std::string&)> warning;
 };
 
 /// What the import did about quadratic tetrahedra folded by their curved edges (curved_mesh_repair.hpp): gmsh's
@@ -75,6 +80,17 @@ struct ImportedMesh {
   bool unit_overrides_declared = false;
   int volumes = 0;                      ///< CAD volumes (0 for .msh)
   double mesh_size_m = 0.0;             ///< element size asked of gmsh [m] (0 for .msh)
+  /// The CAD solids' volume [m³] (OpenCASCADE's mass properties), against which the mesh's volume is checked; nullopt
+  /// for a .msh, or a .geo in gmsh's built-in kernel.
+  std::optional<double> cad_volume_m3;
+  /// The CAD model's bounding-box diagonal [m] (0 for .msh), and a warning when it is implausible for a machine part
+  /// (under 0.1 mm or over 1 km: nearly always a unit mistake), empty otherwise.
+  double extent_m = 0.0;
+  std::string size_warning;
+  /// The first mesh's volume / the CAD volume − 1, before any refinement (nullopt: no CAD volume, or not checked).
+  std::optional<double> first_volume_error;
+  /// When the default size was refined to hold the volume: the size it started from [m] (0: not refined).
+  double refined_from_m = 0.0;
   bool meshed_here = true;              ///< false when a .msh's tetrahedra were used as they are
   /// The CAD surfaces that carry boundary triangles of the mesh, by tag (a .msh lists those it stores).
   std::vector<CadSurface> surfaces;

@@ -4,6 +4,7 @@
 #include "flexbody/preprocess/curved_mesh_repair.hpp"
 #include "flexbody/preprocess/mesh_topology.hpp"
 #include "gmsh_session.hpp"
+#include "shell_sewing.hpp"
 #include "step_unit.hpp"
 
 #include <Eigen/Geometry>
@@ -36,6 +37,9 @@ constexpr double kSmallInModelUnits = 1e-2;
 // Halvings of the element size tried when a mesh misses the CAD solid's volume (mesh_resolving_the_volume): at most
 // 8^3 = 512 times the elements.
 constexpr int kVolumeRefinements = 3;
+// Faces closer than this fraction of the part's bounding-box diagonal are sewn together (shell_sewing.hpp):
+// OpenCASCADE's sewing tolerance, relative so that a part sews the same in any unit.
+constexpr double kSewingTolerance = 1e-6;
 // Parts outside this extent [m] (bounding-box diagonal) are named in a warning before the work: nearly always a unit
 // mistake (issue 28: a part 4 µm across failed in the eigensolver, which blamed itself).
 constexpr double kPlausibleExtent[2] = {1e-4, 1e3};
@@ -507,13 +511,34 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
     gmsh::vectorpair volumes, surfaces;
     gmsh::model::getEntities(volumes, 3);
     gmsh::model::getEntities(surfaces, 2);
+    double xmin, ymin, zmin, xmax, ymax, zmax;
+    gmsh::model::getBoundingBox(-1, -1, xmin, ymin, zmin, xmax, ymax, zmax);
+    const double diagonal = std::hypot(xmax - xmin, ymax - ymin, zmax - zmin);
+    const bool cad = result.format == InputFormat::step || result.format == InputFormat::iges ||
+                     result.format == InputFormat::brep;
+    if (volumes.empty() && cad && !surfaces.empty()) {  // faces only: sewn into a solid if they close one
+      if (options.progress)
+        options.progress(fmt::format("the input has no volume: sewing its {} faces into a solid (OpenCASCADE)",
+                                     surfaces.size()));
+      const detail::SewingOutcome sewn = detail::sew_shells_into_solids(kSewingTolerance * diagonal);
+      // One closed shell is one solid; closed shells side by side are an assembly, like several solids.
+      if (sewn.free_edges > 0 || sewn.solids == 0)
+        throw std::runtime_error(fmt::format(
+            "{}: the input has no volume ({} surfaces), and sewing them made no closed solid: {} free edges (each "
+            "bounds one face only) leave {} shell(s) open (sewing tolerance {:.3g} m); fbprep needs a closed solid",
+            name, sewn.surfaces, sewn.free_edges, sewn.shells, kSewingTolerance * diagonal * unit.gmsh_to_metres));
+      if (sewn.shells > 1)
+        throw std::runtime_error(fmt::format(
+            "{}: the input has no volume ({} surfaces); sewn, they make {} closed shells: an assembly is not one body "
+            "(export each part on its own, or fuse them in CAD)", name, sewn.surfaces, sewn.shells));
+      result.sewn_faces = sewn.surfaces;
+      gmsh::model::getEntities(volumes, 3);
+      gmsh::model::getEntities(surfaces, 2);
+    }
     result.volumes = static_cast<int>(volumes.size());
     if (volumes.empty())
       throw std::runtime_error(fmt::format("{}: the input has no volume ({} surfaces); fbprep needs a solid", name,
                                            surfaces.size()));
-    double xmin, ymin, zmin, xmax, ymax, zmax;
-    gmsh::model::getBoundingBox(-1, -1, xmin, ymin, zmin, xmax, ymax, zmax);
-    const double diagonal = std::hypot(xmax - xmin, ymax - ymin, zmax - zmin);
     result.extent_m = diagonal * unit.gmsh_to_metres;
     if (!(result.extent_m >= kPlausibleExtent[0] && result.extent_m <= kPlausibleExtent[1])) {
       result.size_warning = fmt::format("the part is {:.3g} m across (bounding-box diagonal), read in {}: {}; check the "

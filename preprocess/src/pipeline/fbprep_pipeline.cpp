@@ -108,6 +108,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.declared_unit = imported.declared_unit ? std::string(to_string(*imported.declared_unit)) : std::string();
   summary.unit_overrides_declared = imported.unit_overrides_declared;
   summary.volumes = imported.volumes;
+  summary.sewn_faces = imported.sewn_faces;
   summary.meshed_here = imported.meshed_here;
   summary.mesh_size_m = imported.mesh_size_m;
   summary.mesher = options.mesh.algorithm;

@@ -67,6 +67,9 @@ std::string PrepSummary::full_report() const {
   line("sha256", input_sha256);
   line("length unit", fmt::format("{}: {}", unit, unit_reason));
   if (meshed_here) line("volumes", std::to_string(volumes));
+  if (sewn_faces > 0)
+    line("sewn", fmt::format("the input had no volume: its {} faces were sewn into one closed solid (OpenCASCADE)",
+                             sewn_faces));
   if (meshed_here) line("size", fmt::format("{:.4g} m across (bounding-box diagonal)", extent_m));
   if (!size_warning.empty()) line("warning", size_warning);
   r += element_order == 2 ? "\nMesh (quadratic tetrahedra, 10 nodes)\n" : "\nMesh (linear tetrahedra)\n";
@@ -195,6 +198,7 @@ std::string PrepSummary::json() const {
   j["declared_unit"] = declared_unit.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(declared_unit);
   j["unit_overrides_declared"] = unit_overrides_declared;
   j["volumes"] = volumes;
+  j["sewn_faces"] = sewn_faces > 0 ? nlohmann::ordered_json(sewn_faces) : nlohmann::ordered_json(nullptr);
   j["extent_m"] = meshed_here ? nlohmann::ordered_json(extent_m) : nlohmann::ordered_json(nullptr);
   j["size_warning"] = size_warning.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(size_warning);
   j["mesh_size_m"] = mesh_size_m;

@@ -86,6 +86,7 @@ struct PrepSummary {
   std::string declared_unit;      ///< the unit the input declares, if fbprep reads one ("" otherwise)
   bool unit_overrides_declared = false;  ///< the user's unit replaced a different declared one
   int volumes = 0;
+  int sewn_faces = 0;  ///< the input had faces and no volume: this many were sewn into its solid (0: not sewn)
   bool meshed_here = true;
   double mesh_size_m = 0.0;
   MeshAlgorithm mesher = MeshAlgorithm::delaunay;  ///< gmsh's 3D algorithm (when meshed_here)

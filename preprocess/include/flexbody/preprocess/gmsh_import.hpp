@@ -79,6 +79,8 @@ struct ImportedMesh {
   /// True when the user's unit differs from the declared one and replaced it.
   bool unit_overrides_declared = false;
   int volumes = 0;                      ///< CAD volumes (0 for .msh)
+  /// When the input had faces and no volume: how many faces were sewn into its solid(s) (0: not sewn).
+  int sewn_faces = 0;
   double mesh_size_m = 0.0;             ///< element size asked of gmsh [m] (0 for .msh)
   /// The CAD solids' volume [m³] (OpenCASCADE's mass properties), against which the mesh's volume is checked; nullopt
   /// for a .msh, or a .geo in gmsh's built-in kernel.

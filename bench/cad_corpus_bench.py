@@ -82,7 +82,8 @@ def run(fbprep, part, extra, order, work):
     folded = d.get("folded_elements") or {}
     row.update(outcome="body file", mesh_size_m=d["mesh_size_m"], dofs=d["dofs"], mass_kg=d["mass_kg"],
                volume_m3=d["mesh_quality"]["volume_m3"], cad_volume_m3=d["cad_volume_m3"],
-               volume_error=d["volume_error"],
+               volume_error=d["volume_error"], refined_from_m=d.get("mesh_size_refined_from_m"),
+               sewn_faces=d.get("sewn_faces"), loose_faces=d.get("loose_faces"),
                first_hz=d["frequencies_hz"][0] if d["frequencies_hz"] else "",
                folded=folded.get("after_order_2", ""), folded_after_gmsh=folded.get("after_gmsh_elastic", ""),
                straightened=folded.get("straightened_elements", ""),
@@ -113,7 +114,8 @@ def main():
                      else f"{row['dofs']:>7} DOFs  f1 {row['first_hz']:.5g} Hz  volume "
                           f"{100 * (row['volume_error'] or 0):+.2f} %  folded {row['folded']}"
                           f"/{row['folded_after_gmsh']}/{row['straightened']}"), flush=True)
-    fields = ["part", "order", "outcome", "seconds", "mesh_size_m", "dofs", "mass_kg", "volume_m3", "cad_volume_m3", "volume_error", "first_hz", "folded",
+    fields = ["part", "order", "outcome", "seconds", "mesh_size_m", "dofs", "mass_kg", "volume_m3", "cad_volume_m3", "volume_error", "refined_from_m", "sewn_faces", "loose_faces",
+              "first_hz", "folded",
               "folded_after_gmsh", "straightened", "largest_move_m", "message"]
     results = here / "results" / "cad_corpus_bench.csv"
     with open(results, "w", newline="") as f:

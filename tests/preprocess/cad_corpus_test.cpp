@@ -4,6 +4,11 @@
 #include "flexbody/preprocess/curved_mesh_repair.hpp"
 #include "flexbody/preprocess/gmsh_import.hpp"
 #include "flexbody/preprocess/mesh_topology.hpp"
+#include "cli_run.hpp"
+#include "test_meshes.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
 
@@ -74,6 +79,35 @@ TEST(CadCorpus, SurfaceModelsAreSewnOrRefused) {
       ADD_FAILURE() << "taken";
     } catch (const std::runtime_error& e) {
       EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+}
+
+// Linear elements at the default size on parts with thin leads are far off, and fbprep now says so (issue 28 item 5:
+// the issue's table, against refined quadratic references: RLF_7030 16.3 kHz against 5.58 kHz, TCMT1107_4 44.1 kHz
+// against 19.6 kHz, TSS0P_8 115 kHz against 58.7 kHz, i.e. 92-125 % too high). Each run warns on stderr and in
+// --json; the estimates (measured 133 %, 122 %, 96 %) are above 50 %. 1210_SMD, a compact block, is 3.0 % off (its
+// quadratic mesh: 444.9 against 458.2 kHz): estimated 2.8 %, no warning.
+TEST(CadCorpus, LinearElementsThatAreFarOffAreFlagged) {
+  if (!std::filesystem::is_directory(kFreecadParts))
+    GTEST_SKIP() << kFreecadParts << " is missing: scripts/setup.sh installs Debian's freecad-common";
+  const auto dir = flexbody::test::scratch_dir();
+  for (const std::string part : {"RLF_7030.stp", "TCMT1107_4.stp", "TSS0P_8.stp", "1210_SMD.stp"}) {
+    SCOPED_TRACE(part);
+    const flexbody::test::CliRun run =
+        flexbody::test::run_fbprep(dir, fmt::format("'{}' --json -o out.fbh5", (kFreecadParts / part).string()));
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const nlohmann::json j = nlohmann::json::parse(run.out);
+    const double first = j["frequency_error_estimates"][0].get<double>();
+    if (part == "1210_SMD.stp") {
+      EXPECT_LT(first, 0.05);
+      EXPECT_GT(first, 0.01);
+      EXPECT_TRUE(j["accuracy_warning"].is_null());
+      EXPECT_EQ(run.err, "");
+    } else {
+      EXPECT_GT(first, 0.5);
+      EXPECT_FALSE(j["accuracy_warning"].is_null());
+      EXPECT_EQ(run.err.rfind("fbprep: warning: the first frequency", 0), 0u) << run.err;
     }
   }
 }

@@ -8,6 +8,7 @@
 #include <gmsh.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <filesystem>
 #include <string>
 
@@ -56,4 +57,23 @@ TEST(ShellSewing, AnOpenShellIsRefusedNamingItsFreeEdges) {
     EXPECT_NE(what.find("open_shell.step: the input has no volume (5 surfaces), and sewing them made no closed solid: 4 "
                         "free edges (each bounds one face only) leave 1 shell(s) open"), std::string::npos) << what;
   }
+}
+
+// A face beside a solid (a 10 x 5 x 2 mm box and, 20 mm away, a 3 x 3 mm rectangle, in one STEP file) bounds nothing:
+// the part is meshed without it (the box's volume, to rounding), and the import counts it instead of losing it
+// silently. Its curves and points bound the face, so they are not loose themselves.
+TEST(ShellSewing, AFaceBesideTheSolidIsLeftOutAndCounted) {
+  const auto path = flexbody::test::scratch_dir() / "box_and_face.step";
+  gmsh::initialize();
+  gmsh::option::setNumber("General.Terminal", 0);
+  gmsh::model::add("loose");
+  gmsh::model::occ::addBox(0, 0, 0, 10, 5, 2);
+  gmsh::model::occ::addRectangle(30, 0, 0, 3, 3);
+  gmsh::model::occ::synchronize();
+  gmsh::write(path.string());
+  gmsh::finalize();
+  const fp::ImportedMesh mesh = fp::import_tet_mesh(path, {});
+  EXPECT_EQ(mesh.loose_entities, (std::array<int, 3>{0, 0, 1}));
+  EXPECT_EQ(mesh.sewn_faces, 0);
+  EXPECT_NEAR(fp::mesh_quality(mesh.mesh).volume_m3 / 1e-7, 1.0, 1e-12);
 }

@@ -345,6 +345,25 @@ CurvedElementRepair optimize_folded(const std::string& name, GmshTetrahedra& tet
   return repair;
 }
 
+// Points, curves and faces of the model that bound nothing of a higher dimension, when it has a solid (a model of
+// faces only has none: its faces are what sewing works on).
+std::array<int, 3> loose_entities() {
+  std::array<int, 3> loose{0, 0, 0};
+  gmsh::vectorpair volumes;
+  gmsh::model::getEntities(volumes, 3);
+  if (volumes.empty()) return loose;
+  for (int dim = 0; dim < 3; ++dim) {
+    gmsh::vectorpair entities;
+    gmsh::model::getEntities(entities, dim);
+    for (const auto& [d, tag] : entities) {
+      std::vector<int> up, down;
+      gmsh::model::getAdjacencies(d, tag, up, down);
+      if (up.empty()) ++loose[static_cast<std::size_t>(dim)];
+    }
+  }
+  return loose;
+}
+
 // The model meshed at element size `size` (gmsh's coordinates), its tetrahedra of the order asked read, quadratic ones
 // through gmsh's smoothing (optimize_folded; `repair` says what it did).
 GmshTetrahedra mesh_at(const std::string& name, double size, const GmshImportOptions& options,
@@ -496,10 +515,19 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
       if (result.format == InputFormat::geo || result.format == InputFormat::msh) {
         gmsh::open(path.string());
       } else {
+        // Everything the file holds, to count what lies beside the solids (loose faces, curves, points), which
+        // the part is meshed without: read once more with the highest dimension only when there is any.
         gmsh::model::add("part");
         gmsh::vectorpair imported;
-        gmsh::model::occ::importShapes(path.string(), imported, /*highestDimOnly=*/true);
+        gmsh::model::occ::importShapes(path.string(), imported, /*highestDimOnly=*/false);
         gmsh::model::occ::synchronize();
+        result.loose_entities = loose_entities();
+        if (result.loose_entities[0] + result.loose_entities[1] + result.loose_entities[2] > 0) {
+          gmsh::clear();
+          gmsh::model::add("part");
+          gmsh::model::occ::importShapes(path.string(), imported, /*highestDimOnly=*/true);
+          gmsh::model::occ::synchronize();
+        }
       }
     });
   }

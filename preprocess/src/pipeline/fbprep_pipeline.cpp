@@ -1,4 +1,5 @@
 #include "flexbody/preprocess/fbprep_pipeline.hpp"
+#include "flexbody/preprocess/error_estimate.hpp"
 
 #include "flexbody/format/body_file.hpp"
 #include "flexbody/preprocess/assembly.hpp"
@@ -109,6 +110,7 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   summary.unit_overrides_declared = imported.unit_overrides_declared;
   summary.volumes = imported.volumes;
   summary.sewn_faces = imported.sewn_faces;
+  summary.loose_entities = imported.loose_entities;
   summary.meshed_here = imported.meshed_here;
   summary.mesh_size_m = imported.mesh_size_m;
   summary.mesher = options.mesh.algorithm;
@@ -225,6 +227,15 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     summary.eigensolver = std::string(to_string(modes.eigensolver));
     summary.factor = modes.stats;
     mode_vectors = modes.vectors;
+    if (!quadratic) {  // the eigenmodes' discretisation error (error_estimate.hpp)
+      const Eigen::Index normal = modes.normal_modes;
+      summary.frequency_errors = in_stage("error estimate", [&] {
+        return frequency_error_estimates(imported.mesh, options.material, modes.vectors.leftCols(normal),
+                                         modes.frequencies_hz.head(normal));
+      });
+      if (const std::string warning = summary.accuracy_warning(); !warning.empty() && options.mesh.warning)
+        options.mesh.warning(warning);
+    }
   } else {
     std::vector<RigidInterface> rigid;
     for (const SelectedInterface& s : selected)

@@ -40,6 +40,16 @@ std::string shift_as_frequency(double sigma) {
 
 }  // namespace
 
+std::string PrepSummary::accuracy_warning() const {
+  if (frequency_errors.size() == 0 || !(frequency_errors(0) > kAccuracyWarning)) return {};
+  const std::string amount = std::isfinite(frequency_errors(0))
+                                 ? fmt::format("{:.0f} % too high", 100.0 * frequency_errors(0))
+                                 : std::string("not resolved at all");
+  return fmt::format("the first frequency ({:.4g} Hz) is likely {} with linear elements at this mesh (estimate from "
+                     "the stresses' jumps between elements): use --order 2, or a smaller --mesh-size",
+                     frequencies_hz(0), amount);
+}
+
 double PrepSummary::max_residual_to_floor() const {
   const bool free_free = reduction == ReductionKind::free_free;
   const Eigen::VectorXd& residuals = free_free ? relative_residuals : fixed_interface_residuals;
@@ -67,6 +77,9 @@ std::string PrepSummary::full_report() const {
   line("sha256", input_sha256);
   line("length unit", fmt::format("{}: {}", unit, unit_reason));
   if (meshed_here) line("volumes", std::to_string(volumes));
+  if (loose_entities[0] + loose_entities[1] + loose_entities[2] > 0)
+    line("left out", fmt::format("{} faces, {} curves and {} points beside the solid(s), bounding none: not meshed",
+                                 loose_entities[2], loose_entities[1], loose_entities[0]));
   if (sewn_faces > 0)
     line("sewn", fmt::format("the input had no volume: its {} faces were sewn into one closed solid (OpenCASCADE)",
                              sewn_faces));
@@ -120,14 +133,20 @@ std::string PrepSummary::full_report() const {
   // Free-free modes have floors; the orthonormalised Craig-Bampton modes' residuals are reduction errors, not
   // rounding, and have none.
   const bool floors = residual_floors.size() == frequencies_hz.size();
-  r += fmt::format("  {:>4}  {:>16}  {:>14}{}\n", "mode", "frequency [Hz]", "rel. residual",
-                   floors ? fmt::format("  {:>14}", "rounding floor") : "");
   const Eigen::Index first_static = frequencies_hz.size() - static_correction_modes;
+  const bool errors = frequency_errors.size() == first_static && first_static > 0;
+  r += fmt::format("  {:>4}  {:>16}  {:>14}{}{}\n", "mode", "frequency [Hz]", "rel. residual",
+                   floors ? fmt::format("  {:>14}", "rounding floor") : "",
+                   errors ? fmt::format("  {:>15}", "mesh error est.") : "");
   for (Eigen::Index k = 0; k < frequencies_hz.size(); ++k)
-    r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}{}{}\n", k + 1, frequencies_hz(k), relative_residuals(k),
+    r += fmt::format("  {:>4}  {:>16.6f}  {:>14.2e}{}{}{}\n", k + 1, frequencies_hz(k), relative_residuals(k),
                      floors && k < first_static ? fmt::format("  {:>14.2e}", residual_floors(k)) : "",
+                     errors && k < first_static ? fmt::format("  {:>14.1f}%", 100.0 * frequency_errors(k)) : "",
                      k >= first_static ? "  static correction (Ritz value)" : "");
   if (reduction == ReductionKind::free_free) r += residual_check_line();
+  if (errors)
+    line("mesh error estimate", "f_h / f - 1 from the recovered stresses' jump (Zienkiewicz-Zhu), linear elements");
+  if (const std::string warning = accuracy_warning(); !warning.empty()) line("warning", warning);
   if (!static_loads.empty()) {
     line("static correction", fmt::format("{} unit loads ({}), {} dropped as dependent", static_correction.loads,
                                           fmt::join(static_loads, " "), static_correction.dropped));
@@ -198,6 +217,9 @@ std::string PrepSummary::json() const {
   j["declared_unit"] = declared_unit.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(declared_unit);
   j["unit_overrides_declared"] = unit_overrides_declared;
   j["volumes"] = volumes;
+  j["loose_faces"] = loose_entities[2];
+  j["loose_curves"] = loose_entities[1];
+  j["loose_points"] = loose_entities[0];
   j["sewn_faces"] = sewn_faces > 0 ? nlohmann::ordered_json(sewn_faces) : nlohmann::ordered_json(nullptr);
   j["extent_m"] = meshed_here ? nlohmann::ordered_json(extent_m) : nlohmann::ordered_json(nullptr);
   j["size_warning"] = size_warning.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(size_warning);
@@ -247,6 +269,16 @@ std::string PrepSummary::json() const {
   j["shift_rad2_s2"] = shift;
   j["reduction"] = std::string(to_string(reduction));
   j["frequencies_hz"] = to_std(frequencies_hz);
+  j["accuracy_warning"] = accuracy_warning().empty() ? nlohmann::ordered_json(nullptr)
+                                                     : nlohmann::ordered_json(accuracy_warning());
+  if (frequency_errors.size() > 0) {
+    std::vector<double> errors(frequency_errors.data(), frequency_errors.data() + frequency_errors.size());
+    nlohmann::ordered_json list = nlohmann::ordered_json::array();
+    for (const double e : errors) list.push_back(std::isfinite(e) ? nlohmann::ordered_json(e) : nlohmann::ordered_json(nullptr));
+    j["frequency_error_estimates"] = list;
+  } else {
+    j["frequency_error_estimates"] = nullptr;
+  }
   j["fixed_interface_frequencies_hz"] = to_std(fixed_interface_frequencies_hz);
   j["relative_residuals"] = to_std(relative_residuals);
   // Over the eigenmodes: static correction modes are Ritz vectors with O(1) residuals by construction.

@@ -77,6 +77,9 @@ struct StageRecord {
   double peak_memory_mb = 0.0;
 };
 
+/// The estimated frequency error (relative) above which fbprep warns (issue 28 item 5).
+inline constexpr double kAccuracyWarning = 0.05;
+
 /// What fbprep did, for FullReport() and --json. Starts empty; run_fbprep fills every field.
 struct PrepSummary {
   std::filesystem::path input, output;
@@ -87,6 +90,7 @@ struct PrepSummary {
   bool unit_overrides_declared = false;  ///< the user's unit replaced a different declared one
   int volumes = 0;
   int sewn_faces = 0;  ///< the input had faces and no volume: this many were sewn into its solid (0: not sewn)
+  std::array<int, 3> loose_entities{0, 0, 0};  ///< points, curves, faces beside the solids, left out (gmsh_import.hpp)
   bool meshed_here = true;
   double mesh_size_m = 0.0;
   MeshAlgorithm mesher = MeshAlgorithm::delaunay;  ///< gmsh's 3D algorithm (when meshed_here)
@@ -110,6 +114,11 @@ struct PrepSummary {
   format::MassProperties mass;
   ReductionKind reduction = ReductionKind::free_free;
   Eigen::VectorXd frequencies_hz, relative_residuals;
+  /// Free-free with linear elements: each eigenmode's estimated discretisation error f_h / f − 1 (error_estimate.hpp;
+  /// empty otherwise).
+  Eigen::VectorXd frequency_errors;
+  /// "the first frequency is likely N % too high ..." when the estimate passes kAccuracyWarning, else empty.
+  [[nodiscard]] std::string accuracy_warning() const;
   /// Free-free only: each mode's rounding floor of its residual (eigen_residual.hpp).
   Eigen::VectorXd residual_floors;
   /// Craig-Bampton only: the clamped problem's frequencies, residuals and their rounding floors.

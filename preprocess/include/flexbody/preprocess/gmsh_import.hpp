@@ -6,6 +6,7 @@
 #include "flexbody/preprocess/length_unit.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
 
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -81,6 +82,8 @@ struct ImportedMesh {
   int volumes = 0;                      ///< CAD volumes (0 for .msh)
   /// When the input had faces and no volume: how many faces were sewn into its solid(s) (0: not sewn).
   int sewn_faces = 0;
+  /// Points, curves and faces of a CAD file that lie beside its solids, bounding none: not meshed, and reported.
+  std::array<int, 3> loose_entities{0, 0, 0};
   double mesh_size_m = 0.0;             ///< element size asked of gmsh [m] (0 for .msh)
   /// The CAD solids' volume [m³] (OpenCASCADE's mass properties), against which the mesh's volume is checked; nullopt
   /// for a .msh, or a .geo in gmsh's built-in kernel.

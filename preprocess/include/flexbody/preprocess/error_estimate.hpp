@@ -1,0 +1,26 @@
+#pragma once
+// flexbody/preprocess/error_estimate.hpp: how far a mesh's frequencies are from the part's (issue 28 item 5).
+//
+// The Zienkiewicz-Zhu estimate (ZZ 1987): the recovered stress σ* (the nodal averages of stress_recovery.hpp,
+// interpolated by the element's shape functions) is closer to the exact stress than the element's own σ_h, so
+// η² = Σ_e ∫_e (σ* − σ_h) : C⁻¹ (σ* − σ_h) dV estimates the energy norm of the error. For an M-normalised mode with
+// eigenvalue λ_h = ω_h², λ_h − λ ≈ ‖u − u_h‖²_K (the eigenvalue error of a conforming FE mesh is the error's
+// energy, to second order), so the exact eigenvalue is about λ_h − η² and the frequency f_h √(1 − η²/λ_h): the
+// relative frequency error is estimated as (1 − η²/λ_h)^(−1/2) − 1. Linear tetrahedra have constant σ_h; σ* is
+// linear over each element and the integral is exact (∫ N_a N_b dV = V (1 + δ_ab) / 20).
+
+#include "flexbody/preprocess/material.hpp"
+#include "flexbody/preprocess/tet_mesh.hpp"
+
+#include <Eigen/Core>
+
+namespace flexbody::preprocess {
+
+/// Each mode's estimated relative frequency error f_h / f − 1 (≥ 0; +inf when the estimated error energy reaches the
+/// eigenvalue: the mesh does not resolve that mode at all), for M-normalised mode shapes (3 n_n x m, node-interleaved)
+/// with frequencies [Hz] (m). Modes at zero frequency (rigid-body) get 0.
+[[nodiscard]] Eigen::VectorXd frequency_error_estimates(const TetMesh& mesh, const Material& material,
+                                                        const Eigen::MatrixXd& modes,
+                                                        const Eigen::VectorXd& frequencies_hz);
+
+}  // namespace flexbody::preprocess

@@ -1,0 +1,71 @@
+#include "flexbody/preprocess/error_estimate.hpp"
+
+#include "flexbody/format/tet4_element.hpp"
+#include "flexbody/preprocess/stress_recovery.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+namespace flexbody::preprocess {
+namespace {
+
+using Voigt = Eigen::Matrix<double, 6, 1>;  // xx, yy, zz, xy, xz, yz (tensor shear components)
+
+// s : C⁻¹ t, the complementary energy's bilinear form of an isotropic material: ε = ((1 + ν) σ − ν tr(σ) I) / E.
+double compliance_product(const Voigt& s, const Voigt& t, double young, double poisson) {
+  const double contracted = s.head<3>().dot(t.head<3>()) + 2.0 * s.tail<3>().dot(t.tail<3>());
+  return ((1.0 + poisson) * contracted - poisson * s.head<3>().sum() * t.head<3>().sum()) / young;
+}
+
+}  // namespace
+
+Eigen::VectorXd frequency_error_estimates(const TetMesh& mesh, const Material& material, const Eigen::MatrixXd& modes,
+                                          const Eigen::VectorXd& frequencies_hz) {
+  const Eigen::Index n = mesh.node_count(), m = modes.cols();
+  if (modes.rows() != 3 * n || frequencies_hz.size() != m)
+    throw std::invalid_argument("frequency_error_estimates: the modes do not match the mesh or the frequencies");
+  const Eigen::MatrixXd recovered = nodal_stresses(mesh, material, modes);  // 6 n x m, σ* at the nodes
+  const double lambda = lame_lambda(material), mu = shear_modulus(material);
+  // Sums over fixed blocks of elements, added in block order: the same result for any thread count.
+  constexpr Eigen::Index kBlock = 2048;
+  const Eigen::Index blocks = (mesh.element_count() + kBlock - 1) / kBlock;
+  Eigen::MatrixXd partial = Eigen::MatrixXd::Zero(m, blocks);
+#pragma omp parallel for schedule(dynamic)
+  for (Eigen::Index block = 0; block < blocks; ++block) {
+    const Eigen::Index end = std::min(mesh.element_count(), (block + 1) * kBlock);
+    for (Eigen::Index e = block * kBlock; e < end; ++e) {
+      Eigen::Matrix<double, 4, 3> corners;
+      for (int a = 0; a < 4; ++a) corners.row(a) = mesh.nodes.row(mesh.tets(e, a));
+      const format::Tet4Geometry g = format::tet4_geometry(corners);
+      for (Eigen::Index k = 0; k < m; ++k) {
+        Eigen::Matrix3d h = Eigen::Matrix3d::Zero();  // ∇u = Σ_a u_a ⊗ ∇N_a
+        for (int a = 0; a < 4; ++a)
+          h += modes.col(k).segment<3>(3 * mesh.tets(e, a)) * g.gradients.row(a);
+        const Eigen::Matrix3d strain = 0.5 * (h + h.transpose());
+        const Eigen::Matrix3d sigma = lambda * strain.trace() * Eigen::Matrix3d::Identity() + 2.0 * mu * strain;
+        Voigt element;
+        element << sigma(0, 0), sigma(1, 1), sigma(2, 2), sigma(0, 1), sigma(0, 2), sigma(1, 2);
+        Voigt d[4];
+        for (int a = 0; a < 4; ++a) d[a] = recovered.col(k).segment<6>(6 * mesh.tets(e, a)) - element;
+        double sum = 0.0;  // Σ_ab (1 + δ_ab) d_a : C⁻¹ d_b, times V / 20
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b)
+            sum += (a == b ? 2.0 : 1.0) * compliance_product(d[a], d[b], material.youngs_modulus, material.poisson_ratio);
+        partial(k, block) += std::abs(g.volume) / 20.0 * sum;
+      }
+    }
+  }
+  const Eigen::VectorXd error_energy = partial.rowwise().sum();
+  Eigen::VectorXd estimate(m);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    const double omega = 2.0 * std::numbers::pi * frequencies_hz(k), eigenvalue = omega * omega;
+    const double ratio = eigenvalue > 0.0 ? error_energy(k) / eigenvalue : 0.0;
+    estimate(k) = ratio < 1.0 ? 1.0 / std::sqrt(1.0 - ratio) - 1.0 : std::numeric_limits<double>::infinity();
+  }
+  return estimate;
+}
+
+}  // namespace flexbody::preprocess

@@ -227,11 +227,13 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     summary.eigensolver = std::string(to_string(modes.eigensolver));
     summary.factor = modes.stats;
     mode_vectors = modes.vectors;
-    if (!quadratic) {  // the eigenmodes' discretisation error (error_estimate.hpp)
+    {  // the eigenmodes' discretisation error (error_estimate.hpp)
       const Eigen::Index normal = modes.normal_modes;
       summary.frequency_errors = in_stage("error estimate", [&] {
-        return frequency_error_estimates(imported.mesh, options.material, modes.vectors.leftCols(normal),
-                                         modes.frequencies_hz.head(normal));
+        return quadratic ? frequency_error_estimates(*quadratic, options.material, modes.vectors.leftCols(normal),
+                                                     modes.frequencies_hz.head(normal))
+                         : frequency_error_estimates(imported.mesh, options.material, modes.vectors.leftCols(normal),
+                                                     modes.frequencies_hz.head(normal));
       });
       if (const std::string warning = summary.accuracy_warning(); !warning.empty() && options.mesh.warning)
         options.mesh.warning(warning);

@@ -45,9 +45,10 @@ std::string PrepSummary::accuracy_warning() const {
   const std::string amount = std::isfinite(frequency_errors(0))
                                  ? fmt::format("{:.0f} % too high", 100.0 * frequency_errors(0))
                                  : std::string("not resolved at all");
-  return fmt::format("the first frequency ({:.4g} Hz) is likely {} with linear elements at this mesh (estimate from "
-                     "the stresses' jumps between elements): use --order 2, or a smaller --mesh-size",
-                     frequencies_hz(0), amount);
+  return fmt::format("the first frequency ({:.4g} Hz) is likely {} with {} elements at this mesh (estimate from "
+                     "the stresses' jumps between elements): {}", frequencies_hz(0), amount,
+                     element_order == 2 ? "quadratic" : "linear",
+                     element_order == 2 ? "give a smaller --mesh-size" : "use --order 2, or a smaller --mesh-size");
 }
 
 double PrepSummary::max_residual_to_floor() const {
@@ -145,7 +146,7 @@ std::string PrepSummary::full_report() const {
                      k >= first_static ? "  static correction (Ritz value)" : "");
   if (reduction == ReductionKind::free_free) r += residual_check_line();
   if (errors)
-    line("mesh error estimate", "f_h / f - 1 from the recovered stresses' jump (Zienkiewicz-Zhu), linear elements");
+    line("mesh error estimate", "f_h / f - 1 from the recovered stresses' jump (Zienkiewicz-Zhu)");
   if (const std::string warning = accuracy_warning(); !warning.empty()) line("warning", warning);
   if (!static_loads.empty()) {
     line("static correction", fmt::format("{} unit loads ({}), {} dropped as dependent", static_correction.loads,

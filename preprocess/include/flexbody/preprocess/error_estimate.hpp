@@ -7,7 +7,8 @@
 // eigenvalue λ_h = ω_h², λ_h − λ ≈ ‖u − u_h‖²_K (the eigenvalue error of a conforming FE mesh is the error's
 // energy, to second order), so the exact eigenvalue is about λ_h − η² and the frequency f_h √(1 − η²/λ_h): the
 // relative frequency error is estimated as (1 − η²/λ_h)^(−1/2) − 1. Linear tetrahedra have constant σ_h; σ* is
-// linear over each element and the integral is exact (∫ N_a N_b dV = V (1 + δ_ab) / 20).
+// linear over each element and the integral is exact (∫ N_a N_b dV = V (1 + δ_ab) / 20). Quadratic ones compare
+// the two at the 4 Gauss points.
 
 #include "flexbody/preprocess/material.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
@@ -20,6 +21,11 @@ namespace flexbody::preprocess {
 /// eigenvalue: the mesh does not resolve that mode at all), for M-normalised mode shapes (3 n_n x m, node-interleaved)
 /// with frequencies [Hz] (m). Modes at zero frequency (rigid-body) get 0.
 [[nodiscard]] Eigen::VectorXd frequency_error_estimates(const TetMesh& mesh, const Material& material,
+                                                        const Eigen::MatrixXd& modes,
+                                                        const Eigen::VectorXd& frequencies_hz);
+/// The same for quadratic tetrahedra: σ_h and σ* = Σ N_a σ*_a (the nodal stresses extrapolated from the Gauss points
+/// and averaged, stress_recovery.hpp) compared at the elements' 4 Gauss points (the stiffness's rule).
+[[nodiscard]] Eigen::VectorXd frequency_error_estimates(const Tet10Mesh& mesh, const Material& material,
                                                         const Eigen::MatrixXd& modes,
                                                         const Eigen::VectorXd& frequencies_hz);
 

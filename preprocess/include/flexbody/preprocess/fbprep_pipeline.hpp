@@ -114,7 +114,7 @@ struct PrepSummary {
   format::MassProperties mass;
   ReductionKind reduction = ReductionKind::free_free;
   Eigen::VectorXd frequencies_hz, relative_residuals;
-  /// Free-free with linear elements: each eigenmode's estimated discretisation error f_h / f − 1 (error_estimate.hpp;
+  /// Free-free: each eigenmode's estimated discretisation error f_h / f − 1 (error_estimate.hpp;
   /// empty otherwise).
   Eigen::VectorXd frequency_errors;
   /// "the first frequency is likely N % too high ..." when the estimate passes kAccuracyWarning, else empty.

@@ -8,7 +8,8 @@ folder), and the 18 solids of gmsh's demo assembly as1-tu-203, each written on i
 
 Each part runs `fbprep PART --order O --json` for O = 1 and 2 (default modes, mesh size and material). Per run:
 the outcome (a body file, or fbprep's one-line refusal), wall time, DOFs, mass, the first elastic frequency, the
-mesh's volume and what was done about folded quadratic elements. Writes bench/results/cad_corpus_bench.csv and prints
+mesh's volume against the CAD solid's, the first frequency's estimated discretisation error, and what was done about
+folded quadratic elements. Writes bench/results/cad_corpus_bench.csv and prints
 a table with the first frequency's change from linear to quadratic elements.
 
     /usr/bin/python3 bench/cad_corpus_bench.py [--build build] [--work bench/results/work/corpus] [--only NAME ...]
@@ -85,6 +86,7 @@ def run(fbprep, part, extra, order, work):
                volume_error=d["volume_error"], refined_from_m=d.get("mesh_size_refined_from_m"),
                sewn_faces=d.get("sewn_faces"), loose_faces=d.get("loose_faces"),
                first_hz=d["frequencies_hz"][0] if d["frequencies_hz"] else "",
+               first_error_estimate=(d.get("frequency_error_estimates") or [""])[0],
                folded=folded.get("after_order_2", ""), folded_after_gmsh=folded.get("after_gmsh_elastic", ""),
                straightened=folded.get("straightened_elements", ""),
                largest_move_m=folded.get("largest_move_m", ""))
@@ -115,7 +117,7 @@ def main():
                           f"{100 * (row['volume_error'] or 0):+.2f} %  folded {row['folded']}"
                           f"/{row['folded_after_gmsh']}/{row['straightened']}"), flush=True)
     fields = ["part", "order", "outcome", "seconds", "mesh_size_m", "dofs", "mass_kg", "volume_m3", "cad_volume_m3", "volume_error", "refined_from_m", "sewn_faces", "loose_faces",
-              "first_hz", "folded",
+              "first_hz", "first_error_estimate", "folded",
               "folded_after_gmsh", "straightened", "largest_move_m", "message"]
     results = here / "results" / "cad_corpus_bench.csv"
     with open(results, "w", newline="") as f:
@@ -129,11 +131,16 @@ def main():
     linear_only = [p for p, o in by_part.items() if o[1]["outcome"] == "body file" and o[2]["outcome"] != "body file"]
     print(f"\n{len(both)} parts give body files with linear elements; {len(linear_only)} of them not with quadratic "
           f"ones{': ' + ', '.join(linear_only) if linear_only else ''}")
-    print(f"\n{'part':<34} {'f1 linear':>11} {'f1 quadratic':>13} {'change':>8}")
+    def pct(x):
+        return f"{100 * x:7.1f}%" if isinstance(x, float) else f"{'-':>8}"
+
+    print(f"\n{'part':<34} {'f1 linear':>11} {'f1 quadratic':>13} {'change':>8} {'est. lin':>8} {'est. quad':>9} "
+          f"{'s lin':>6} {'s quad':>6}")
     for p, o in both:
         if o[2]["outcome"] == "body file" and o[1]["first_hz"] and o[2]["first_hz"]:
             print(f"{p:<34} {o[1]['first_hz']:11.5g} {o[2]['first_hz']:13.5g} "
-                  f"{100 * (o[1]['first_hz'] / o[2]['first_hz'] - 1):7.1f}%")
+                  f"{pct(o[1]['first_hz'] / o[2]['first_hz'] - 1)} {pct(o[1].get('first_error_estimate'))} "
+                  f"{pct(o[2].get('first_error_estimate')):>9} {o[1]['seconds']:6.1f} {o[2]['seconds']:6.1f}")
     print(f"\nwrote {results}")
 
 

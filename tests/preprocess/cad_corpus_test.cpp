@@ -190,8 +190,10 @@ class CadCorpusPart : public ::testing::TestWithParam<std::tuple<CorpusPart, int
 
 TEST_P(CadCorpusPart, GivesABodyFileOrTheListedRefusal) {
   const auto& [part, order] = GetParam();
-  if (!std::filesystem::is_directory(kFreecadParts) || !std::filesystem::is_directory(kGmshDemos))
-    GTEST_SKIP() << "the corpus is missing: scripts/setup.sh installs Debian's freecad-common and gmsh-doc";
+  const bool gmsh_demo = part.file == "component8.step" || part.file.rfind("as1-tu-203", 0) == 0;
+  if (!std::filesystem::is_directory(gmsh_demo ? kGmshDemos : kFreecadParts))
+    GTEST_SKIP() << (gmsh_demo ? kGmshDemos : kFreecadParts) << " is missing: scripts/setup.sh installs Debian's "
+                 << (gmsh_demo ? "gmsh-doc" : "freecad-common");
   const auto dir = flexbody::test::scratch_dir();
   const std::filesystem::path input = part_file(part.file, dir);
   const bool brep = input.extension() == ".brep";

@@ -660,11 +660,14 @@ TEST(FbprepCli, NumericOptionsMustBePositive) {
 
 namespace {
 
-/// A small body file (a steel box of 110 nodes, 2 modes), made once per test program in its own directory.
+/// A small body file (a steel box of 110 nodes, 2 modes), made once per test process in its own directory.
 const std::filesystem::path& small_body_file() {
   static const std::filesystem::path file = [] {
-    // Its own directory, apart from the running test's (scratch_dir), which it would empty.
-    const auto dir = std::filesystem::path(FLEXBODY_TEST_SCRATCH_DIR) / "FbprepCli.small_body_file";
+    // Its own directory, apart from the running test's (scratch_dir), which it would empty, and apart from other
+    // processes': ctest runs each test in a process of its own, two at a time, and one emptied the directory while
+    // another copied the file from it (a CI failure).
+    const auto dir = std::filesystem::path(FLEXBODY_TEST_SCRATCH_DIR) /
+                     ("FbprepCli.small_body_file." + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     write(dir / "box.geo", std::string(kOcc) + "Box(1) = {0, 0, 0, 0.1, 0.02, 0.02};\n");

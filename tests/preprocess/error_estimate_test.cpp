@@ -59,13 +59,14 @@ TEST(ErrorEstimate, FollowsTheTrueErrorOfTheBeamsBendingFrequency) {
   }
 }
 
-// The same estimates, bit for bit, on 1 and 2 threads (fixed blocks of elements summed in order).
+// The same estimates, bit for bit, on 1 and 2 threads (fixed blocks of elements summed in order): the 80 x 4 x 4
+// mesh's 7680 elements are 4 blocks.
 TEST(ErrorEstimate, IsTheSameOnAnyThreadCount) {
   const int before = omp_get_max_threads();
   omp_set_num_threads(1);
-  const Eigen::VectorXd one = beam(1).estimates;
+  const Eigen::VectorXd one = beam(2).estimates;
   omp_set_num_threads(2);
-  const Eigen::VectorXd two = beam(1).estimates;
+  const Eigen::VectorXd two = beam(2).estimates;
   omp_set_num_threads(before);
   EXPECT_EQ(one, two);
 }

@@ -34,10 +34,13 @@ constexpr double kMaxEstimatedElements = 2e7;
 // A part smaller than this across, in gmsh's own coordinates, is where gmsh's and OpenCASCADE's absolute
 // tolerances start to spoil the mesh (see import_tet_mesh): 1e-2 of the file's unit.
 constexpr double kSmallInModelUnits = 1e-2;
-// Halvings of the element size tried when a mesh misses the CAD solid's volume (mesh_resolving_the_volume): at most
-// 8^4 = 4096 times the elements (and the 2e7 limit). Measured on the corpus (bench/cad_corpus_bench.py): the one
-// default linear mesh that needed four was a curved solid of as1-tu-203 (64.4 % at 8 mm, 99.50 % at 1 mm).
+// Halvings of the element size tried when a mesh misses the CAD solid's volume (mesh_resolving_the_volume), and the
+// estimated tetrahedra beyond which no finer mesh is tried (the search for a size to advise must not cost more than
+// a run: 2e6 tetrahedra are ~1e6 linear DOFs). Measured on the corpus (bench/cad_corpus_bench.py): the one default
+// linear mesh that needed four halvings was a curved solid of as1-tu-203 (64.4 % at 8 mm, 99.50 % at 1 mm, held at
+// 0.5 mm).
 constexpr int kVolumeRefinements = 4;
+constexpr double kVolumeSearchElements = 2e6;
 // Faces closer than this fraction of the part's bounding-box diagonal are sewn together (shell_sewing.hpp):
 // OpenCASCADE's sewing tolerance, relative so that a part sews the same in any unit.
 constexpr double kSewingTolerance = 1e-6;
@@ -418,22 +421,28 @@ GmshTetrahedra mesh_resolving_the_volume(const std::string& name, double size, s
   result.first_volume_error = first_error;
   if (std::abs(first_error) <= tolerance) return tetrahedra;
   // Halve the size until the volume is held: the default's refinement, or the size to advise.
+  // `trial` and `trial_error` are always the last size meshed and its error (review: the element limit broke the loop
+  // after halving, and the refusal then named a size never meshed with the error of twice it).
   double trial = size, trial_error = first_error;
   GmshTetrahedra finer;
   std::optional<CurvedElementRepair> finer_repair;
-  bool found = false;
+  bool found = false, limited = false;
   for (int k = 1; k <= kVolumeRefinements && !found; ++k) {
-    trial *= 0.5;
+    if (estimated * 8.0 > kVolumeSearchElements) {
+      limited = true;
+      break;
+    }
     estimated *= 8.0;
-    if (estimated > kMaxEstimatedElements) break;
+    const double next = 0.5 * trial;
     if (options.progress)
       options.progress(fmt::format("the mesh holds {:.2f} % of the CAD solid's volume (tolerance {:.2g} %): {}",
                                    100.0 * (1.0 + trial_error), 100.0 * tolerance,
                                    by_default ? "refining the default size" : "looking for a size that holds it"));
-    progress(trial);
-    finer = mesh_at(name, trial, options, finer_repair);
+    progress(next);
+    finer = mesh_at(name, next, options, finer_repair);
     const std::optional<double> v = resolved_volume(finer);
-    if (!v) break;
+    if (!v) break;  // the finer mesh fell apart: refused as disconnected below
+    trial = next;
     trial_error = error(*v);
     found = std::abs(trial_error) <= tolerance;
   }
@@ -449,11 +458,22 @@ GmshTetrahedra mesh_resolving_the_volume(const std::string& name, double size, s
       by_default ? fmt::format("the default element size ({:.4g} {})", given, unit_name)
                  : fmt::format("--mesh-size {:.4g} {}", given, unit_name);
   const double trial_given = trial * unit.gmsh_to_metres / metres_per(unit.geometry_unit);
+  const double accepting = 1.05 * std::abs(first_error);  // a --volume-tolerance that takes this mesh (below 1)
+  const std::string or_accept =
+      accepting < 1.0 ? fmt::format(" (or --volume-tolerance {:.2g} accepts this mesh)", accepting) : std::string();
+  if (trial == size)  // nothing finer was meshed: the element limit, or the finer mesh fell apart
+    throw std::runtime_error(fmt::format(
+        "{}: the mesh at {} holds {:.2f} % of the CAD solid's volume ({:.4g} m^3), beyond the {:.2g} % tolerance; {}{}",
+        name, size_text, 100.0 * (1.0 + first_error), *solid * std::pow(unit.gmsh_to_metres, 3), 100.0 * tolerance,
+        limited ? fmt::format("a finer mesh would pass {:.0e} tetrahedra, so none was tried: --order 2 follows curved "
+                              "faces", kVolumeSearchElements)
+                : std::string("a finer mesh falls apart: the CAD solid may be open or self-intersecting"),
+        or_accept));
   throw std::runtime_error(fmt::format(
       "{}: the mesh at {} holds {:.2f} % of the CAD solid's volume ({:.4g} m^3), beyond the {:.2g} % tolerance; {}", name,
       size_text, 100.0 * (1.0 + first_error), *solid * std::pow(unit.gmsh_to_metres, 3), 100.0 * tolerance,
-      found ? fmt::format("--mesh-size {:.4g} {} holds it to {:.2f} % (or --volume-tolerance {:.2g} accepts this mesh)",
-                          trial_given, unit_name, 100.0 * trial_error, 1.05 * std::abs(first_error))
+      found ? fmt::format("--mesh-size {:.4g} {} holds it to {:.2f} %{}", trial_given, unit_name, 100.0 * trial_error,
+                          or_accept)
             : std::abs(trial_error) < 0.5 * std::abs(first_error)
                   ? fmt::format("no size down to {:.4g} {} does (it holds {:.2f} % there; the error shrinks with the "
                                 "size): --order 2 follows curved faces, or give a smaller --mesh-size", trial_given,

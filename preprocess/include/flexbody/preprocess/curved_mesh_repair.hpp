@@ -2,8 +2,8 @@
 // flexbody/preprocess/curved_mesh_repair.hpp: folded quadratic tetrahedra, found and straightened.
 //
 // A quadratic mesh's mid-edge nodes on curved CAD surfaces can fold an element (det ∂x/∂ξ <= 0 somewhere inside it)
-// where a small fillet or a thin feature bends an edge across its neighbours. gmsh's high-order optimizers cure most
-// of these (gmsh_import.cpp runs them first); what they leave is straightened here: the mid-edge nodes of a folded
+// where a small fillet or a thin feature bends an edge across its neighbours. gmsh's elastic smoothing of the
+// high-order nodes cures many of these (gmsh_import.cpp runs it first); what it leaves is straightened here: the mid-edge nodes of a folded
 // element move to the midpoints of their edges' corners. A straight-sided tetrahedron with a positive volume has a
 // constant positive Jacobian, so each round cures the element it straightens, and a neighbour that a moved node
 // folds in turn is straightened in the next round: the loop ends, at the latest, with the linear mesh's geometry.

@@ -41,49 +41,57 @@ Eigen::VectorXd relative_frequency_errors(const Eigen::VectorXd& error_energy, c
   return estimate;
 }
 
+void check_sizes(Eigen::Index nodes, const Eigen::MatrixXd& modes, const Eigen::VectorXd& frequencies_hz) {
+  if (modes.rows() != 3 * nodes || frequencies_hz.size() != modes.cols())
+    throw std::invalid_argument("frequency_error_estimates: the modes do not match the mesh or the frequencies");
+}
+
+// Each mode's error energy η², Σ_e of what `add(e, energy)` adds for element e into the modes' column `energy`:
+// summed over fixed blocks of elements in parallel, the blocks then added in order, so the same result for any
+// thread count.
+template <typename AddElement>
+Eigen::VectorXd error_energies(Eigen::Index elements, Eigen::Index modes, const AddElement& add) {
+  constexpr Eigen::Index kBlock = 1024;
+  const Eigen::Index blocks = (elements + kBlock - 1) / kBlock;
+  Eigen::MatrixXd partial = Eigen::MatrixXd::Zero(modes, blocks);
+#pragma omp parallel for schedule(dynamic)
+  for (Eigen::Index block = 0; block < blocks; ++block) {
+    auto energy = partial.col(block);
+    for (Eigen::Index e = block * kBlock; e < std::min(elements, (block + 1) * kBlock); ++e) add(e, energy);
+  }
+  return partial.rowwise().sum();
+}
+
 }  // namespace
 
 Eigen::VectorXd frequency_error_estimates(const TetMesh& mesh, const Material& material, const Eigen::MatrixXd& modes,
                                           const Eigen::VectorXd& frequencies_hz) {
-  const Eigen::Index n = mesh.node_count(), m = modes.cols();
-  if (modes.rows() != 3 * n || frequencies_hz.size() != m)
-    throw std::invalid_argument("frequency_error_estimates: the modes do not match the mesh or the frequencies");
+  check_sizes(mesh.node_count(), modes, frequencies_hz);
   const Eigen::MatrixXd recovered = nodal_stresses(mesh, material, modes);  // 6 n x m, σ* at the nodes
   const double lambda = lame_lambda(material), mu = shear_modulus(material);
-  // Sums over fixed blocks of elements, added in block order: the same result for any thread count.
-  constexpr Eigen::Index kBlock = 2048;
-  const Eigen::Index blocks = (mesh.element_count() + kBlock - 1) / kBlock;
-  Eigen::MatrixXd partial = Eigen::MatrixXd::Zero(m, blocks);
-#pragma omp parallel for schedule(dynamic)
-  for (Eigen::Index block = 0; block < blocks; ++block) {
-    const Eigen::Index end = std::min(mesh.element_count(), (block + 1) * kBlock);
-    for (Eigen::Index e = block * kBlock; e < end; ++e) {
-      Eigen::Matrix<double, 4, 3> corners;
-      for (int a = 0; a < 4; ++a) corners.row(a) = mesh.nodes.row(mesh.tets(e, a));
-      const format::Tet4Geometry g = format::tet4_geometry(corners);
-      for (Eigen::Index k = 0; k < m; ++k) {
-        Eigen::Matrix3d h = Eigen::Matrix3d::Zero();  // ∇u = Σ_a u_a ⊗ ∇N_a
-        for (int a = 0; a < 4; ++a)
-          h += modes.col(k).segment<3>(3 * mesh.tets(e, a)) * g.gradients.row(a);
-        const Voigt element = voigt_stress(h, lambda, mu);
-        Voigt d[4];
-        for (int a = 0; a < 4; ++a) d[a] = recovered.col(k).segment<6>(6 * mesh.tets(e, a)) - element;
-        double sum = 0.0;  // Σ_ab (1 + δ_ab) d_a : C⁻¹ d_b, times V / 20
-        for (int a = 0; a < 4; ++a)
-          for (int b = 0; b < 4; ++b)
-            sum += (a == b ? 2.0 : 1.0) * compliance_product(d[a], d[b], material.youngs_modulus, material.poisson_ratio);
-        partial(k, block) += std::abs(g.volume) / 20.0 * sum;
-      }
+  const Eigen::VectorXd energy = error_energies(mesh.element_count(), modes.cols(), [&](Eigen::Index e, auto& out) {
+    Eigen::Matrix<double, 4, 3> corners;
+    for (int a = 0; a < 4; ++a) corners.row(a) = mesh.nodes.row(mesh.tets(e, a));
+    const format::Tet4Geometry g = format::tet4_geometry(corners);
+    for (Eigen::Index k = 0; k < modes.cols(); ++k) {
+      Eigen::Matrix3d h = Eigen::Matrix3d::Zero();  // ∇u = Σ_a u_a ⊗ ∇N_a
+      for (int a = 0; a < 4; ++a) h += modes.col(k).segment<3>(3 * mesh.tets(e, a)) * g.gradients.row(a);
+      const Voigt element = voigt_stress(h, lambda, mu);
+      Voigt d[4];
+      for (int a = 0; a < 4; ++a) d[a] = recovered.col(k).segment<6>(6 * mesh.tets(e, a)) - element;
+      double sum = 0.0;  // Σ_ab (1 + δ_ab) d_a : C⁻¹ d_b, times V / 20
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b)
+          sum += (a == b ? 2.0 : 1.0) * compliance_product(d[a], d[b], material.youngs_modulus, material.poisson_ratio);
+      out(k) += std::abs(g.volume) / 20.0 * sum;
     }
-  }
-  return relative_frequency_errors(partial.rowwise().sum(), frequencies_hz);
+  });
+  return relative_frequency_errors(energy, frequencies_hz);
 }
 
 Eigen::VectorXd frequency_error_estimates(const Tet10Mesh& mesh, const Material& material, const Eigen::MatrixXd& modes,
                                           const Eigen::VectorXd& frequencies_hz) {
-  const Eigen::Index n = mesh.node_count(), m = modes.cols();
-  if (modes.rows() != 3 * n || frequencies_hz.size() != m)
-    throw std::invalid_argument("frequency_error_estimates: the modes do not match the mesh or the frequencies");
+  check_sizes(mesh.node_count(), modes, frequencies_hz);
   const Eigen::MatrixXd recovered = nodal_stresses(mesh, material, modes);  // 6 n x m, σ* at every node
   const double lambda = lame_lambda(material), mu = shear_modulus(material);
   // The 4-point Gauss rule (degree 2; weights 1/24 of the reference volume 1/6), at barycentric (a, b, b, b) and
@@ -99,33 +107,26 @@ Eigen::VectorXd frequency_error_estimates(const Tet10Mesh& mesh, const Material&
       shape(g, 4 + k) = 4.0 * l[i] * l[j];
     }
   }
-  constexpr Eigen::Index kBlock = 1024;
-  const Eigen::Index blocks = (mesh.element_count() + kBlock - 1) / kBlock;
-  Eigen::MatrixXd partial = Eigen::MatrixXd::Zero(m, blocks);
-#pragma omp parallel for schedule(dynamic)
-  for (Eigen::Index block = 0; block < blocks; ++block) {
-    const Eigen::Index end = std::min(mesh.element_count(), (block + 1) * kBlock);
-    for (Eigen::Index e = block * kBlock; e < end; ++e) {
-      format::Tet10Nodes x;
-      for (int c = 0; c < 10; ++c) x.row(c) = mesh.nodes.row(mesh.tets(e, c));
-      for (int g = 0; g < 4; ++g) {
-        const Eigen::Vector3d xi(barycentric[g][1], barycentric[g][2], barycentric[g][3]);
-        const format::Tet10Gradients grad = format::tet10_gradients(x, xi);
-        const double weight = std::abs(grad.determinant) / 24.0;
-        for (Eigen::Index k = 0; k < m; ++k) {
-          Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
-          Voigt star = Voigt::Zero();
-          for (int c = 0; c < 10; ++c) {
-            h += modes.col(k).segment<3>(3 * mesh.tets(e, c)) * grad.gradients.row(c);
-            star += shape(g, c) * recovered.col(k).segment<6>(6 * mesh.tets(e, c));
-          }
-          const Voigt d = star - voigt_stress(h, lambda, mu);
-          partial(k, block) += weight * compliance_product(d, d, material.youngs_modulus, material.poisson_ratio);
+  const Eigen::VectorXd energy = error_energies(mesh.element_count(), modes.cols(), [&](Eigen::Index e, auto& out) {
+    format::Tet10Nodes x;
+    for (int c = 0; c < 10; ++c) x.row(c) = mesh.nodes.row(mesh.tets(e, c));
+    for (int g = 0; g < 4; ++g) {
+      const Eigen::Vector3d xi(barycentric[g][1], barycentric[g][2], barycentric[g][3]);
+      const format::Tet10Gradients grad = format::tet10_gradients(x, xi);
+      const double weight = std::abs(grad.determinant) / 24.0;
+      for (Eigen::Index k = 0; k < modes.cols(); ++k) {
+        Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+        Voigt star = Voigt::Zero();
+        for (int c = 0; c < 10; ++c) {
+          h += modes.col(k).segment<3>(3 * mesh.tets(e, c)) * grad.gradients.row(c);
+          star += shape(g, c) * recovered.col(k).segment<6>(6 * mesh.tets(e, c));
         }
+        const Voigt d = star - voigt_stress(h, lambda, mu);
+        out(k) += weight * compliance_product(d, d, material.youngs_modulus, material.poisson_ratio);
       }
     }
-  }
-  return relative_frequency_errors(partial.rowwise().sum(), frequencies_hz);
+  });
+  return relative_frequency_errors(energy, frequencies_hz);
 }
 
 }  // namespace flexbody::preprocess

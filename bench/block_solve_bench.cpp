@@ -37,6 +37,7 @@ int main(int argc, char** argv) try {
     return 2;
   }
   fp::GmshImportOptions import_options;
+  import_options.order = 1;  // the linear mesh it assembles (and its recorded results)
   import_options.unit = fp::length_unit_from_string(argv[2]);
   if (!import_options.unit) throw std::invalid_argument(fmt::format("unit '{}' is not one of mm, cm, m, in", argv[2]));
   std::vector<Eigen::Index> blocks;

@@ -27,7 +27,7 @@ int list_surfaces_command(int argc, char** argv) {
   app.add_option("INPUT", input, "STEP/STP, IGES/IGS, BREP, gmsh .geo or .msh")->required();
   app.add_option("--unit", unit_text, "unit of INPUT's coordinates, as for fbprep");
   app.add_option("--mesh-size", mesh_size, "element size in the input's unit, as for fbprep");
-  app.add_option("--order", order, "element order 1 or 2, as for fbprep (a .msh of quadratic tetrahedra needs 2)");
+  app.add_option("--order", order, "element order 1 or 2, as for fbprep (default 2; a .msh: the order it holds)");
   app.add_flag("--json", json, "print one JSON object on stdout instead of the table");
   try {
     app.parse(argc, argv);
@@ -46,7 +46,7 @@ int list_surfaces_command(int argc, char** argv) {
       throw std::invalid_argument(fmt::format("--mesh-size must be a positive number (the largest element size in the "
                                               "input's unit; leave it out for the default), got {}", mesh_size));
     options.mesh_size = mesh_size;
-    options.order = order;
+    if (app.count("--order") > 0) options.order = order;
     const preprocess::ImportedMesh imported = preprocess::import_tet_mesh(input, options);
     if (json) {
       nlohmann::ordered_json j;

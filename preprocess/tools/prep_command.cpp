@@ -43,8 +43,9 @@ int prep_command(int argc, char** argv) {
   app.add_option("--volume-tolerance", volume_tolerance, "how far the mesh's volume may be from the CAD solid's, "
                                                          "relative (default 0.005): the default size is refined "
                                                          "until it holds, a --mesh-size that misses is refused");
-  app.add_option("--order", order, "element order: 1 (linear tetrahedra, 4 nodes) or 2 (quadratic, 10 nodes, "
-                                  "curved on the CAD surfaces; default 1)");
+  app.add_option("--order", order, "element order: 2 (quadratic tetrahedra, 10 nodes, curved on the CAD surfaces; "
+                                  "the default) or 1 (linear, 4 nodes: cheaper, stiffer; see the accuracy estimate); "
+                                  "a .msh: by default the order it holds");
   app.add_option("--mesher", mesher_text, "gmsh's 3D algorithm: delaunay (default, reproducible) or hxt (faster; differs per run)");
   app.add_option("--material", material_text, "steel|aluminium|titanium or E=210e9,nu=0.3,rho=7850 (SI)");
   app.add_option("--modes", modes, "number of elastic free-free modes (rigid-body modes never count)");
@@ -119,8 +120,8 @@ int prep_command(int argc, char** argv) {
                                               "(0.005: 0.5 %), got {}", volume_tolerance));
     if (!from_spec || given("--volume-tolerance")) options.mesh.volume_tolerance = volume_tolerance;
     record("volume_tolerance", fmt::format("{}", options.mesh.volume_tolerance));
-    if (!from_spec || given("--order")) options.mesh.order = order;  // like every flag, it replaces the spec's
-    record("element_order", std::to_string(options.mesh.order));
+    if (given("--order")) options.mesh.order = order;  // like every flag, it replaces the spec's
+    record("element_order", options.mesh.order ? std::to_string(*options.mesh.order) : std::string("default"));
     if (!from_spec || given("--mesher")) {
       const std::optional<fp::MeshAlgorithm> mesher = fp::mesh_algorithm_from_string(mesher_text);
       if (!mesher) throw std::invalid_argument("--mesher '" + mesher_text + "' is not one of delaunay, hxt");

@@ -266,8 +266,9 @@ TEST(FbprepOrder2, TipLoadDeflectsTheCantileverAsTimoshenkoSays) {
 }
 
 // A .msh that already holds quadratic tetrahedra (tests/data/gmsh-beam/beam_1m_order2.msh, gmsh 4.8's own second-order
-// mesh of the beam at 0.05 m) is read with --order 2 as it is; asked for linear tetrahedra, fbprep says it has
-// quadratic ones, and writes nothing. Its first bending pair is within 0.2 % of Timoshenko (as the .geo's).
+// mesh of the beam at 0.05 m) is read as it is, by default (the order a .msh holds) and with --order 2; asked for
+// linear tetrahedra, fbprep says it has quadratic ones, and writes nothing. Its first bending pair is within 0.2 % of
+// Timoshenko (as the .geo's).
 TEST(FbprepOrder2, ReadsAQuadraticMshAsItIs) {
   const auto dir = flexbody::test::scratch_dir();
   const std::filesystem::path msh = flexbody::test::data_dir() / "gmsh-beam" / "beam_1m_order2.msh";
@@ -277,8 +278,12 @@ TEST(FbprepOrder2, ReadsAQuadraticMshAsItIs) {
   const flexbody::format::BodyData body = flexbody::format::read_body_file(dir / "q.fbh5");
   EXPECT_EQ(body.mesh.element_order, 2);
   EXPECT_LT(std::abs(pair_error(body.modes.frequencies_hz, kFreeFree)), 2e-3);
+  const flexbody::test::CliRun by_default =
+      flexbody::test::run_fbprep(dir, fmt::format("'{}' --unit m --modes 2 -o d.fbh5", msh.string()));
+  ASSERT_EQ(by_default.exit_code, 0) << by_default.err;
+  EXPECT_EQ(flexbody::format::read_body_file(dir / "d.fbh5").mesh.element_order, 2);
   const flexbody::test::CliRun linear =
-      flexbody::test::run_fbprep(dir, fmt::format("'{}' --unit m --modes 2 -o l.fbh5", msh.string()));
+      flexbody::test::run_fbprep(dir, fmt::format("'{}' --unit m --order 1 --modes 2 -o l.fbh5", msh.string()));
   EXPECT_EQ(linear.exit_code, 1);
   EXPECT_NE(linear.err.find("the mesh has no linear tetrahedra (it has quadratic ones: ask for order 2 to read them)"),
             std::string::npos) << linear.err;

@@ -127,3 +127,43 @@ TEST(GmshOrder2, AFoldedQuadraticTetrahedronIsRefused) {
   EXPECT_EQ(straight.quadratic->node_count(), 10);
   EXPECT_NEAR(fp::mesh_quality(*straight.quadratic).min_jacobian_ratio, 1.0, 1e-12);
 }
+
+// Without an order asked for, a .msh is read in the order it holds (the default element order is for meshes fbprep
+// makes); one that holds both kinds of tetrahedra is refused with or without an order: either reading would drop
+// volumes.
+TEST(GmshOrder2, AMshIsReadInTheOrderItHolds) {
+  const auto dir = flexbody::test::scratch_dir();
+  const std::string nodes = "$Nodes\n1 10 1 10\n3 1 0 10\n1\n2\n3\n4\n5\n6\n7\n8\n9\n10\n"
+                            "0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                            "0.5 0 0\n0.5 0.5 0\n0 0.5 0\n0 0 0.5\n0 0.5 0.5\n0.5 0 0.5\n$EndNodes\n";
+  std::ofstream(dir / "linear.msh") << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n" << nodes
+                                    << "$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n$EndElements\n";
+  std::ofstream(dir / "quadratic.msh") << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n" << nodes
+                                       << "$Elements\n1 1 1 1\n3 1 11 1\n1 1 2 3 4 5 6 7 8 9 10\n$EndElements\n";
+  // Two volumes, one of each kind (as gmsh writes them, a block per volume; gmsh 4.8 cannot read both kinds in one
+  // volume: its getElementsByType then writes past its own allocation, valgrind).
+  std::ofstream(dir / "mixed.msh") << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+                                      "$Nodes\n2 14 1 14\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                      "3 2 0 10\n5\n6\n7\n8\n9\n10\n11\n12\n13\n14\n2 0 0\n3 0 0\n2 1 0\n2 0 1\n"
+                                      "2.5 0 0\n2.5 0.5 0\n2 0.5 0\n2 0 0.5\n2 0.5 0.5\n2.5 0 0.5\n$EndNodes\n"
+                                      "$Elements\n2 2 1 2\n3 1 4 1\n1 1 2 3 4\n3 2 11 1\n2 5 6 7 8 9 10 11 12 13 14\n"
+                                      "$EndElements\n";
+  fp::GmshImportOptions options;  // no order
+  options.unit = fp::LengthUnit::metre;
+  const fp::ImportedMesh linear = fp::import_tet_mesh(dir / "linear.msh", options);
+  EXPECT_FALSE(linear.quadratic.has_value());
+  EXPECT_EQ(linear.mesh.tets.rows(), 1);
+  const fp::ImportedMesh quadratic = fp::import_tet_mesh(dir / "quadratic.msh", options);
+  ASSERT_TRUE(quadratic.quadratic.has_value());
+  EXPECT_EQ(quadratic.quadratic->node_count(), 10);
+  for (const std::optional<int> order : {std::optional<int>(), std::optional<int>(1), std::optional<int>(2)}) {
+    options.order = order;
+    try {
+      (void)fp::import_tet_mesh(dir / "mixed.msh", options);
+      FAIL() << "a mesh of both orders was read, order " << order.value_or(0);
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("mixed.msh: the mesh holds both linear and quadratic tetrahedra; fbprep "
+                                           "reads one kind"), std::string::npos) << e.what();
+    }
+  }
+}

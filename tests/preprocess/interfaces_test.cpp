@@ -42,6 +42,7 @@ const Part& bracket() {  // meshes/bracket.step at 3 mm
   static const Part part = [] {
     fp::GmshImportOptions options;
     options.mesh_size = 3.0;
+    options.order = 1;  // make_part assembles linear tetrahedra
     return make_part(fp::import_tet_mesh(std::filesystem::path(FLEXBODY_SOURCE_DIR) / "meshes" / "bracket.step",
                                          options).mesh);
   }();

@@ -132,6 +132,7 @@ const AssembledMesh& square_beam() {
     preprocess::GmshImportOptions options;
     options.unit = preprocess::LengthUnit::metre;
     options.mesh_size = 0.02;
+    options.order = 1;  // the linear mesh that `assemble` takes
     preprocess::TetMesh mesh = preprocess::import_tet_mesh(path, options).mesh;
     std::filesystem::remove(path);
     const preprocess::Material steel{"steel", 210e9, 0.3, 7850.0};

@@ -168,6 +168,14 @@ void check_readable(const std::filesystem::path& path) {
   std::fclose(probe);
 }
 
+// The order of a ready mesh's tetrahedra, when none was asked for: the kind it holds (neither: 1, whose reading then
+// says that the mesh has no tetrahedra; both: refused when read).
+int order_of_msh() {
+  std::vector<int> types;
+  gmsh::model::mesh::getElementTypes(types);
+  return std::find(types.begin(), types.end(), kGmshTet10) != types.end() ? 2 : 1;
+}
+
 // The tetrahedra, and for every node tag the node's index in them (absent: not used by a tetrahedron). For second-order
 // meshes also the quadratic mesh, whose first nodes are the linear mesh's (the corners, same indices) and whose
 // mid-edge nodes follow; gmsh's 10-node order lists the edges (2,3) and (1,3) the other way round from
@@ -185,11 +193,14 @@ GmshTetrahedra tetrahedra_from_gmsh(const std::string& name, int order) {
   gmsh::model::mesh::getNodes(node_tags, coordinates, parametric, -1, -1, /*includeBoundary=*/true, false);
   std::vector<std::size_t> element_tags, element_nodes;
   gmsh::model::mesh::getElementsByType(type, element_tags, element_nodes);
+  std::vector<int> types;
+  gmsh::model::mesh::getElementTypes(types);
+  const int other = order == 2 ? kGmshTet4 : kGmshTet10;
+  const bool has_other = std::find(types.begin(), types.end(), other) != types.end();
+  if (!element_tags.empty() && has_other)  // reading one kind would drop the other's volumes
+    throw std::runtime_error(fmt::format("{}: the mesh holds both linear and quadratic tetrahedra; fbprep reads one "
+                                         "kind (mesh every volume in the same order)", name));
   if (element_tags.empty()) {
-    std::vector<int> types;
-    gmsh::model::mesh::getElementTypes(types);
-    const int other = order == 2 ? kGmshTet4 : kGmshTet10;
-    const bool has_other = std::find(types.begin(), types.end(), other) != types.end();
     throw std::runtime_error(fmt::format("{}: the mesh has no {} tetrahedra{}", name, order == 2 ? "quadratic" : "linear",
                                          has_other ? fmt::format(" (it has {} ones: ask for order {} to read them)",
                                                                  order == 2 ? "linear" : "quadratic", order == 2 ? 1 : 2)
@@ -382,7 +393,7 @@ GmshTetrahedra mesh_at(const std::string& name, double size, const GmshImportOpt
       gmsh::model::mesh::setOrder(2);
     }
   });
-  GmshTetrahedra tetrahedra = tetrahedra_from_gmsh(name, options.order);
+  GmshTetrahedra tetrahedra = tetrahedra_from_gmsh(name, options.order.value_or(kDefaultElementOrder));
   repair.reset();
   if (tetrahedra.quadratic) repair = optimize_folded(name, tetrahedra, options);
   return tetrahedra;
@@ -521,9 +532,9 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
   ImportedMesh result;
   result.format = input_format_of(path);
   check_readable(path);
-  if (options.order != 1 && options.order != 2)
+  if (options.order && *options.order != 1 && *options.order != 2)
     throw std::invalid_argument(fmt::format("element order {}: the element order is 1 (linear tetrahedra) or 2 "
-                                            "(quadratic)", options.order));
+                                            "(quadratic)", *options.order));
   if (!(options.mesh_size >= 0.0) || !std::isfinite(options.mesh_size))
     throw std::invalid_argument(fmt::format("--mesh-size must be a positive length, got {}", options.mesh_size));
   const UnitDecision unit = decide_unit(path, result.format, options.unit, options.unit_source);
@@ -623,13 +634,20 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
       gmsh::option::setNumber("Mesh.MaxNumThreads1D", 1);  // curves and surfaces as with the default mesher
       gmsh::option::setNumber("Mesh.MaxNumThreads2D", 1);
     }
-    tetrahedra = mesh_resolving_the_volume(name, size, solid_volume, unit, options, result, elements);
+    GmshImportOptions resolved = options;  // the inner steps read the order it resolves to
+    resolved.order = options.order.value_or(kDefaultElementOrder);
+    tetrahedra = mesh_resolving_the_volume(name, size, solid_volume, unit, resolved, result, elements);
   });
-  if (result.format == InputFormat::msh) detail::gmsh_call(name, [&] { tetrahedra = tetrahedra_from_gmsh(name, options.order); });
+  int order = options.order.value_or(kDefaultElementOrder);
+  if (result.format == InputFormat::msh)
+    detail::gmsh_call(name, [&] {
+      if (!options.order) order = order_of_msh();
+      tetrahedra = tetrahedra_from_gmsh(name, order);
+    });
   detail::gmsh_call(name, [&] {
     result.mesh = std::move(tetrahedra.mesh);
     result.quadratic = std::move(tetrahedra.quadratic);
-    result.surfaces = cad_surfaces(tetrahedra.index_of_tag, options.order);
+    result.surfaces = cad_surfaces(tetrahedra.index_of_tag, order);
   });
   result.mesh.nodes *= unit.gmsh_to_metres;
   if (result.quadratic) result.quadratic->nodes *= unit.gmsh_to_metres;

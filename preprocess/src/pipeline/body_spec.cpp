@@ -129,10 +129,11 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
                                                      "(0.005: 0.5 %)", options.mesh.volume_tolerance));
     }
     if (mesh["order"]) {
-      options.mesh.order = r.count(mesh["order"], "mesh order");
-      if (options.mesh.order != 1 && options.mesh.order != 2)
+      const int order = r.count(mesh["order"], "mesh order");
+      if (order != 1 && order != 2)
         r.fail(mesh["order"], fmt::format("mesh order {}: the element order is 1 (linear tetrahedra) or 2 (quadratic, "
-                                          "10 nodes)", options.mesh.order));
+                                          "10 nodes)", order));
+      options.mesh.order = order;
     }
     if (mesh["algorithm"]) {
       const std::string text = r.text(mesh["algorithm"], "mesh algorithm");

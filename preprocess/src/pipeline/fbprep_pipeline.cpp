@@ -363,6 +363,8 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   body.provenance.unit_reason = summary.unit_reason;
   body.provenance.declared_unit = summary.declared_unit;
   body.provenance.options = options.recorded_options;
+  for (auto& [key, value] : body.provenance.options)  // the order an unset option resolved to (gmsh_import.hpp)
+    if (key == "element_order" && value == "default") value = fmt::format("{} (default)", summary.element_order);
   body.material = options.material;
   body.mass = summary.mass;
   body.modes.kind = std::string(to_string(options.reduction));

@@ -6,7 +6,7 @@
 //   unit: m                         # unit of the input's coordinates (wins over what a STEP file
 //                                   # declares) and of every length below
 //   material: {E: 210e9, nu: 0.3, rho: 7850}      # or: steel | aluminium | titanium
-//   mesh: {size: 0.0125, order: 1}
+//   mesh: {size: 0.0125, order: 1}  # order: 2 (quadratic tetrahedra, the default) or 1 (linear)
 //   reduction: {kind: free-free, modes: 8, fmax: 2000, eigensolver: arpack}
 //   interfaces:
 //     root: {select: {plane: {point: [0, 0, 0], normal: [1, 0, 0], tolerance: 1e-6}}, coupling: rbe3}

@@ -35,20 +35,9 @@ Eigen::Matrix<double, 10, 1> shape_functions(const Eigen::Vector3d& xi) {
   return n;
 }
 
-// The 4-point rule of degree 2 on the reference tetrahedron (volume 1/6): L = (a, b, b, b) and its permutations,
-// a = (5 + 3√5)/20, b = (5 − √5)/20.
+// The 4-point rule's barycentric coordinates (tet10_gauss_points): L = (a, b, b, b) and its permutations.
 const double kGaussA = (5.0 + 3.0 * std::sqrt(5.0)) / 20.0, kGaussB = (5.0 - std::sqrt(5.0)) / 20.0;
-constexpr double kGaussWeight = 1.0 / 24.0;
-
-std::array<Eigen::Vector3d, 4> gauss_points() {
-  std::array<Eigen::Vector3d, 4> points;
-  for (int p = 0; p < 4; ++p) {
-    double l[4] = {kGaussB, kGaussB, kGaussB, kGaussB};
-    l[p] = kGaussA;
-    points[static_cast<std::size_t>(p)] = Eigen::Vector3d(l[1], l[2], l[3]);
-  }
-  return points;
-}
+constexpr double kGaussWeight = kTet10GaussWeight;
 
 // 5-point Gauss-Legendre on [0, 1] (points and weights in closed form, to the last bit).
 struct Legendre5 {
@@ -72,6 +61,16 @@ const Legendre5& legendre5() {
 
 }  // namespace
 
+std::array<Eigen::Vector3d, 4> tet10_gauss_points() {
+  std::array<Eigen::Vector3d, 4> points;
+  for (int p = 0; p < 4; ++p) {
+    double l[4] = {kGaussB, kGaussB, kGaussB, kGaussB};
+    l[p] = kGaussA;
+    points[static_cast<std::size_t>(p)] = Eigen::Vector3d(l[1], l[2], l[3]);
+  }
+  return points;
+}
+
 Tet10Gradients tet10_gradients(const Tet10Nodes& nodes, const Eigen::Vector3d& xi) {
   const Eigen::Matrix<double, 10, 3> d = reference_derivatives(xi);
   const Eigen::Matrix3d jacobian = nodes.transpose() * d;  // J(r, k) = ∂x_r/∂ξ_k
@@ -84,7 +83,7 @@ Tet10Gradients tet10_gradients(const Tet10Nodes& nodes, const Eigen::Vector3d& x
 
 Eigen::Matrix<double, 30, 30> tet10_stiffness(const Tet10Nodes& nodes, double lambda, double mu) {
   Eigen::Matrix<double, 30, 30> k = Eigen::Matrix<double, 30, 30>::Zero();
-  for (const Eigen::Vector3d& xi : gauss_points()) {
+  for (const Eigen::Vector3d& xi : tet10_gauss_points()) {
     const Tet10Gradients g = tet10_gradients(nodes, xi);
     const double weight = kGaussWeight * g.determinant;
     for (int b = 0; b < 10; ++b)
@@ -101,7 +100,7 @@ Eigen::Matrix<double, 30, 30> tet10_stiffness(const Tet10Nodes& nodes, double la
 Eigen::Matrix<double, 10, 10> tet10_mass(const Tet10Nodes& nodes, double density, Tet10MassRule rule) {
   if (rule == Tet10MassRule::four_point) {
     Eigen::Matrix<double, 10, 10> m = Eigen::Matrix<double, 10, 10>::Zero();
-    for (const Eigen::Vector3d& xi : gauss_points()) {
+    for (const Eigen::Vector3d& xi : tet10_gauss_points()) {
       const double det = (nodes.transpose() * reference_derivatives(xi)).determinant();
       const Eigen::Matrix<double, 10, 1> n = shape_functions(xi);
       m.noalias() += (density * kGaussWeight * det) * n * n.transpose();
@@ -129,7 +128,7 @@ Tet10RecoveryGradients tet10_recovery_gradients(const Tet10Nodes& nodes) {
   // so the corner values are c = P⁻¹ f, P⁻¹ = (I − b 11ᵀ) / (a − b) (a + 3 b = 1).
   Tet10RecoveryGradients out;
   std::array<Eigen::Matrix<double, 10, 3>, 4> at_gauss;
-  const std::array<Eigen::Vector3d, 4> points = gauss_points();
+  const std::array<Eigen::Vector3d, 4> points = tet10_gauss_points();
   for (std::size_t p = 0; p < 4; ++p) {
     const Tet10Gradients g = tet10_gradients(nodes, points[p]);
     if (!(g.determinant > 0.0)) {
@@ -154,7 +153,7 @@ Tet10RecoveryGradients tet10_recovery_gradients(const Tet10Nodes& nodes) {
 
 Eigen::Matrix<double, 14, 1> tet10_jacobian_determinants(const Tet10Nodes& nodes) {
   Eigen::Matrix<double, 14, 1> out;
-  const std::array<Eigen::Vector3d, 4> points = gauss_points();
+  const std::array<Eigen::Vector3d, 4> points = tet10_gauss_points();
   for (int p = 0; p < 4; ++p) out(p) = (nodes.transpose() * reference_derivatives(points[static_cast<std::size_t>(p)])).determinant();
   const Eigen::Vector3d corners[4] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
                                       Eigen::Vector3d::UnitZ()};

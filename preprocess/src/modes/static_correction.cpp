@@ -104,23 +104,19 @@ std::vector<std::string> unit_load_labels(const std::vector<LoadPoint>& points) 
   return labels;
 }
 
-StaticCorrectionModes static_correction_modes(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
-                                              const SparseMatrix& scalar_mass_upper, const Eigen::MatrixXd& known,
-                                              const Eigen::MatrixXd& loads) {
+Eigen::MatrixXd relieved_static_responses(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
+                                          const SparseMatrix& scalar_mass_upper, const Eigen::MatrixXd& known,
+                                          const Eigen::MatrixXd& loads, StaticCorrectionStats& stats) {
   const Eigen::Index n = stiffness_upper.rows();
   if (solve.rows() != n || scalar_mass_upper.rows() * 3 != n || known.rows() != n || loads.rows() != n)
-    throw std::invalid_argument("static correction: the factorization, K, M, the known fields and the loads differ in size");
-  if (!loads.allFinite()) throw std::invalid_argument("static correction: a load vector is not finite");
+    throw std::invalid_argument("static solve: the factorization, K, M, the known fields and the loads differ in size");
+  if (!loads.allFinite()) throw std::invalid_argument("static solve: a load vector is not finite");
   if (solve.shift() > 0.0)
-    throw std::invalid_argument("static correction: the factorization's shift must be <= 0 (a positive definite "
+    throw std::invalid_argument("static solve: the factorization's shift must be <= 0 (a positive definite "
                                 "preconditioner)");
-  StaticCorrectionModes result;
   const Eigen::Index s = loads.cols();
-  result.stats.loads = s;
-  result.vectors.resize(n, 0);
-  if (s == 0) return result;
-
-  // 1. The residual static responses, by preconditioned conjugate gradients on PᵀK̄P u = Pᵀ f.
+  stats.loads += s;
+  // Preconditioned conjugate gradients on PᵀK̄P u = Pᵀ f.
   Eigen::MatrixXd responses = Eigen::MatrixXd::Zero(n, s);
   Eigen::VectorXd b(n), r(n), z(n), p(n), q(n), u(n), magnitude(n);
   auto precondition = [&](const Eigen::VectorXd& in, Eigen::VectorXd& out) {
@@ -143,17 +139,17 @@ StaticCorrectionModes static_correction_modes(ShiftSolve& solve, const SparseMat
       double rz = r.dot(z);
       for (int iteration = 0; r.norm() > kSolveTolerance * b_norm; ++iteration) {
         if (iteration == kMaxIterations)
-          throw std::runtime_error(fmt::format("static correction: load {} did not converge in {} iterations "
+          throw std::runtime_error(fmt::format("static solve: load {} did not converge in {} iterations "
                                                "(residual {:.3g})", c + 1, kMaxIterations, r.norm() / b_norm));
         if (!(rz > 0.0))
-          throw std::runtime_error(fmt::format("static correction: load {}: the preconditioner is not positive "
+          throw std::runtime_error(fmt::format("static solve: load {}: the preconditioner is not positive "
                                                "definite", c + 1));
-        ++result.stats.iterations;
+        ++stats.iterations;
         apply_symmetric(stiffness_upper, p, q);
         project_force(known, scalar_mass_upper, q);
         const double pq = p.dot(q);
         if (!(pq > 0.0))
-          throw std::runtime_error(fmt::format("static correction: load {}: the stiffness is not positive on the "
+          throw std::runtime_error(fmt::format("static solve: load {}: the stiffness is not positive on the "
                                                "complement of the known fields (a zero-energy mode missing?)", c + 1));
         const double alpha = rz / pq;
         u += alpha * p;
@@ -171,12 +167,26 @@ StaticCorrectionModes static_correction_modes(ShiftSolve& solve, const SparseMat
       if (true_residual <= accepted_residual(floor)) break;
     }
     if (!(true_residual <= accepted_residual(floor)))
-      throw std::runtime_error(fmt::format("static correction: load {}: the static solve is not converged: {}", c + 1,
+      throw std::runtime_error(fmt::format("static solve: load {}: not converged: {}", c + 1,
                                            describe_refusal(true_residual, floor)));
-    result.stats.max_relative_residual = std::max(result.stats.max_relative_residual, true_residual);
-    result.stats.max_residual_to_floor = std::max(result.stats.max_residual_to_floor, true_residual / floor);
+    stats.max_relative_residual = std::max(stats.max_relative_residual, true_residual);
+    stats.max_residual_to_floor = std::max(stats.max_residual_to_floor, true_residual / floor);
     responses.col(c) = u;
   }
+  return responses;
+}
+
+StaticCorrectionModes static_correction_modes(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
+                                              const SparseMatrix& scalar_mass_upper, const Eigen::MatrixXd& known,
+                                              const Eigen::MatrixXd& loads) {
+  const Eigen::Index n = stiffness_upper.rows();
+  StaticCorrectionModes result;
+  const Eigen::Index s = loads.cols();
+  result.vectors.resize(n, 0);
+  // 1. The residual static responses (inertia relief against the known fields).
+  Eigen::MatrixXd responses = relieved_static_responses(solve, stiffness_upper, scalar_mass_upper, known, loads,
+                                                        result.stats);
+  if (s == 0) return result;
 
   // 2. M̄-orthonormalise the responses, dropping the directions they do not really span.
   Eigen::MatrixXd m_responses(n, s);

@@ -44,6 +44,11 @@ enum class Tet10MassRule {
 /// curvature (issue 15's quality check).
 [[nodiscard]] Eigen::Matrix<double, 14, 1> tet10_jacobian_determinants(const Tet10Nodes& nodes);
 
+/// The 4-point Gauss rule of degree 2 on the reference tetrahedron (volume 1/6), the rule of tet10_stiffness: its
+/// points ξ, each of weight kTet10GaussWeight (∫ f dV ≈ Σ_g kTet10GaussWeight det J(ξ_g) f(ξ_g)).
+[[nodiscard]] std::array<Eigen::Vector3d, 4> tet10_gauss_points();
+inline constexpr double kTet10GaussWeight = 1.0 / 24.0;
+
 /// The shape functions' gradients ∂N_a/∂x (row a, 1/m) and det ∂x/∂ξ at reference point ξ (for stress recovery).
 struct Tet10Gradients {
   Eigen::Matrix<double, 10, 3> gradients = Eigen::Matrix<double, 10, 3>::Zero();

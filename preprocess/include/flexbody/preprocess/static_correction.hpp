@@ -74,6 +74,18 @@ struct StaticCorrectionModes {
   StaticCorrectionStats stats;
 };
 
+/// The static responses u of the loads (columns of `loads`, 3 n_n x s) on the M̄-complement of `known` (n x w,
+/// M̄-orthonormal, holding every zero-energy field of K̄): K̄ u = (I − M̄ W Wᵀ) f, Wᵀ M̄ u = 0. With W the six
+/// rigid-body fields this is the free body's response with inertia relief: the load is balanced by the rigid-body
+/// accelerations it causes. By conjugate gradients preconditioned by `solve` (a factorization of K̄ − σM̄, σ <= 0).
+/// A load wholly in the known fields gives a zero column. `stats` counts the loads, the iterations and the worst
+/// residual (added to what it holds). Throws std::runtime_error if a solve does not converge (its true residual
+/// above max(1e-8, kResidualFloorFactor x its rounding floor)), std::invalid_argument for sizes that differ.
+[[nodiscard]] Eigen::MatrixXd relieved_static_responses(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
+                                                        const SparseMatrix& scalar_mass_upper,
+                                                        const Eigen::MatrixXd& known, const Eigen::MatrixXd& loads,
+                                                        StaticCorrectionStats& stats);
+
 /// Residual static correction modes (see the top of this file). `solve` is a factorization of K̄ − σM̄
 /// with σ <= 0 (its shift as set; for σ < 0 it should deflate the rigid-body fields); `known` (n x w) must be
 /// M̄-orthonormal and hold every zero-energy field of K̄ (the six rigid-body fields of a free body) and the

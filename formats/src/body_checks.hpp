@@ -35,4 +35,9 @@ void check_recovery_structure(const BodyData& body, const std::string& context);
 void check_recovery_finite(const BodyData& body, const std::string& context);
 void check_recovery_ranges(const BodyData& body, const std::string& context);
 
+/// The /geometric_stiffness part of each check above (geometric_stiffness_checks.cpp).
+void check_geometric_stiffness_structure(const BodyData& body, const std::string& context);
+void check_geometric_stiffness_finite(const BodyData& body, const std::string& context);
+void check_geometric_stiffness_ranges(const BodyData& body, const std::string& context);
+
 }  // namespace flexbody::format::detail

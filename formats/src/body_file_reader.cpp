@@ -294,6 +294,26 @@ std::vector<RecoveryRegion> read_recovery(const Location& root) {
   return regions;
 }
 
+// Optional: absent means no geometric stiffness (fbprep not asked for it, or before 0.13). The stacked matrices are
+// split by the count of cases; a row count that is no multiple of it is left for check_structure to name.
+GeometricStiffness read_geometric_stiffness(const Location& root) {
+  GeometricStiffness stiffness;
+  if (detail::object_kind(root, "/geometric_stiffness") == detail::ObjectKind::missing) return stiffness;
+  const Location group = detail::open_group(root, "geometric_stiffness");
+  if (!detail::has_attribute(root, "/geometric_stiffness", "cases"))
+    group.fail("missing attribute /geometric_stiffness/cases");
+  stiffness.cases = names_in_order(detail::read_string_attribute(group, "cases"));
+  if (stiffness.cases.empty()) group.fail("/geometric_stiffness/cases names no case");
+  const Eigen::MatrixXd stacked = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(group, "matrices"));
+  const auto count = static_cast<Eigen::Index>(stiffness.cases.size());
+  if (stacked.rows() != count * stacked.cols())
+    group.fail("/geometric_stiffness/matrices has " + std::to_string(stacked.rows()) + " rows, expected " +
+               std::to_string(count) + " cases x " + std::to_string(stacked.cols()) + " (its columns)");
+  for (Eigen::Index k = 0; k < count; ++k)
+    stiffness.matrices.emplace_back(stacked.middleRows(k * stacked.cols(), stacked.cols()));
+  return stiffness;
+}
+
 }  // namespace
 
 BodyData read_body_file(const std::filesystem::path& path, const ReadOptions& options) {
@@ -336,6 +356,7 @@ BodyData read_body_file(const std::filesystem::path& path, const ReadOptions& op
     body.gcms = read_gcms(root);
     body.interfaces = read_interfaces(root);
     body.recovery = read_recovery(root);
+    body.geometric_stiffness = read_geometric_stiffness(root);
   }
   image = {};  // the values are in `body` now
   detail::check_structure(body, label);

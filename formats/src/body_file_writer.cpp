@@ -152,6 +152,20 @@ void write_recovery(const Location& root, const std::vector<RecoveryRegion>& reg
   }
 }
 
+// Optional: written only when there are cases. The matrices stacked: rows k (4 + n_f) ... of case k.
+void write_geometric_stiffness(const Location& root, const GeometricStiffness& stiffness) {
+  if (stiffness.empty()) return;
+  const Location group = detail::create_group(root, "geometric_stiffness");
+  std::string cases;
+  for (const std::string& c : stiffness.cases) cases += (cases.empty() ? "" : ",") + c;
+  detail::write_string_attribute(group, "cases", cases);
+  const Eigen::Index size = stiffness.matrices.front().rows();
+  RowMatrixXd stacked(size * static_cast<Eigen::Index>(stiffness.matrices.size()), size);
+  for (std::size_t k = 0; k < stiffness.matrices.size(); ++k)
+    stacked.middleRows(static_cast<Eigen::Index>(k) * size, size) = stiffness.matrices[k];
+  detail::write_matrix(group, "matrices", rows_of(stacked), cols_of(stacked), stacked.data(), "mixed: see SCHEMA.md");
+}
+
 /// Writes the whole layout into a new file at `path`; every handle is closed on return.
 void write_layout(const BodyData& body, const std::filesystem::path& path, const std::string& label) {
   Location file = detail::create_file(path, label, detail::kSealBytes);
@@ -164,6 +178,7 @@ void write_layout(const BodyData& body, const std::filesystem::path& path, const
   write_gcms(file, body.gcms);
   write_interfaces(file, body.interfaces);
   write_recovery(file, body.recovery);
+  write_geometric_stiffness(file, body.geometric_stiffness);
   detail::flush_and_close(file);
 }
 

@@ -60,6 +60,7 @@ void check_structure(const BodyData& body, const std::string& context) {
   check_gcms_structure(body, context);
   check_interfaces_structure(body, context);
   check_recovery_structure(body, context);
+  check_geometric_stiffness_structure(body, context);
   if (modes.static_correction_modes < 0 || modes.static_correction_modes > n_m)
     fail(context, "/reduction/static_correction_modes is " + std::to_string(modes.static_correction_modes) +
                       ", expected 0 to n_m = " + std::to_string(n_m));
@@ -92,6 +93,7 @@ void check_finite(const BodyData& body, const std::string& context) {
   check_gcms_finite(body, context);
   check_interfaces_finite(body, context);
   check_recovery_finite(body, context);
+  check_geometric_stiffness_finite(body, context);
 }
 
 void check_ranges(const BodyData& body, const std::string& context) {
@@ -129,6 +131,7 @@ void check_ranges(const BodyData& body, const std::string& context) {
   check_gcms_ranges(body, context);
   check_recovery_ranges(body, context);
   check_interfaces_ranges(body, context);
+  check_geometric_stiffness_ranges(body, context);
 }
 
 }  // namespace detail

@@ -31,7 +31,7 @@ int prep_command(int argc, char** argv) {
   std::string input, output, unit_text, material_text = "steel", solver_text = "auto", mesher_text = "delaunay";
   double mesh_size = 0.0, fmax = 0.0, volume_tolerance = 5e-3;
   int order = 1, modes = 0;
-  bool json = false, quiet = false;
+  bool json = false, quiet = false, geometric_stiffness = false;
   app.add_option("INPUT", input, "STEP/STP, IGES/IGS, BREP, gmsh .geo, gmsh .msh with tetrahedra, or a body spec "
                                  "(.yaml: see README; the flags below override it)")->required();
   app.add_option("-o,--output", output, "body file to write (default: INPUT's name with .fbh5, here)");
@@ -53,6 +53,9 @@ int prep_command(int argc, char** argv) {
   app.add_option("--eigensolver", solver_text, "auto|arpack|spectra|block-lanczos|slepc (auto: block-lanczos from 50k "
                                                "DOFs, arpack below, slepc under mpirun; slepc: MUMPS and SLEPc, "
                                                "builds with -DFLEXBODY_WITH_SLEPC=ON)");
+  app.add_flag("--geometric-stiffness", geometric_stiffness,
+               "also the geometric stiffness of the prestress cases (spin, a unit force and moment at each interface), "
+               "for rotating and preloaded parts (default: off; a body spec says geometric_stiffness: true)");
   app.add_flag("--json", json, "print the summary as one JSON object on stdout instead of the report");
   app.add_flag("-q,--quiet", quiet, "no progress and no report (errors still go to stderr)");
   try {
@@ -138,6 +141,8 @@ int prep_command(int argc, char** argv) {
     }
     record("modes", std::to_string(options.modes.modes));
     record("fmax", fmt::format("{}", options.modes.fmax_hz));
+    if (given("--geometric-stiffness")) options.geometric_stiffness = true;  // like every flag, over the spec's
+    record("geometric_stiffness", options.geometric_stiffness ? "true" : "false");
     if (!from_spec || given("--eigensolver")) {
       options.modes.solver.backend = fp::eigensolver_backend_from_string(solver_text);
       record("eigensolver", solver_text);

@@ -442,11 +442,7 @@ Scene read_scene(const std::filesystem::path& file) {
     scene.output_every = r.count(every, "integrator output_every");
     if (scene.output_every < 1) r.fail(every, "integrator output_every must be at least 1");
   }
-  if (const YAML::Node monitors = root["monitors"]) {
-    const std::string m = r.text(monitors, "monitors");
-    if (m != "true" && m != "false") r.fail(monitors, "monitors must be true or false");
-    scene.monitors = m == "true";
-  }
+  if (const YAML::Node monitors = root["monitors"]) scene.monitors = r.truth(monitors, "monitors");
 
   if (const YAML::Node outputs = root["outputs"]) {
     if (!outputs.IsMap()) r.fail(outputs, "outputs must be a map of names to outputs");
@@ -514,11 +510,7 @@ Scene read_scene(const std::filesystem::path& file) {
   if (const YAML::Node paraview = root["paraview"]) {
     r.expect_map(paraview, "paraview", {"bodies", "every", "stresses"});
     bool stresses = true;
-    if (const YAML::Node s = paraview["stresses"]) {
-      const std::string text = r.text(s, "paraview stresses");
-      if (text != "true" && text != "false") r.fail(s, "paraview stresses must be true or false");
-      stresses = text == "true";
-    }
+    if (const YAML::Node s = paraview["stresses"]) stresses = r.truth(s, "paraview stresses");
     std::vector<std::pair<int, YAML::Node>> chosen;
     if (const YAML::Node list = paraview["bodies"]) {
       if (!list.IsSequence() || list.size() == 0) r.fail(list, "paraview bodies must be a list of body names");

@@ -81,6 +81,10 @@ void expect_same(const BodyData& a, const BodyData& b) {
     EXPECT_EQ(a.recovery[k].nodes, b.recovery[k].nodes);
     EXPECT_EQ(a.recovery[k].stress_modes, b.recovery[k].stress_modes);
   }
+  EXPECT_EQ(a.geometric_stiffness.cases, b.geometric_stiffness.cases);
+  ASSERT_EQ(a.geometric_stiffness.matrices.size(), b.geometric_stiffness.matrices.size());
+  for (std::size_t k = 0; k < a.geometric_stiffness.matrices.size(); ++k)
+    EXPECT_EQ(a.geometric_stiffness.matrices[k], b.geometric_stiffness.matrices[k]);
 }
 
 using RoundTrip = TempDirTest;
@@ -108,6 +112,7 @@ TEST_F(RoundTrip, KeepsEmptyOptionsTrianglesAndModes) {
   body.recovery.clear();
   body.modes.static_loads.clear();
   body.modes.static_correction_modes = 0;
+  body.geometric_stiffness = {};  // optional: absent from the file, empty when read
   const auto path = dir() / "bare.fbh5";
   write_body_file(body, path);
   expect_same(body, read_body_file(path));

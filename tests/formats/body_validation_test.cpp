@@ -267,6 +267,37 @@ TEST(Validate, StaticCorrectionAndRecovery) {
   expect_invalid(body, "two output regions are named \"fillet\"");
 }
 
+// The geometric stiffness (issue 29): cases that name a centrifugal product or an interface's load, one matrix of
+// G's size per case, finite, symmetric as written, and no gradient of the constant field.
+TEST(Validate, GeometricStiffness) {
+  BodyData body = make_body();
+  body.geometric_stiffness.cases[1] = "bore B:fx";
+  expect_invalid(body, "/geometric_stiffness/cases[1] is \"bore B:fx\", expected centrifugal:xx ... :yz or "
+                       "<interface>:fx ... :mz with an interface of /interfaces");
+  body = make_body();
+  body.geometric_stiffness.cases[0] = "centrifugal:zy";
+  expect_invalid(body, "/geometric_stiffness/cases[0] is \"centrifugal:zy\"");
+  body = make_body();
+  body.geometric_stiffness.cases[1] = "centrifugal:zz";
+  expect_invalid(body, "/geometric_stiffness/cases[1] repeats \"centrifugal:zz\"");
+  body = make_body();
+  body.geometric_stiffness.matrices.pop_back();
+  expect_invalid(body, "/geometric_stiffness/matrices holds 1 matrices for 2 cases");
+  body = make_body();
+  body.geometric_stiffness.matrices[1].conservativeResize(8, 8);
+  expect_invalid(body, "/geometric_stiffness/matrices of case bore A:fx is 8 x 8, expected 9 x 9 (4 + n_f, as /gcms/G)");
+  body = make_body();
+  body.geometric_stiffness.matrices[0](5, 6) = std::numeric_limits<double>::infinity();
+  expect_invalid(body, "/geometric_stiffness/matrices (case centrifugal:zz)[5][6] is inf, expected a finite number");
+  body = make_body();
+  body.geometric_stiffness.matrices[0](5, 6) *= 1.0 + 1e-15;
+  expect_invalid(body, "/geometric_stiffness/matrices (case centrifugal:zz)[6][5] is 1.580909090909091 but [5][6] is "
+                       "1.5809090909090928; the matrix is symmetric");
+  body = make_body();
+  body.geometric_stiffness.matrices[1](0, 3) = body.geometric_stiffness.matrices[1](3, 0) = 1e-3;
+  expect_invalid(body, "/geometric_stiffness/matrices (case bore A:fx) row 0 reaches 0.001, above 1e-8 of the largest entry");
+}
+
 // Issue 13: a K̂ with a negative eigenvalue was accepted (fbprep inspect showed its frequency range "from 0 Hz").
 // The eigenvalue is hidden: every diagonal entry stays positive and the matrix symmetric.
 TEST(Validate, StiffnessWithANegativeEigenvalueIsRefused) {

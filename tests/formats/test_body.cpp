@@ -194,6 +194,15 @@ BodyData make_body() {
   for (Eigen::Index r = 0; r < 12; ++r)
     for (Eigen::Index c = 0; c < 3 * kFields; ++c) region.stress_modes(r, c) = 1e9 * static_cast<double>(r + 2 * c) / 13.0;
   body.recovery.push_back(region);
+
+  // The geometric stiffness of two prestress cases: symmetric, distinct values, row and column 0 zero.
+  body.geometric_stiffness.cases = {"centrifugal:zz", "bore A:fx"};
+  for (int k = 0; k < 2; ++k) {
+    Eigen::MatrixXd stiffness = Eigen::MatrixXd::Zero(4 + kFields, 4 + kFields);
+    for (Eigen::Index r = 1; r < stiffness.rows(); ++r)
+      for (Eigen::Index c = 1; c <= r; ++c) stiffness(r, c) = stiffness(c, r) = (k + 1) * 0.37 * static_cast<double>(r * 7 + c) / 11.0;
+    body.geometric_stiffness.matrices.push_back(stiffness);
+  }
   return body;
 }
 

@@ -57,7 +57,8 @@ Eigen::MatrixXd upsilon_from_modes(const Eigen::MatrixXd& modes) {
 
 FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
                               const SparseMatrix& scalar_mass_upper, const Material& material,
-                              const FreeFreeOptions& options, const Eigen::MatrixXd& static_loads) {
+                              const FreeFreeOptions& options, const Eigen::MatrixXd& static_loads,
+                              const Eigen::MatrixXd& prestress_loads) {
   if (options.modes < 0) throw std::invalid_argument(fmt::format("modes: must be >= 0, got {}", options.modes));
   if (options.fmax_hz < 0.0 || !std::isfinite(options.fmax_hz))
     throw std::invalid_argument(fmt::format("fmax: must be a positive frequency, got {}", options.fmax_hz));
@@ -151,6 +152,12 @@ FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& sti
     result.vectors.rightCols(correction.vectors.cols()) = correction.vectors;
     result.eigenvalues.conservativeResize(result.vectors.cols());
     result.eigenvalues.tail(correction.eigenvalues.size()) = correction.eigenvalues;
+  }
+  if (prestress_loads.cols() > 0) {
+    if (prestress_loads.rows() != n) throw std::invalid_argument("free-free modes: the prestress loads have the wrong length");
+    if (options.progress) options.progress(fmt::format("prestress: {} unit load cases", prestress_loads.cols()));
+    result.prestress_responses =
+        relieved_static_responses(op, stiffness_upper, scalar_mass_upper, rigid, prestress_loads, result.prestress);
   }
   const Eigen::Index n_m = result.vectors.cols();
   result.frequencies_hz = result.eigenvalues.cwiseMax(0.0).cwiseSqrt() / kTwoPi;

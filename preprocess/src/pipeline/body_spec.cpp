@@ -80,7 +80,8 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
   }
   const YAML::Node& root = loaded;  // const: operator[] never adds keys
   r.expect_map(root, "the body spec",
-               {"input", "unit", "material", "mesh", "reduction", "interfaces", "load_points", "output_regions"});
+               {"input", "unit", "material", "mesh", "reduction", "interfaces", "load_points", "output_regions",
+                "geometric_stiffness"});
   PrepOptions options;
   options.spec = spec;
   const std::filesystem::path base = spec.parent_path();
@@ -163,6 +164,9 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
       }
     }
   }
+  if (const YAML::Node geometric = root["geometric_stiffness"])
+    options.geometric_stiffness = r.truth(geometric, "geometric_stiffness");
+  recorded.emplace_back("geometric_stiffness", options.geometric_stiffness ? "true" : "false");
   recorded.emplace_back("reduction", std::string(to_string(options.reduction)));
   recorded.emplace_back("modes", std::to_string(options.modes.modes));
   recorded.emplace_back("fmax", fmt::format("{}", options.modes.fmax_hz));

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <string_view>
 #include <utility>
 
@@ -102,6 +103,26 @@ nlohmann::ordered_json number_or_null(double value) {
   return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
 }
 
+// Mode 1's stiffening under a spin Ω about each body axis (geometric_stiffness.hpp): its ω² grows by S Ω² with
+// S = Σ_fg Ĝ(4 + f, 4 + g) ξ̄_f · ξ̄_g of the centrifugal case of that axis (xx, yy, zz), ξ̄ the M-normalised mode in
+// the fields (/gcms/mode_coefficients): the Southwell coefficient of the free part's mode (the spin softening that
+// the rotating frame's inertia adds is not in it). nullopt without the centrifugal cases or without modes.
+std::optional<Eigen::Vector3d> spin_stiffening(const format::BodyData& body) {
+  const format::GeometricStiffness& g = body.geometric_stiffness;
+  const Eigen::Index n_f = body.gcms.field_count();
+  if (body.modes.count() == 0 || body.gcms.mode_coefficients.cols() < 3) return std::nullopt;
+  const Eigen::MatrixXd shape = body.gcms.mode_coefficients.leftCols(3);  // ξ̄_f of mode 1, one row per field
+  Eigen::Vector3d s;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::string name = std::string("centrifugal:") + "xyz"[axis] + "xyz"[axis];
+    const auto it = std::find(g.cases.begin(), g.cases.end(), name);
+    if (it == g.cases.end()) return std::nullopt;
+    const Eigen::MatrixXd& m = g.matrices[static_cast<std::size_t>(it - g.cases.begin())];
+    s(axis) = (shape.transpose() * m.bottomRightCorner(n_f, n_f) * shape).trace();
+  }
+  return s;
+}
+
 }  // namespace
 
 std::string body_report(const format::BodyData& body, const std::filesystem::path& file) {
@@ -183,6 +204,21 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
       line(printable(i.name), fmt::format("{}, {} nodes, reference point {} m", printable(i.coupling), i.nodes.size(),
                                           vector3(i.reference_point)));
   }
+  if (!body.geometric_stiffness.empty()) {
+    r += "\nGeometric stiffness (prestress cases, inertia relief)\n";
+    std::vector<std::pair<std::string, int>> sources;  // "centrifugal" or an interface, and its count of cases
+    for (const std::string& name : body.geometric_stiffness.cases) {
+      const std::string source = name.substr(0, name.rfind(':'));
+      if (sources.empty() || sources.back().first != source) sources.emplace_back(source, 0);
+      ++sources.back().second;
+    }
+    std::string listed;
+    for (const auto& [source, count] : sources) listed += fmt::format("{}{} ({})", listed.empty() ? "" : ", ", source, count);
+    line("cases", fmt::format("{}: {}", body.geometric_stiffness.cases.size(), printable(listed)));
+    if (const auto s = spin_stiffening(body))
+      line("mode 1 under spin", fmt::format("omega_1^2 + S Omega^2 with S = {:.4g} (about x), {:.4g} (y), {:.4g} (z)",
+                                            (*s)(0), (*s)(1), (*s)(2)));
+  }
   r += "\nStress recovery\n";
   if (body.recovery.empty()) line("output regions", "none");
   for (const format::RecoveryRegion& region : body.recovery)
@@ -256,6 +292,11 @@ std::string body_json(const format::BodyData& body, const std::filesystem::path&
   for (const format::RecoveryRegion& region : body.recovery)
     regions.push_back({{"name", capped(region.name)}, {"nodes", region.nodes.size()}});
   j["output_regions"] = regions;
+  std::vector<std::string> cases;
+  for (const std::string& name : body.geometric_stiffness.cases) cases.push_back(capped(name));
+  j["geometric_stiffness_cases"] = cases;
+  const std::optional<Eigen::Vector3d> spin = spin_stiffening(body);
+  j["spin_stiffening_mode_1"] = spin ? nlohmann::ordered_json({(*spin)(0), (*spin)(1), (*spin)(2)}) : nlohmann::ordered_json(nullptr);
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 

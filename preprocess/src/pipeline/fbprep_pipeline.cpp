@@ -4,7 +4,10 @@
 #include "flexbody/format/body_file.hpp"
 #include "flexbody/preprocess/assembly.hpp"
 #include "flexbody/preprocess/craig_bampton.hpp"
+#include "flexbody/preprocess/eigensolver.hpp"
 #include "flexbody/preprocess/gcms_constants.hpp"
+#include "flexbody/preprocess/geometric_stiffness.hpp"
+#include "flexbody/preprocess/rigid_body_modes.hpp"
 #include "flexbody/preprocess/mass_properties.hpp"
 #include "flexbody/preprocess/stress_recovery.hpp"
 #include "flexbody/preprocess/tet10_assembly.hpp"
@@ -203,6 +206,23 @@ PrepSummary run_fbprep(const PrepOptions& options) {
       in_stage("interfaces", [&] { return unit_load_vectors(body.mesh.nodes, load_points); });
   summary.static_loads = unit_load_labels(load_points);
 
+  // The geometric stiffness's load cases (issue 29, geometric_stiffness.hpp): the six centrifugal ones and a unit force
+  // and moment at every interface, each balanced by inertia relief.
+  Eigen::MatrixXd prestress_loads, prestress_responses;
+  if (options.geometric_stiffness) {
+    std::vector<LoadPoint> at_interfaces;
+    for (const SelectedInterface& s : selected)
+      at_interfaces.push_back({s.name, s.patch.nodes, s.patch.weights, patch_centroid(s.patch, body.mesh.nodes)});
+    prestress_loads = in_stage("geometric stiffness", [&] {
+      const Eigen::MatrixXd interface_loads = unit_load_vectors(body.mesh.nodes, at_interfaces);
+      Eigen::MatrixXd loads(3 * node_count, 6 + interface_loads.cols());
+      loads << centrifugal_unit_loads(body.mesh.nodes, scalar_mass), interface_loads;
+      return loads;
+    });
+    for (const char* c : kCentrifugalCases) summary.prestress_cases.push_back(std::string("centrifugal:") + c);
+    for (const std::string& label : unit_load_labels(at_interfaces)) summary.prestress_cases.push_back(label);
+  }
+
   // 3. Modes: free-free, or Craig-Bampton on the rbe2 interfaces.
   StageTimer modes_timer(summary, "modes");
   summary.reduction = options.reduction;
@@ -211,8 +231,11 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     FreeFreeOptions mode_options = options.modes;  // with auto, each solve picks its backend; the modes name it
     mode_options.progress = options.progress;
     const FreeFreeModes modes = in_stage("modes", [&] {
-      return free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options, static_loads);
+      return free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options, static_loads,
+                             prestress_loads);
     });
+    prestress_responses = modes.prestress_responses;
+    summary.prestress = modes.prestress;
     summary.static_correction = modes.static_correction;
     summary.static_correction_modes = modes.vectors.cols() - modes.normal_modes;
     summary.frequencies_hz = modes.frequencies_hz;
@@ -269,6 +292,18 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     summary.factor = modes.stats;
     summary.operator_applies = static_cast<int>(modes.stats.solves);
     mode_vectors = modes.vectors;
+    if (prestress_loads.cols() > 0) {  // Craig-Bampton factorizes the interior only: the free part's own factorization
+      if (options.progress) options.progress(fmt::format("prestress: {} unit load cases", prestress_loads.cols()));
+      prestress_responses = in_stage("geometric stiffness", [&] {
+        const Eigen::MatrixXd rigid_fields = rigid_body_modes(body.mesh.nodes, scalar_mass);
+        const std::unique_ptr<ShiftSolve> solve = make_shift_solve(
+            options.modes.solver.backend == EigensolverBackend::slepc ? EigensolverBackend::slepc
+                                                                       : EigensolverBackend::arpack,
+            stiffness, scalar_mass, rigid_fields);
+        solve->set_shift(automatic_shift(body.mesh.nodes, options.material));
+        return relieved_static_responses(*solve, stiffness, scalar_mass, rigid_fields, prestress_loads, summary.prestress);
+      });
+    }
   }
   modes_timer.stop();
 
@@ -292,6 +327,16 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   });
   for (const format::Interface& i : body.interfaces)
     summary.interfaces.push_back({i.name, i.coupling, i.nodes.size(), i.reference_point + summary.mass.center_of_mass_input});
+  if (prestress_responses.cols() > 0) {  // Ĝ_σ on Y = [1, X̄, Ῡ'], the fields of G
+    if (options.progress) options.progress("geometric stiffness of the prestress cases");
+    body.geometric_stiffness.cases = summary.prestress_cases;
+    body.geometric_stiffness.matrices = in_stage("geometric stiffness", [&] {
+      Eigen::MatrixXd y(node_count, 4 + body.gcms.field_count());
+      y << Eigen::VectorXd::Ones(node_count), body.mesh.nodes, body.gcms.fields;
+      return quadratic ? projected_geometric_stiffness(*quadratic, options.material, prestress_responses, y)
+                       : projected_geometric_stiffness(imported.mesh, options.material, prestress_responses, y);
+    });
+  }
   reduce_timer.stop();
 
   // 5. Stress recovery: stress modes of the fields at the output regions' nodes.

@@ -158,6 +158,12 @@ std::string PrepSummary::full_report() const {
                              ? "inertia relief, less the normal modes' part"
                              : "interfaces clamped, in the basis before orthonormalisation"));
   }
+  if (!prestress_cases.empty()) {
+    line("geometric stiffness", fmt::format("{} prestress cases ({}), inertia relief", prestress_cases.size(),
+                                            fmt::join(prestress_cases, " ")));
+    line("", fmt::format("{} preconditioned CG iterations, max static residual {:.1e} ({:.2g} x its rounding floor)",
+                         prestress.iterations, prestress.max_relative_residual, prestress.max_residual_to_floor));
+  }
   if (reduction == ReductionKind::free_free)
     line("rigid-body check", fmt::format("|K r|/(|K| |r|) = {:.1e}, max |r^T M phi| = {:.1e}", rigid_body_residual,
                                          rigid_body_coupling));
@@ -336,6 +342,10 @@ std::string PrepSummary::json() const {
                             {"iterations", static_correction.iterations},
                             {"max_relative_residual", static_correction.max_relative_residual},
                             {"max_residual_to_floor", static_correction.max_residual_to_floor}};
+  j["geometric_stiffness_cases"] = prestress_cases;
+  j["geometric_stiffness_solves"] = {{"iterations", prestress.iterations},
+                                     {"max_relative_residual", prestress.max_relative_residual},
+                                     {"max_residual_to_floor", prestress.max_residual_to_floor}};
   nlohmann::ordered_json region_list = nlohmann::ordered_json::array();
   for (const auto& region : output_regions) region_list.push_back({{"name", region.name}, {"nodes", region.nodes}});
   j["output_regions"] = region_list;

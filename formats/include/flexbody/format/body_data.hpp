@@ -164,6 +164,22 @@ struct RecoveryRegion {
   Eigen::MatrixXd stress_modes;
 };
 
+/// The geometric stiffness of unit prestress cases (issue 29; SCHEMA.md "Geometric stiffness";
+/// preprocess/geometric_stiffness.hpp): the prestress of case k, weighted by λ_k, adds λ_k Ĝ_k to the stiffness
+/// projected on Y = [1, X̄, Ῡ'] (as G projects the mass); the GCMS's K̂ gains λ_k (Ĝ_k[4:, 4:] ⊗ I3).
+struct GeometricStiffness {
+  /// "centrifugal:xx", ":yy", ":zz", ":xy", ":xz", ":yz" (λ = ω_x², ..., ω_y ω_z [rad²/s²], ω the body's angular
+  /// velocity, body axes) and "<interface>:fx" ... ":mz" (λ = the force [N] or the moment [N m] about its reference
+  /// point that the interface carries into the body, body axes). Each balanced by inertia relief.
+  std::vector<std::string> cases;
+  /// Ĝ_k ((4 + n_f) square, symmetric, one per case): ∫ ∇Y_aᵀ σ_k ∇Y_b dV per unit λ_k; like G's, its blocks carry
+  /// mixed units (N m per unit λ for (X̄, X̄), s⁻² per unit λ for (Ῡ', Ῡ'), the unit of K̂). Row and column 0 (the
+  /// constant field) are zero up to round-off.
+  std::vector<Eigen::MatrixXd> matrices;
+
+  [[nodiscard]] bool empty() const { return cases.empty(); }
+};
+
 /// Everything a flexible body file holds.
 struct BodyData {
   /// The file's format version as read (kFormatVersion or kUnsealedFormatVersion); the writer ignores it and
@@ -180,6 +196,7 @@ struct BodyData {
   Gcms gcms;
   std::vector<Interface> interfaces;  ///< in the order the body spec names them; names unique
   std::vector<RecoveryRegion> recovery;  ///< output regions, in the body spec's order; names unique
+  GeometricStiffness geometric_stiffness;  ///< optional: empty when fbprep was not asked for it
 };
 
 }  // namespace flexbody::format

@@ -97,6 +97,13 @@ class YamlReader {
     return static_cast<int>(x);
   }
 
+  /// `true` or `false`, nothing else (YAML's yes/on/1 are refused: one spelling per meaning).
+  bool truth(const YAML::Node& node, const std::string& what) const {
+    const std::string t = text(node, what);
+    if (t != "true" && t != "false") fail(node, fmt::format("{} must be true or false", what));
+    return t == "true";
+  }
+
   Eigen::Vector3d vector3(const YAML::Node& node, const std::string& what) const {
     if (!node.IsSequence() || node.size() != 3) fail(node, fmt::format("{} must be a list of 3 numbers", what));
     return {number(node[0], what), number(node[1], what), number(node[2], what)};

@@ -64,6 +64,9 @@ struct PrepOptions {
   std::vector<LoadPointRequest> load_points;
   /// Output regions for stress recovery; nullopt: the default (kDefaultRecoveryBytes), empty: none.
   std::optional<std::vector<OutputRegionRequest>> output_regions;
+  /// The geometric stiffness of the prestress cases (geometric_stiffness.hpp: the six centrifugal ones and a unit
+  /// force and moment at each interface), projected on the GCMS fields, for rotating and preloaded parts (issue 29).
+  bool geometric_stiffness = false;
   /// The options as the user gave them, recorded in the body file's provenance.
   std::vector<std::pair<std::string, std::string>> recorded_options;
   /// Called with a short message at the start of each long step.
@@ -146,6 +149,9 @@ struct PrepSummary {
   /// corrections (free-free: the last ones; Craig-Bampton: 0, they are folded into its basis).
   std::vector<std::string> static_loads;
   StaticCorrectionStats static_correction;
+  /// The geometric stiffness's load cases (empty: not asked for) and their static solves.
+  std::vector<std::string> prestress_cases;
+  StaticCorrectionStats prestress;
   Eigen::Index static_correction_modes = 0;
   /// Output regions for stress recovery (name, nodes) and why these (the default rule or the spec).
   struct RegionLine {

@@ -51,19 +51,27 @@ struct FreeFreeModes {
   int operator_applies = 0;
   EigensolverBackend eigensolver = EigensolverBackend::arpack;  ///< the backend of the last run (never automatic)
   ShiftSolveStats stats;
+  /// With `prestress_loads`: their static responses with inertia relief (3 n_n x p, static_correction.hpp:
+  /// relieved_static_responses against the rigid-body fields), solved on the modes' factorization, and how the
+  /// solves went.
+  Eigen::MatrixXd prestress_responses;
+  StaticCorrectionStats prestress;
 };
 
 /// Computes the lowest elastic free-free modes of K̄ phi = omega^2 M̄ phi (M̄ = M_s ⊗ I3) by shift-invert
 /// on a CHOLMOD factorization of K̄ - sigma M̄ with sigma < 0, the six rigid-body modes deflated.
 /// With `static_loads` (3 n_n x s nodal force vectors, e.g. unit_load_vectors), the basis is extended by
 /// their residual static correction modes (inertia relief; static_correction.hpp) on the same factorization.
+/// With `prestress_loads` (3 n_n x p), their relieved static responses too (FreeFreeModes::prestress_responses; the
+/// geometric stiffness's load cases, geometric_stiffness.hpp), on the same factorization.
 /// Throws std::runtime_error when the body has more than six zero-energy modes (a mechanism or a
 /// disconnected mesh), when a normal mode's residual exceeds max(1e-8, kResidualFloorFactor x its rounding
 /// floor) (eigen_residual.hpp: not converged), or when a solver fails.
 [[nodiscard]] FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
                                             const SparseMatrix& scalar_mass_upper, const Material& material,
                                             const FreeFreeOptions& options,
-                                            const Eigen::MatrixXd& static_loads = Eigen::MatrixXd());
+                                            const Eigen::MatrixXd& static_loads = Eigen::MatrixXd(),
+                                            const Eigen::MatrixXd& prestress_loads = Eigen::MatrixXd());
 
 /// The automatic shift of FreeFreeOptions::shift for a body of this size and material.
 [[nodiscard]] double automatic_shift(const RowMatrixX3d& nodes, const Material& material);

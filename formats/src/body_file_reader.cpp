@@ -296,7 +296,7 @@ std::vector<RecoveryRegion> read_recovery(const Location& root) {
 
 // Optional: absent means no geometric stiffness (fbprep not asked for it, or before 0.13). The stacked matrices are
 // split by the count of cases; a row count that is no multiple of it is left for check_structure to name.
-GeometricStiffness read_geometric_stiffness(const Location& root) {
+GeometricStiffness read_geometric_stiffness(const Location& root, Eigen::Index field_count) {
   GeometricStiffness stiffness;
   if (detail::object_kind(root, "/geometric_stiffness") == detail::ObjectKind::missing) return stiffness;
   const Location group = detail::open_group(root, "geometric_stiffness");
@@ -304,13 +304,16 @@ GeometricStiffness read_geometric_stiffness(const Location& root) {
     group.fail("missing attribute /geometric_stiffness/cases");
   stiffness.cases = names_in_order(detail::read_string_attribute(group, "cases"));
   if (stiffness.cases.empty()) group.fail("/geometric_stiffness/cases names no case");
-  const Eigen::MatrixXd stacked = to_matrix<Eigen::MatrixXd>(detail::read_double_matrix(group, "matrices"));
-  const auto count = static_cast<Eigen::Index>(stiffness.cases.size());
-  if (stacked.rows() != count * stacked.cols())
-    group.fail("/geometric_stiffness/matrices has " + std::to_string(stacked.rows()) + " rows, expected " +
-               std::to_string(count) + " cases x " + std::to_string(stacked.cols()) + " (its columns)");
-  for (Eigen::Index k = 0; k < count; ++k)
-    stiffness.matrices.emplace_back(stacked.middleRows(k * stacked.cols(), stacked.cols()));
+  // The shape before the values are copied: p (4 + n_f) x (4 + n_f), n_f from /gcms (read before).
+  const detail::Table<double> table = detail::read_double_matrix(group, "matrices");
+  const auto count = static_cast<Eigen::Index>(stiffness.cases.size()), size = 4 + field_count;
+  if (static_cast<Eigen::Index>(table.cols) != size || static_cast<Eigen::Index>(table.rows) / size != count ||
+      static_cast<Eigen::Index>(table.rows) % size != 0)
+    group.fail("/geometric_stiffness/matrices has shape " + std::to_string(table.rows) + " x " +
+               std::to_string(table.cols) + ", expected " + std::to_string(count * size) + " x " + std::to_string(size) +
+               " (" + std::to_string(count) + " cases of 4 + n_f rows)");
+  const Eigen::MatrixXd stacked = to_matrix<Eigen::MatrixXd>(table);
+  for (Eigen::Index k = 0; k < count; ++k) stiffness.matrices.emplace_back(stacked.middleRows(k * size, size));
   return stiffness;
 }
 
@@ -356,7 +359,7 @@ BodyData read_body_file(const std::filesystem::path& path, const ReadOptions& op
     body.gcms = read_gcms(root);
     body.interfaces = read_interfaces(root);
     body.recovery = read_recovery(root);
-    body.geometric_stiffness = read_geometric_stiffness(root);
+    body.geometric_stiffness = read_geometric_stiffness(root, body.gcms.field_count());
   }
   image = {};  // the values are in `body` now
   detail::check_structure(body, label);

@@ -203,6 +203,21 @@ TEST_F(ReadErrors, ADeclaredShapeBeyondTheFileIsRefusedBeforeAllocating) {
   expect_read_error(unwritten, {"/mesh/nodes declares 5 x 3 values (120 bytes), but only 0 bytes of them are stored"});
 }
 
+// The geometric stiffness's stacked matrices are checked against the cases and n_f before their values are copied:
+// a declared (0, 2^62) shape holds no values, so it passed the size check of the file, and with 4 cases the product
+// 4 x 2^62 wrapped to 0 rows (helper review). Each shape below is refused by name.
+TEST_F(ReadErrors, GeometricStiffnessOfTheWrongShape) {
+  const auto path = good_file("stiffness_shape.fbh5");
+  replace_double_dataset(path, "/geometric_stiffness/matrices", 9, 9, std::vector<double>(81, 0.0));
+  expect_read_error(path, {"/geometric_stiffness/matrices has shape 9 x 9, expected 18 x 9 (2 cases of 4 + n_f rows)"});
+  const auto wide = good_file("stiffness_wide.fbh5");
+  replace_double_dataset(wide, "/geometric_stiffness/matrices", 0, std::size_t{1} << 62, {});
+  expect_read_error(wide, {"/geometric_stiffness/matrices has shape 0 x 4611686018427387904, expected 18 x 9"});
+  const auto cases = good_file("stiffness_cases.fbh5");
+  set_string_attribute(cases, "/geometric_stiffness", "cases", "");
+  expect_read_error(cases, {"/geometric_stiffness/cases names no case"});
+}
+
 TEST_F(ReadErrors, PhysicalRangeViolation) {
   const auto path = good_file("nu.fbh5");
   delete_attribute(path, "/material", "poisson_ratio");

@@ -270,3 +270,29 @@ TEST(StaticCorrection, SlenderWireUnderItsWeightIsAcceptedAtItsRoundingFloor) {
   // As for the compact bar: 1e-8 (measured 4.7e-10).
   EXPECT_LT(distance_from_span(with_rigid, m, u), 1e-8);
 }
+
+// A small patch far from the origin (an interface of a 1 km part): its centroid rounds at ε |c|, which the check
+// of the weighted centroid allows for (the check against 1e-12 of the patch's size alone refused this one). The unit
+// loads keep their resultants.
+TEST(UnitLoads, ASmallPatchFarFromTheOriginIsAccepted) {
+  fp::RowMatrixX3d nodes(7, 3);
+  nodes << 0, 0, 0, 1000.003, 0.001, 0.002, 1000.007, 0.003, 0.001, 1000.001, 0.009, 0.004, 1000.009, 0.006, 0.008,
+      1000.004, 0.002, 0.009, 1000.006, 0.007, 0.003;  // a 1 cm bolt hole 1 km from the origin
+  fp::LoadPoint p;
+  p.name = "far";
+  p.nodes.resize(6);
+  p.nodes << 1, 2, 3, 4, 5, 6;
+  p.weights = Eigen::VectorXd::Constant(6, 1.0 / 6.0);
+  for (Eigen::Index a = 0; a < 6; ++a) p.reference_point += p.weights(a) * nodes.row(p.nodes(a)).transpose();
+  const Eigen::MatrixXd loads = fp::unit_load_vectors(nodes, {p});
+  ASSERT_EQ(loads.cols(), 6);
+  for (int k = 0; k < 3; ++k) {  // a unit force sums to e_k; a unit moment to no force
+    Eigen::Vector3d force = Eigen::Vector3d::Zero(), moment_force = Eigen::Vector3d::Zero();
+    for (Eigen::Index i = 0; i < nodes.rows(); ++i) {
+      force += loads.block<3, 1>(3 * i, k);
+      moment_force += loads.block<3, 1>(3 * i, 3 + k);
+    }
+    EXPECT_LT((force - Eigen::Vector3d::Unit(k)).norm(), 1e-12);
+    EXPECT_LT(moment_force.norm(), 1e-6);  // moments of 1 N m over a 1 cm patch: forces of ~100 N
+  }
+}

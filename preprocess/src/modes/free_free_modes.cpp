@@ -58,7 +58,7 @@ Eigen::MatrixXd upsilon_from_modes(const Eigen::MatrixXd& modes) {
 FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& stiffness_upper,
                               const SparseMatrix& scalar_mass_upper, const Material& material,
                               const FreeFreeOptions& options, const Eigen::MatrixXd& static_loads,
-                              const Eigen::MatrixXd& prestress_loads) {
+                              const Eigen::MatrixXd& prestress_loads, const std::vector<std::string>& prestress_names) {
   if (options.modes < 0) throw std::invalid_argument(fmt::format("modes: must be >= 0, got {}", options.modes));
   if (options.fmax_hz < 0.0 || !std::isfinite(options.fmax_hz))
     throw std::invalid_argument(fmt::format("fmax: must be a positive frequency, got {}", options.fmax_hz));
@@ -157,7 +157,8 @@ FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& sti
     if (prestress_loads.rows() != n) throw std::invalid_argument("free-free modes: the prestress loads have the wrong length");
     if (options.progress) options.progress(fmt::format("prestress: {} unit load cases", prestress_loads.cols()));
     result.prestress_responses =
-        relieved_static_responses(op, stiffness_upper, scalar_mass_upper, rigid, prestress_loads, result.prestress);
+        relieved_static_responses(op, stiffness_upper, scalar_mass_upper, rigid, prestress_loads, result.prestress,
+                                  prestress_names, "geometric stiffness");
   }
   const Eigen::Index n_m = result.vectors.cols();
   result.frequencies_hz = result.eigenvalues.cwiseMax(0.0).cwiseSqrt() / kTwoPi;

@@ -216,8 +216,8 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
     for (const auto& [source, count] : sources) listed += fmt::format("{}{} ({})", listed.empty() ? "" : ", ", source, count);
     line("cases", fmt::format("{}: {}", body.geometric_stiffness.cases.size(), printable(listed)));
     if (const auto s = spin_stiffening(body))
-      line("mode 1 under spin", fmt::format("omega_1^2 + S Omega^2 with S = {:.4g} (about x), {:.4g} (y), {:.4g} (z)",
-                                            (*s)(0), (*s)(1), (*s)(2)));
+      line("mode 1 under spin", fmt::format("omega_1^2 + S Omega^2 with S = {:.4g} (about x), {:.4g} (y), {:.4g} (z); "
+                                            "S - 1 for motion in the plane of rotation", (*s)(0), (*s)(1), (*s)(2)));
   }
   r += "\nStress recovery\n";
   if (body.recovery.empty()) line("output regions", "none");

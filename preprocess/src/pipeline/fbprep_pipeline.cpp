@@ -230,11 +230,12 @@ PrepSummary run_fbprep(const PrepOptions& options) {
   if (options.reduction == ReductionKind::free_free) {
     FreeFreeOptions mode_options = options.modes;  // with auto, each solve picks its backend; the modes name it
     mode_options.progress = options.progress;
-    const FreeFreeModes modes = in_stage("modes", [&] {
+    FreeFreeModes modes = in_stage("modes", [&] {
       return free_free_modes(body.mesh.nodes, stiffness, scalar_mass, options.material, mode_options, static_loads,
-                             prestress_loads);
+                             prestress_loads, summary.prestress_cases);
     });
-    prestress_responses = modes.prestress_responses;
+    prestress_responses = std::move(modes.prestress_responses);
+    prestress_loads = Eigen::MatrixXd();  // solved: 3 n_n x p doubles back
     summary.prestress = modes.prestress;
     summary.static_correction = modes.static_correction;
     summary.static_correction_modes = modes.vectors.cols() - modes.normal_modes;
@@ -301,8 +302,10 @@ PrepSummary run_fbprep(const PrepOptions& options) {
                                                                        : EigensolverBackend::arpack,
             stiffness, scalar_mass, rigid_fields);
         solve->set_shift(automatic_shift(body.mesh.nodes, options.material));
-        return relieved_static_responses(*solve, stiffness, scalar_mass, rigid_fields, prestress_loads, summary.prestress);
+        return relieved_static_responses(*solve, stiffness, scalar_mass, rigid_fields, prestress_loads, summary.prestress,
+                                         summary.prestress_cases, "geometric stiffness");
       });
+      prestress_loads = Eigen::MatrixXd();
     }
   }
   modes_timer.stop();
@@ -331,10 +334,19 @@ PrepSummary run_fbprep(const PrepOptions& options) {
     if (options.progress) options.progress("geometric stiffness of the prestress cases");
     body.geometric_stiffness.cases = summary.prestress_cases;
     body.geometric_stiffness.matrices = in_stage("geometric stiffness", [&] {
-      Eigen::MatrixXd y(node_count, 4 + body.gcms.field_count());
-      y << Eigen::VectorXd::Ones(node_count), body.mesh.nodes, body.gcms.fields;
-      return quadratic ? projected_geometric_stiffness(*quadratic, options.material, prestress_responses, y)
-                       : projected_geometric_stiffness(imported.mesh, options.material, prestress_responses, y);
+      // The constant field has no gradient: its row and column are exact zeros, the rest is projected on [X̄, Ῡ']
+      // (computed, row 0 is round-off whose size relative to the other blocks depends on the units: helper review).
+      Eigen::MatrixXd y(node_count, 3 + body.gcms.field_count());
+      y << body.mesh.nodes, body.gcms.fields;
+      const std::vector<Eigen::MatrixXd> projected =
+          quadratic ? projected_geometric_stiffness(*quadratic, options.material, prestress_responses, y)
+                    : projected_geometric_stiffness(imported.mesh, options.material, prestress_responses, y);
+      std::vector<Eigen::MatrixXd> padded;
+      for (const Eigen::MatrixXd& g : projected) {
+        padded.push_back(Eigen::MatrixXd::Zero(g.rows() + 1, g.cols() + 1));
+        padded.back().bottomRightCorner(g.rows(), g.cols()) = g;
+      }
+      return padded;
     });
   }
   reduce_timer.stop();

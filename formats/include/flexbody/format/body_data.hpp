@@ -174,7 +174,7 @@ struct GeometricStiffness {
   std::vector<std::string> cases;
   /// Ĝ_k ((4 + n_f) square, symmetric, one per case): ∫ ∇Y_aᵀ σ_k ∇Y_b dV per unit λ_k; like G's, its blocks carry
   /// mixed units (N m per unit λ for (X̄, X̄), s⁻² per unit λ for (Ῡ', Ῡ'), the unit of K̂). Row and column 0 (the
-  /// constant field) are zero up to round-off.
+  /// constant field, which has no gradient) are zero.
   std::vector<Eigen::MatrixXd> matrices;
 
   [[nodiscard]] bool empty() const { return cases.empty(); }

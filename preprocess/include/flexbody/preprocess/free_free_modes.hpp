@@ -63,7 +63,8 @@ struct FreeFreeModes {
 /// With `static_loads` (3 n_n x s nodal force vectors, e.g. unit_load_vectors), the basis is extended by
 /// their residual static correction modes (inertia relief; static_correction.hpp) on the same factorization.
 /// With `prestress_loads` (3 n_n x p), their relieved static responses too (FreeFreeModes::prestress_responses; the
-/// geometric stiffness's load cases, geometric_stiffness.hpp), on the same factorization.
+/// geometric stiffness's load cases, geometric_stiffness.hpp, named in errors by `prestress_names`), on the same
+/// factorization.
 /// Throws std::runtime_error when the body has more than six zero-energy modes (a mechanism or a
 /// disconnected mesh), when a normal mode's residual exceeds max(1e-8, kResidualFloorFactor x its rounding
 /// floor) (eigen_residual.hpp: not converged), or when a solver fails.
@@ -71,7 +72,8 @@ struct FreeFreeModes {
                                             const SparseMatrix& scalar_mass_upper, const Material& material,
                                             const FreeFreeOptions& options,
                                             const Eigen::MatrixXd& static_loads = Eigen::MatrixXd(),
-                                            const Eigen::MatrixXd& prestress_loads = Eigen::MatrixXd());
+                                            const Eigen::MatrixXd& prestress_loads = Eigen::MatrixXd(),
+                                            const std::vector<std::string>& prestress_names = {});
 
 /// The automatic shift of FreeFreeOptions::shift for a body of this size and material.
 [[nodiscard]] double automatic_shift(const RowMatrixX3d& nodes, const Material& material);

@@ -18,6 +18,7 @@
 
 #include <array>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace flexbody::preprocess {
@@ -79,12 +80,15 @@ struct StaticCorrectionModes {
 /// rigid-body fields this is the free body's response with inertia relief: the load is balanced by the rigid-body
 /// accelerations it causes. By conjugate gradients preconditioned by `solve` (a factorization of K̄ − σM̄, σ <= 0).
 /// A load wholly in the known fields gives a zero column. `stats` counts the loads, the iterations and the worst
-/// residual (added to what it holds). Throws std::runtime_error if a solve does not converge (its true residual
-/// above max(1e-8, kResidualFloorFactor x its rounding floor)), std::invalid_argument for sizes that differ.
+/// residual (added to what it holds). Errors begin with `what` and name the load by `names` (one per column) or
+/// by its number. Throws std::runtime_error if a solve does not converge (its true residual above max(1e-8,
+/// kResidualFloorFactor x its rounding floor)), std::invalid_argument for sizes that differ.
 [[nodiscard]] Eigen::MatrixXd relieved_static_responses(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
                                                         const SparseMatrix& scalar_mass_upper,
                                                         const Eigen::MatrixXd& known, const Eigen::MatrixXd& loads,
-                                                        StaticCorrectionStats& stats);
+                                                        StaticCorrectionStats& stats,
+                                                        const std::vector<std::string>& names = {},
+                                                        std::string_view what = "static solve");
 
 /// Residual static correction modes (see the top of this file). `solve` is a factorization of K̄ − σM̄
 /// with σ <= 0 (its shift as set; for σ < 0 it should deflate the rigid-body fields); `known` (n x w) must be

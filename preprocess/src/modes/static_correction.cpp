@@ -112,7 +112,7 @@ std::vector<std::string> unit_load_labels(const std::vector<LoadPoint>& points) 
 
 namespace {
 
-// One batch of relieved_static_responses' loads (columns of `loads`), `names` theirs.
+// One batch of relieved_static_responses' loads (the columns of `loads`); `name(c)` names load c in errors.
 Eigen::MatrixXd relieved_batch(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
                                const SparseMatrix& scalar_mass_upper, const Eigen::MatrixXd& known,
                                const Eigen::MatrixXd& loads, StaticCorrectionStats& stats,

@@ -11,11 +11,8 @@
 namespace flexbody::format::detail {
 namespace {
 
-constexpr std::array<std::string_view, 6> kCentrifugal = {"xx", "yy", "zz", "xy", "xz", "yz"};
-constexpr std::array<std::string_view, 6> kInterfaceLoads = {"fx", "fy", "fz", "mx", "my", "mz"};
-
-bool one_of(std::string_view text, const std::array<std::string_view, 6>& allowed) {
-  return std::find(allowed.begin(), allowed.end(), text) != allowed.end();
+bool one_of(std::string_view text, const std::array<const char*, 6>& allowed) {
+  return std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return text == a; });
 }
 
 }  // namespace
@@ -31,8 +28,8 @@ void check_geometric_stiffness_structure(const BodyData& body, const std::string
     const std::size_t colon = name.rfind(':');
     const std::string source = colon == std::string::npos ? name : name.substr(0, colon);
     const std::string load = colon == std::string::npos ? std::string() : name.substr(colon + 1);
-    const bool centrifugal = source == "centrifugal" && one_of(load, kCentrifugal);
-    const bool at_interface = interfaces.count(source) > 0 && one_of(load, kInterfaceLoads);
+    const bool centrifugal = source == "centrifugal" && one_of(load, kCentrifugalCases);
+    const bool at_interface = interfaces.count(source) > 0 && one_of(load, kInterfaceLoadCases);
     if (!centrifugal && !at_interface)
       fail(context, path + " is \"" + name + "\", expected centrifugal:xx ... :yz or <interface>:fx ... :mz with an "
                     "interface of /interfaces");

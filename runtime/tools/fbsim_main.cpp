@@ -113,6 +113,16 @@ int main(int argc, char** argv) {
         removed.push_back({{"joint", c.name}, {"row", c.row + 1}, {"meaning", c.meaning}, {"gap", c.gap}});
       j["removed_constraints"] = removed;
     }
+    {
+      nlohmann::ordered_json stiffened = nlohmann::ordered_json::array();
+      for (int b = 0; b < scene.system.body_count(); ++b)
+        if (const auto& prestress = scene.system.model(b).prestress) {
+          const std::string gap = scene.system.prestress_gap(b);
+          stiffened.push_back({{"body", scene.system.body_name(b)}, {"cases", prestress->cases.size()},
+                               {"covers_all_loads", gap.empty()}, {"gap", gap}});
+        }
+      j["geometric_stiffening"] = stiffened;
+    }
     j["cpu_s"] = summary.cpu_seconds;
     j["energy_initial_j"] = summary.energy_initial;
     j["energy_final_j"] = summary.energy_final;
@@ -144,6 +154,12 @@ int main(int argc, char** argv) {
       std::cout << fmt::format("  assembly: joint gaps up to {:.3g} m closed in {} steps; largest move {:.3g} m (body '{}')\n",
                                scene.assembly.largest_gap, scene.assembly.iterations,
                                scene.assembly.moves[static_cast<std::size_t>(moved)], scene.system.body_name(moved));
+    for (int b = 0; b < scene.system.body_count(); ++b)
+      if (const auto& prestress = scene.system.model(b).prestress) {
+        const std::string gap = scene.system.prestress_gap(b);
+        std::cout << fmt::format("  body '{}': geometric stiffening on ({} prestress cases){}\n", scene.system.body_name(b),
+                                 prestress->cases.size(), gap.empty() ? "" : "; " + gap);
+      }
     for (std::size_t k = 0; k < scene.removed.size();) {  // one line per joint
       const std::size_t joint = scene.removed[k].joint;
       std::string rows;

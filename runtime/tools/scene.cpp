@@ -106,7 +106,7 @@ Scene read_scene(const std::filesystem::path& file) {
     if (bodies.count(name)) r.fail(it->first, fmt::format("{} is defined twice", where));
     const YAML::Node b = it->second;
     r.expect_map(b, where, {"file", "modes", "formulation", "frame", "position", "rotation", "velocity", "angular_velocity",
-                            "damping"});
+                            "damping", "geometric_stiffness"});
     const std::string path_text = r.text(r.required(b, "file", where), where + " file");
     const std::filesystem::path path =
         std::filesystem::path(path_text).is_absolute() ? std::filesystem::path(path_text) : base / path_text;
@@ -138,6 +138,20 @@ Scene read_scene(const std::filesystem::path& file) {
       r.fail(b["modes"], e.what());
     }
     if (!stresses_used.count(name)) model.recovery.clear();
+    // geometric_stiffness: on (true) whenever the body file holds it (fbprep --geometric-stiffness); false turns it off.
+    if (const YAML::Node g = b["geometric_stiffness"]) {
+      if (!r.truth(g, where + " geometric_stiffness")) {
+        model.prestress.reset();
+      } else if (full) {
+        r.fail(g, fmt::format("{} geometric_stiffness: the body file stores it projected on the modes, so modes: full "
+                              "(the unreduced model) has none", where));
+      } else if (model.rigid()) {
+        r.fail(g, fmt::format("{} geometric_stiffness: a rigid body has no deformation to stiffen", where));
+      } else if (!model.prestress) {
+        r.fail(g, fmt::format("{} geometric_stiffness: {} holds none (fbprep --geometric-stiffness, or "
+                              "geometric_stiffness: true in its body spec, writes it)", where, path.filename().string()));
+      }
+    }
     if (full && b["formulation"] && r.text(b["formulation"], where + " formulation") == "ffrf")
       r.fail(b["formulation"], fmt::format("{}: formulation ffrf moves modes in a floating frame; modes: full is the unreduced "
                                            "improved ACF (use a number of modes, or formulation gcms)", where));
@@ -372,7 +386,8 @@ Scene read_scene(const std::filesystem::path& file) {
   const YAML::Node integrator = r.required(root, "integrator", "the scene");
   r.expect_map(integrator, "integrator",
                {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every", "deformation_limit",
-                "spin_warning", "spin_limit", "constraints", "linear_solver", "coupled_step"});
+                "spin_warning", "spin_limit", "stiffened_spin_warning", "stiffened_spin_limit", "constraints",
+                "linear_solver", "coupled_step"});
   if (const YAML::Node t = integrator["type"]; t && r.text(t, "integrator type") != "generalized-alpha")
     r.fail(t, fmt::format("integrator type '{}' is unknown; use generalized-alpha", t.Scalar()));
   if (const YAML::Node rho = integrator["rho_inf"]) {
@@ -396,12 +411,17 @@ Scene read_scene(const std::filesystem::path& file) {
                               "distance (the step's local error), and above that the iteration error exceeds it",
                               scene.integrator.tolerance, runtime::kLargestTolerance));
   }
-  for (const char* key : {"spin_warning", "spin_limit"})
+  const std::pair<const char*, double*> spin_levels[] = {
+      {"spin_warning", &scene.integrator.spin_warning},
+      {"spin_limit", &scene.integrator.spin_limit},
+      {"stiffened_spin_warning", &scene.integrator.stiffened_spin_warning},
+      {"stiffened_spin_limit", &scene.integrator.stiffened_spin_limit}};
+  for (const auto& [key, level] : spin_levels)
     if (const YAML::Node ratio = integrator[key]) {
       const double value = r.number(ratio, fmt::format("integrator {}", key));
-      if (value < 0.0) r.fail(ratio, fmt::format("integrator {} must be >= 0 (a fraction of the lowest elastic frequency; 0: "
+      if (value < 0.0) r.fail(ratio, fmt::format("integrator {} must be >= 0 (a multiple of the lowest elastic frequency; 0: "
                                                  "no check), got {}", key, value));
-      (std::string(key) == "spin_warning" ? scene.integrator.spin_warning : scene.integrator.spin_limit) = value;
+      *level = value;
     }
   if (const YAML::Node limit = integrator["deformation_limit"]) {
     scene.integrator.deformation_limit = r.number(limit, "integrator deformation_limit");

@@ -2,7 +2,8 @@
 // FFRF as for the GCMS): every joint type, applied forces, torques, a spring-damper, damping and gravity, on GCMS,
 // FFRF and rigid bodies, in both constraint forms. This executable replaces malloc and realloc (glibc's
 // __libc_malloc behind them; CMake builds it on glibc only) to count the calls made during steps that kept their
-// Newton matrix; a step that builds one allocates (the factorization), and is not counted.
+// Newton matrix; a step that builds one allocates (the factorization), and is not counted. The two bars carry
+// geometric stiffness cases (made up), weighted at every iteration.
 #include "flexbody/runtime/damping.hpp"
 #include "flexbody/runtime/ffrf_model.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
@@ -37,9 +38,38 @@ namespace fr = flexbody::runtime;
 
 namespace {
 
-// A soft bar 1 x 0.04 x 0.02 m (E 5e9 Pa, ρ 1000 kg/m³; 10 x 2 x 1 Kuhn-split cells), its first 4 free-free modes.
+// A soft bar 1 x 0.04 x 0.02 m (E 5e9 Pa, ρ 1000 kg/m³; 10 x 2 x 1 Kuhn-split cells), its first 4 free-free modes,
+// with an interface "end" at the node nearest (−0.5, 0, 0) and made-up geometric stiffness cases (the six
+// centrifugal ones and the end's six), so that the prestress weights and forces are counted too.
 const flexbody::format::BodyData& bar() {
-  static const flexbody::format::BodyData data = flexbody::test::soft_bar(1.0, 10, 4);
+  static const flexbody::format::BodyData data = [] {
+    flexbody::format::BodyData b = flexbody::test::soft_bar(1.0, 10, 4);
+    Eigen::Index end = 0;
+    (b.mesh.nodes.rowwise() - Eigen::RowVector3d(-0.5, 0, 0)).rowwise().squaredNorm().minCoeff(&end);
+    const Eigen::Index n_f = b.gcms.fields.cols();
+    flexbody::format::Interface i;
+    i.name = "end";
+    i.coupling = "rbe3";
+    i.nodes = Eigen::VectorXi::Constant(1, static_cast<int>(end));
+    i.weights = Eigen::VectorXd::Ones(1);
+    i.reference_point = b.mesh.nodes.row(end).transpose();
+    i.y_row = Eigen::VectorXd(4 + n_f);
+    i.y_row << 1.0, b.mesh.nodes.row(end).transpose(), b.gcms.fields.row(end).transpose();
+    i.rotation = Eigen::MatrixXd::Zero(3, 3 * n_f);
+    b.interfaces.push_back(i);
+    std::srand(29);
+    for (const char* source : {"centrifugal", "end"})
+      for (int k = 0; k < 6; ++k) {
+        b.geometric_stiffness.cases.push_back(std::string(source) + ":" +
+                                              (std::string(source) == "end" ? flexbody::format::kInterfaceLoadCases[k]
+                                                                            : flexbody::format::kCentrifugalCases[k]));
+        Eigen::MatrixXd g = Eigen::MatrixXd::Zero(4 + n_f, 4 + n_f);
+        const Eigen::MatrixXd r = Eigen::MatrixXd::Random(3 + n_f, 3 + n_f);
+        g.bottomRightCorner(3 + n_f, 3 + n_f) = 1e-3 * r * r.transpose();
+        b.geometric_stiffness.matrices.push_back(g);
+      }
+    return b;
+  }();
   return data;
 }
 
@@ -80,9 +110,9 @@ std::unique_ptr<fr::System> scene() {
   auto q_of = [&](int b) { return system.body_coordinates(q0, b); };
   auto point = [&](int b, const Eigen::Vector3d& x) { return fr::point_marker(system.model(b), b, "body", x); };
   const fr::BodyModel &m0 = system.model(b0), &m1 = system.model(b1);
-  const fr::Marker root = fr::node_marker(m0, b0, "gcms bar", nearest(m0, {-0.5, 0, 0}));
+  const fr::Marker root = fr::interface_marker(m0, b0, "gcms bar", "end");  // prestressed by the pin's reaction
   const fr::Marker tip = fr::node_marker(m0, b0, "gcms bar", nearest(m0, {0.5, 0, 0}));
-  const fr::Marker near = fr::node_marker(m1, b1, "ffrf bar", nearest(m1, {-0.5, 0, 0}));
+  const fr::Marker near = fr::interface_marker(m1, b1, "ffrf bar", "end");
   const fr::Marker far = fr::node_marker(m1, b1, "ffrf bar", nearest(m1, {0.5, 0, 0}));
   system.add_joint(fr::make_joint("pin", fr::JointType::revolute, root, fr::ground_marker(fr::marker_position(root, q_of(b0))),
                                   Eigen::Vector3d::UnitZ(), q_of(b0), Eigen::VectorXd()));
@@ -131,6 +161,8 @@ Count count(fr::ConstraintForm form) {
     ++c.kept;
     c.allocations += allocations;
   }
+  // The two bars' geometric stiffness was weighted (the pin's and the ball's reactions, the spin).
+  for (int b : {0, 1}) EXPECT_GT(system->prestress_weights(b).cwiseAbs().maxCoeff(), 0.0) << b;
   return c;
 }
 

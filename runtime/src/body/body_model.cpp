@@ -156,6 +156,8 @@ BodyModel make_body_model(const format::BodyData& body, std::optional<Eigen::Ind
     r.stress_modes.conservativeResize(Eigen::NoChange, 3 * n_f);
     model.recovery.push_back(std::move(r));
   }
+  if (!body.geometric_stiffness.empty() && n_f > 0)
+    model.prestress = std::make_shared<const Prestress>(make_prestress(body, n_f, model.interfaces));
   return model;
 }
 

@@ -83,6 +83,15 @@ FfrfModel make_ffrf_model(const BodyModel& model, FloatingFrame frame, const std
   for (Eigen::Index m = 0; m < n_m; ++m) c.col(m) = field_coordinates(f.shapes, m);
   f.modal_stiffness = c.transpose() * model.stiffness * c;
   f.modal_stiffness = 0.5 * (f.modal_stiffness + f.modal_stiffness.transpose()).eval();
+  if (model.prestress) {
+    for (const Eigen::MatrixXd& g_k : model.prestress->matrices) {
+      const Eigen::MatrixXd products = f.shapes.transpose() * (g_k * f.shapes);  // blocks (m, n): W_mᵀ Ĝ_k W_n
+      Eigen::MatrixXd k_g(n_m, n_m);
+      for (Eigen::Index m = 0; m < n_m; ++m)
+        for (Eigen::Index n = 0; n < n_m; ++n) k_g(m, n) = products.block<3, 3>(3 * m, 3 * n).trace();
+      f.prestress.push_back(0.5 * (k_g + k_g.transpose()));
+    }
+  }
   if (model.damping.size() > 0) {
     f.modal_damping = c.transpose() * model.damping * c;
     f.modal_damping = 0.5 * (f.modal_damping + f.modal_damping.transpose()).eval();

@@ -62,8 +62,13 @@ Marker make_marker(int body, std::string name, Eigen::VectorXd y, Eigen::MatrixX
 }  // namespace
 
 Marker interface_marker(const BodyModel& model, int body, const std::string& body_name, const std::string& name) {
-  for (const format::Interface& i : model.interfaces)
-    if (i.name == name) return finished(model, make_marker(body, body_name + "/" + name, i.y_row, i.rotation));
+  for (std::size_t k = 0; k < model.interfaces.size(); ++k) {
+    const format::Interface& i = model.interfaces[k];
+    if (i.name != name) continue;
+    Marker m = finished(model, make_marker(body, body_name + "/" + name, i.y_row, i.rotation));
+    m.interface = static_cast<int>(k);
+    return m;
+  }
   std::string known;
   for (const format::Interface& i : model.interfaces) known += (known.empty() ? "" : ", ") + i.name;
   throw std::invalid_argument(model.source + ": no interface '" + name + "' (interfaces: " +

@@ -103,7 +103,26 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
   const Eigen::Index rows = model.floating() ? 1 : model.rigid() ? 6 : (model.needs_translational_tisserand() ? 12 : 9);
   std::shared_ptr<const detail::PaddedMatrix> stiffness;
   if (!model.sparse && !model.rigid() && !model.floating()) stiffness = std::make_shared<const detail::PaddedMatrix>(model.stiffness);
-  bodies_.push_back({name, std::move(model), state, coordinates_, rows, reference_total_, std::move(stiffness), {}, {}});
+  PrestressState prestress;
+  if (model.prestress) {
+    const Prestress& p = *model.prestress;
+    const auto cases = static_cast<Eigen::Index>(p.cases.size());
+    const Eigen::Index size = 4 + model.field_count();
+    for (const Eigen::MatrixXd& g : p.matrices)
+      if (g.rows() != size || g.cols() != size)
+        throw std::invalid_argument("body '" + name + "': its prestress matrices must be 4 + n_f = " +
+                                    std::to_string(size) + " square");
+    if (p.matrices.size() != p.cases.size() || p.interface_cases.size() != model.interfaces.size() ||
+        (model.floating() && model.floating_frame->prestress.size() != p.cases.size()))
+      throw std::invalid_argument("body '" + name + "': its prestress cases do not match its matrices, interfaces or "
+                                  "floating frame");
+    prestress.weights = Eigen::VectorXd::Zero(cases);
+    prestress.loads.assign(model.interfaces.size(), InterfaceLoad{});
+    prestress.generalized.resize(model.coordinate_count());
+    ++prestressed_bodies_;
+  }
+  bodies_.push_back({name, std::move(model), state, coordinates_, rows, reference_total_, std::move(stiffness), {}, {},
+                     std::move(prestress)});
   coordinates_ += bodies_.back().model.coordinate_count();
   reference_total_ += rows;
   return static_cast<int>(bodies_.size()) - 1;
@@ -298,6 +317,7 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
     auto f_b = f.segment(b.offset, n);
     if (b.model.floating()) {  // gravity, the quadratic velocity vector, elastic and damping forces
       f_b = ffrf_forces(*b.model.floating_frame, q.segment(b.offset, n), v.segment(b.offset, n), gravity_);
+      add_prestress_forces(b, q, f_b, 1.0);
       continue;
     }
     add_body_forces(b, q, v, f_b);
@@ -307,7 +327,7 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
 }
 
 void System::dynamic_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
-                              Eigen::VectorXd& out) const {
+                              Eigen::VectorXd& out, bool with_prestress) const {
   out.resize(coordinates_);
   const int count = body_count();
   // Each body writes its own slice from its own workspace (detail::kParallelFrom).
@@ -318,18 +338,19 @@ void System::dynamic_residual(double t, const Eigen::VectorXd& q, const Eigen::V
     if (b.model.floating()) {  // R(q, q̇, q̈) in one pass over the invariants
       ffrf_residual(*b.model.floating_frame, q.segment(b.offset, n), v.segment(b.offset, n), qdd.segment(b.offset, n),
                     gravity_, b.work, out_b);
+      if (with_prestress) add_prestress_forces(b, q, out_b, -1.0);
       return;
     }
     mass_times(b.model, qdd.segment(b.offset, n), out_b);
     out_b = -out_b;
-    add_body_forces(b, q, v, out_b);
+    add_body_forces(b, q, v, out_b, with_prestress);
     out_b = -out_b;
   });
   add_applied_forces(t, q, v, -1.0, out);
 }
 
 void System::add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
-                             Eigen::Ref<Eigen::VectorXd> f_b) const {
+                             Eigen::Ref<Eigen::VectorXd> f_b, bool with_prestress) const {
   const Eigen::Index n = b.model.coordinate_count();
   {
     for (Eigen::Index k = 0; k < n / 3; ++k) f_b.segment<3>(3 * k) += b.model.g_border(0, k) * gravity_;  // (G[:, 0] ⊗ I3) g
@@ -344,6 +365,7 @@ void System::add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eige
       const ElasticForces& elastic = w.elastic;
       f_b.segment<9>(3) -= elastic.grad_a;   // Eq. 86
       f_b.tail(n - 12) -= elastic.grad_xi;   // Eq. 87
+      if (with_prestress) add_prestress_forces(b, q, f_b, 1.0);
       const bool sparse_damping = b.model.sparse && b.model.sparse->stiffness_damping > 0.0;
       if (b.model.damping.size() > 0 || sparse_damping) {  // R = ½ ξ̄̇ᵀ D̂ ξ̄̇, ξ̄̇_f = Ȧᵀ ξ_f + Aᵀ ξ̇_f
         const auto v_b = v.segment(b.offset, n);
@@ -406,28 +428,35 @@ void System::add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen:
   }
   for (std::size_t k = 0; k < springs_.size(); ++k) {
     const SpringDamper& s = springs_[k];
-    std::array<Eigen::MatrixXd, 2>& work = spring_work_[k];  // one per marker: their bodies' sizes differ
-    const VectorRef q1 = body_view(q, s.first.body), q2 = body_view(q, s.second.body);
-    const VectorRef v1 = body_view(v, s.first.body), v2 = body_view(v, s.second.body);
-    const Eigen::Vector3d d = marker_position(s.second, q2) - marker_position(s.first, q1);
-    const double length = d.norm();
-    if (!(length > 0.0)) continue;  // coincident markers: no direction, no force
-    const Eigen::Vector3d e = d / length;
-    Eigen::Vector3d rate = Eigen::Vector3d::Zero();  // ṙ_2 − ṙ_1
-    if (s.second.body != kGround) {
-      marker_position_jacobian(s.second, q2, work[1]);
-      rate.noalias() += work[1] * v2;
-    }
-    if (s.first.body != kGround) {
-      marker_position_jacobian(s.first, q1, work[0]);
-      rate.noalias() -= work[0] * v1;
-    }
-    const double tension = sign * (s.stiffness * (length - s.rest_length) + s.damping * e.dot(rate));
+    const Eigen::Vector3d force = sign * spring_force(k, q, v);
     if (s.first.body != kGround)
-      add_marker_force(f.segment(offset(s.first.body), model(s.first.body).coordinate_count()), s.first, q1, tension * e);
+      add_marker_force(f.segment(offset(s.first.body), model(s.first.body).coordinate_count()), s.first,
+                       body_view(q, s.first.body), force);
     if (s.second.body != kGround)
-      add_marker_force(f.segment(offset(s.second.body), model(s.second.body).coordinate_count()), s.second, q2, -tension * e);
+      add_marker_force(f.segment(offset(s.second.body), model(s.second.body).coordinate_count()), s.second,
+                       body_view(q, s.second.body), -force);
   }
+}
+
+Eigen::Vector3d System::spring_force(std::size_t k, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
+  const SpringDamper& s = springs_[k];
+  std::array<Eigen::MatrixXd, 2>& work = spring_work_[k];  // one per marker: their bodies' sizes differ
+  const VectorRef q1 = body_view(q, s.first.body), q2 = body_view(q, s.second.body);
+  const VectorRef v1 = body_view(v, s.first.body), v2 = body_view(v, s.second.body);
+  const Eigen::Vector3d d = marker_position(s.second, q2) - marker_position(s.first, q1);
+  const double length = d.norm();
+  if (!(length > 0.0)) return Eigen::Vector3d::Zero();  // coincident markers: no direction, no force
+  const Eigen::Vector3d e = d / length;
+  Eigen::Vector3d rate = Eigen::Vector3d::Zero();  // ṙ_2 − ṙ_1
+  if (s.second.body != kGround) {
+    marker_position_jacobian(s.second, q2, work[1]);
+    rate.noalias() += work[1] * v2;
+  }
+  if (s.first.body != kGround) {
+    marker_position_jacobian(s.first, q1, work[0]);
+    rate.noalias() -= work[0] * v1;
+  }
+  return (s.stiffness * (length - s.rest_length) + s.damping * e.dot(rate)) * e;
 }
 
 FfrfTangent System::floating_frame_tangent(int body, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
@@ -435,7 +464,10 @@ FfrfTangent System::floating_frame_tangent(int body, const Eigen::VectorXd& q, c
   const Body& b = bodies_.at(static_cast<std::size_t>(body));
   if (!b.model.floating()) throw std::invalid_argument("body '" + b.name + "' has no floating frame");
   const Eigen::Index n = b.model.coordinate_count();
-  return ffrf_tangent(*b.model.floating_frame, q.segment(b.offset, n), v.segment(b.offset, n), a.segment(b.offset, n), gravity_);
+  FfrfTangent t = ffrf_tangent(*b.model.floating_frame, q.segment(b.offset, n), v.segment(b.offset, n),
+                               a.segment(b.offset, n), gravity_);
+  if (b.prestress.active) t.stiffness.bottomRightCorner(b.model.modes, b.model.modes) += b.prestress.matrix;
+  return t;
 }
 
 Eigen::Matrix3d System::orientation(int body, const Eigen::VectorXd& q) const {
@@ -456,7 +488,18 @@ Eigen::MatrixXd System::stiffness(const Eigen::VectorXd& q) const {
     if (b.model.rigid() || b.model.floating()) continue;
     const Eigen::Index n = b.model.coordinate_count(), n_xi = n - 12;
     const auto q_b = q.segment(b.offset, n);
-    const ElasticTangent t = body_elastic_tangent(b.model, orientation_of(q_b), q_b.tail(n_xi), true);
+    ElasticTangent t = body_elastic_tangent(b.model, orientation_of(q_b), q_b.tail(n_xi), true);
+    if (b.prestress.active) {  // ½ ξ̄ᵀ (K_g ⊗ I3) ξ̄ has the Hessian of the elastic energy with K_g ⊗ I3 for K̂
+      const Eigen::Index n_f = n_xi / 3;
+      Eigen::MatrixXd k_g = Eigen::MatrixXd::Zero(n_xi, n_xi);
+      for (Eigen::Index f = 0; f < n_f; ++f)
+        for (Eigen::Index c = 0; c < n_f; ++c)
+          k_g.block<3, 3>(3 * f, 3 * c).diagonal().setConstant(b.prestress.matrix(4 + f, 4 + c));
+      const ElasticTangent geometric = elastic_tangent(k_g, orientation_of(q_b), q_b.tail(n_xi), true);
+      t.aa += geometric.aa;
+      t.a_xi += geometric.a_xi;
+      t.xi_xi += geometric.xi_xi;
+    }
     k.block<9, 9>(b.offset + 3, b.offset + 3) = t.aa;
     k.block(b.offset + 3, b.offset + 12, 9, n_xi) = t.a_xi;
     k.block(b.offset + 12, b.offset + 3, n_xi, 9) = t.a_xi.transpose();

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -167,6 +168,11 @@ struct RecoveryRegion {
 /// The geometric stiffness of unit prestress cases (issue 29; SCHEMA.md "Geometric stiffness";
 /// preprocess/geometric_stiffness.hpp): the prestress of case k, weighted by λ_k, adds λ_k Ĝ_k to the stiffness
 /// projected on Y = [1, X̄, Ῡ'] (as G projects the mass); the GCMS's K̂ gains λ_k (Ĝ_k[4:, 4:] ⊗ I3).
+/// The geometric stiffness's load cases are named "centrifugal:<c>" and "<interface>:<l>", with c and l from these
+/// lists, in this order (the six products ω_i ω_j; a unit force and moment along the body axes).
+inline constexpr std::array<const char*, 6> kCentrifugalCases = {"xx", "yy", "zz", "xy", "xz", "yz"};
+inline constexpr std::array<const char*, 6> kInterfaceLoadCases = {"fx", "fy", "fz", "mx", "my", "mz"};
+
 struct GeometricStiffness {
   /// "centrifugal:xx", ":yy", ":zz", ":xy", ":xz", ":yz" (λ = ω_x², ..., ω_y ω_z [rad²/s²], ω the body's angular
   /// velocity, body axes) and "<interface>:fx" ... ":mz" (λ = the force [N] or the moment [N m] about its reference

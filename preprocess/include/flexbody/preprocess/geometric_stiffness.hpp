@@ -23,6 +23,7 @@
 // do, through the interface cases. What the cases leave out: loads elsewhere than at interfaces (a force on a node or
 // a point), the change of the modes with the prestress (a fixed basis), and large deformation.
 
+#include "flexbody/format/body_data.hpp"
 #include "flexbody/preprocess/material.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
 
@@ -35,7 +36,7 @@
 namespace flexbody::preprocess {
 
 /// The centrifugal load cases' names after "centrifugal:", in the order of their columns and weights λ.
-inline constexpr std::array<const char*, 6> kCentrifugalCases = {"xx", "yy", "zz", "xy", "xz", "yz"};
+inline constexpr const std::array<const char*, 6>& kCentrifugalCases = format::kCentrifugalCases;
 
 /// The six centrifugal unit loads: nodal forces (3 n_n x 6, node-interleaved) [N per rad²/s²] of the body-frame nodes
 /// (origin at the centre of mass), column k = M̄ ((tr W_k) I − W_k) x̄ (the consistent nodal forces of the body force,

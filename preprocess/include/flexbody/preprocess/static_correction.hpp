@@ -12,6 +12,7 @@
 // diagonalised on them (Rayleigh-Ritz), so they join the basis as "modes" with Ritz frequencies above the
 // last normal mode's, and the normal modes stay exact eigenvectors.
 
+#include "flexbody/format/body_data.hpp"
 #include "flexbody/preprocess/interfaces.hpp"
 #include "flexbody/preprocess/shift_invert_operator.hpp"
 #include "flexbody/preprocess/tet_mesh.hpp"
@@ -23,8 +24,9 @@
 
 namespace flexbody::preprocess {
 
-/// The six unit loads of a load point: forces along x, y, z [N], moments about x, y, z [N m].
-inline constexpr std::array<const char*, 6> kUnitLoadNames = {"fx", "fy", "fz", "mx", "my", "mz"};
+/// The six unit loads of a load point: forces along x, y, z [N], moments about x, y, z [N m] (the names of the
+/// body file's interface load cases, format::kInterfaceLoadCases).
+inline constexpr const std::array<const char*, 6>& kUnitLoadNames = format::kInterfaceLoadCases;
 
 /// A load point as the body spec asks for it (input frame, lengths in the input's unit like interfaces).
 /// It is also an rbe3 interface of the same name, so the runtime can apply its loads there.

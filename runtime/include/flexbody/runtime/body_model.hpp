@@ -8,6 +8,7 @@
 
 #include "flexbody/format/body_data.hpp"
 #include "flexbody/runtime/gcms_elastic.hpp"
+#include "flexbody/runtime/prestress.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
@@ -74,6 +75,9 @@ struct BodyModel {
   /// GCMS's [τ; a; ξ]: the same modes, markers and outputs, another formulation. The GCMS members stay (markers,
   /// stresses and pictures are made from them).
   std::shared_ptr<const FfrfModel> floating_frame;
+  /// The geometric stiffness of its prestress cases (prestress.hpp), when the body file holds them; null: the body
+  /// has no geometric stiffening (a scene turns it off by resetting this).
+  std::shared_ptr<const Prestress> prestress;
 
   /// G[0, 4:] (n_f): zero when every field is M-orthogonal to translations (every body file); otherwise (the
   /// full-order reference, full_order.hpp) the translational Tisserand rows Σ_f G[0, 4 + f] ξ_f = 0 (Eq. 77) are

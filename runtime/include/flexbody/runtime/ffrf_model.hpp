@@ -55,6 +55,10 @@ struct FfrfModel {
   /// The small rotation each mode's rigid part adds to every marker (3 x n_m): zero in the mean-axis frame, −θ_m in
   /// the interface frame.
   Eigen::Matrix3Xd rigid_rotations;
+  /// The geometric stiffness of the body model's prestress cases on the modes (n_m square each, one per case of
+  /// BodyModel::prestress) [1/s² per unit λ]: Σ_d W_dᵀ Ĝ_k W_d over the directions d, W_d the columns 3m + d (the
+  /// displacement measured from this frame, rigid part included); empty without prestress cases.
+  std::vector<Eigen::MatrixXd> prestress;
 };
 
 /// The FFRF of a (GCMS) body model with its modes, in the given frame (`interface`: the name of one of the body

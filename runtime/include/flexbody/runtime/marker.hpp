@@ -27,6 +27,9 @@ struct Marker {
   /// On a floating-frame body: Ψ_c and Θ_c (3 x n_m each, body frame) [kg^-1/2, kg^-1/2 m^-1]; empty otherwise.
   Eigen::Matrix3Xd modal_displacement, modal_rotation;
   bool floating = false;  ///< the marker's body moves in floating-frame coordinates
+  /// The index of the body's interface (BodyModel::interfaces) this marker is, or −1: loads here prestress the body
+  /// through that interface's cases (prestress.hpp).
+  int interface = -1;
 };
 
 /// A body file's interface (rbe2/rbe3) of body `body` in a System. Throws std::invalid_argument naming the

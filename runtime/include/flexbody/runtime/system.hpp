@@ -148,8 +148,9 @@ class System {
   /// M(q) q̈ − forces(t, q, q̇) into `out` (resized to the coordinates): the Newton iteration's dynamic rows. A
   /// floating-frame body's part is one pass over its η-dependent invariants (ffrf_residual) in a workspace the
   /// System keeps per body, so this is not safe to call on one System from two threads at once.
+  /// Without `with_prestress` the geometric stiffness's forces are left out (add_prestress_residual adds them).
   void dynamic_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
-                        Eigen::VectorXd& out) const;
+                        Eigen::VectorXd& out, bool with_prestress = true) const;
   /// ∂²U/∂q² of the GCMS bodies, dense (the applied forces here do not depend on q; the springs' tangents are
   /// spring_tangents(); floating-frame bodies have floating_frame_tangent()).
   [[nodiscard]] Eigen::MatrixXd stiffness(const Eigen::VectorXd& q) const;
@@ -237,6 +238,33 @@ class System {
   [[nodiscard]] Eigen::Index reference_row(int body) const;
   [[nodiscard]] Energies energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
 
+  /// Whether some body carries prestress cases (BodyModel::prestress): then set_prestress weights them.
+  [[nodiscard]] bool has_prestress() const { return prestressed_bodies_ > 0; }
+  /// Weights each prestressed body's geometric stiffness (prestress.hpp) by the loads at (t, q, q̇) with the joints'
+  /// multipliers λ (all rows, as joint_reaction takes them): the body's spin in its own axes, and the force and the
+  /// moment that the joints, point forces, torques and spring-dampers at each of its interfaces carry into it. The
+  /// weights hold until the next call: forces() and dynamic_residual() add −K_g ξ̄ (a floating-frame body's −K_g η, and
+  /// its tangent K_g), with K_g held fixed in their derivatives. The integrator calls this before every evaluation of
+  /// the dynamic rows; without a call the weights are zero (no stiffening). Allocates nothing once sizes are set.
+  void set_prestress(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& lambda,
+                     double lambda_scale = 1.0) const;
+  /// The Newton iteration's way to the same: the weights of set_prestress(t, q, q̇, scale μ), read from the joints'
+  /// evaluations at (t, q) that the call add_constraint_jacobian_transpose_product(t, q, ...) just before this one
+  /// left in the System's work storage (so that each joint is evaluated once per iteration), and then the geometric
+  /// stiffness's share of the dynamic rows, K_g ξ̄ / scale (what dynamic_residual(..., false) left out, scaled as the
+  /// integrator scales those rows), added to `residual`.
+  void add_prestress_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
+                              double scale, Eigen::VectorXd& residual) const;
+  /// Why body b's geometric stiffness does not cover every load on it, or empty when it does: it has prestress cases
+  /// (BodyModel::prestress), and every joint, point force, torque and spring-damper acts on it at one of its
+  /// interfaces. A load elsewhere (a node, a point) is missing from its prestress. "it has no geometric stiffness",
+  /// "joint 'hub' acts on it at beam/node 3, which is not an interface, so its prestress leaves that load out".
+  [[nodiscard]] std::string prestress_gap(int body) const;
+  /// Body b's current weights λ (one per case of its BodyModel::prestress; empty without).
+  [[nodiscard]] const Eigen::VectorXd& prestress_weights(int body) const {
+    return bodies_.at(static_cast<std::size_t>(body)).prestress.weights;
+  }
+
  private:
   struct Body;
   /// The reference rows' residuals and Φ_q v into the first rows of `phi` / `rate`; return how many rows.
@@ -251,6 +279,18 @@ class System {
     ElasticForces elastic;
     Eigen::VectorXd xi_bar, rate, damping_force, reference;
   };
+  /// A prestressed body's weights and their sum, and scratch for the loads at its interfaces.
+  struct PrestressState {
+    Eigen::VectorXd weights;           ///< λ, one per case
+    std::vector<InterfaceLoad> loads;  ///< per interface, body axes
+    /// Σ λ_k Ĝ_k ((4 + n_f) square; its field block acts on ξ̄) on a GCMS body, Σ λ_k K_g,k (n_m square) on a
+    /// floating-frame one.
+    Eigen::MatrixXd matrix;
+    Eigen::VectorXd xi_bar;       ///< ξ̄ = Âᵀ ξ
+    Eigen::VectorXd generalized;  ///< a joint's generalized force on the body
+    Eigen::VectorXd forces;       ///< (K_g ⊗ I3) ξ̄ (3 n_f) or K_g η (n_m)
+    bool active = false;          ///< some λ_k ≠ 0
+  };
   struct Body {
     std::string name;
     BodyModel model;
@@ -262,9 +302,23 @@ class System {
     std::shared_ptr<const detail::PaddedMatrix> stiffness;
     mutable FfrfWorkspace work;  ///< a floating-frame body's evaluation scratch (dynamic_residual)
     mutable GcmsWorkspace gcms;  ///< a GCMS body's (dynamic_residual, Φ_qᵀ μ)
+    mutable PrestressState prestress;  ///< set_prestress's weights (used when the model has prestress cases)
   };
+  /// set_prestress, with the joints evaluated here or (`evaluate_joints` false) as last evaluated at (t, q).
+  void update_prestress(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& lambda,
+                        double lambda_scale, bool evaluate_joints) const;
+  /// Adds `sign` times the geometric stiffness's forces −K_g ξ̄ (−K_g η) of body b at q to its slice f_b, if its weights
+  /// are set.
+  void add_prestress_forces(const Body& b, const Eigen::VectorXd& q, Eigen::Ref<Eigen::VectorXd> f_b, double sign) const;
+  /// Adds the wrench of generalized force `g` on body b (coordinates q_b) to the load at marker m's interface.
+  void add_interface_load(const Body& b, const VectorRef& q_b, const Marker& m, const Eigen::VectorXd& g) const;
+  /// Spring k's force on its first marker (its negative acts on the second), global frame [N]: zero for coincident
+  /// markers.
+  [[nodiscard]] Eigen::Vector3d spring_force(std::size_t k, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;
+  int prestressed_bodies_ = 0;
   /// A GCMS body's gravity, elastic and damping forces, added to its slice f_b.
-  void add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::Ref<Eigen::VectorXd> f_b) const;
+  void add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::Ref<Eigen::VectorXd> f_b,
+                       bool with_prestress = true) const;
   /// The applied forces, torques and spring-dampers, times `sign`, added to f.
   void add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, double sign, Eigen::VectorXd& f) const;
   [[nodiscard]] static Eigen::Index reference_rows(const Body& b) { return b.reference_rows; }

@@ -1,0 +1,156 @@
+// system_prestress.cpp: the System's geometric stiffening (prestress.hpp; issue 29, FORMULATION.md section 8.1): the
+// weights λ of each prestressed body's cases from its spin and the loads at its interfaces, and the forces they add.
+#include "flexbody/runtime/system.hpp"
+
+#include "../kernels/outer_sum.hpp"
+
+#include "flexbody/runtime/ffrf_dynamics.hpp"
+
+#include <Eigen/Geometry>
+
+namespace flexbody::runtime {
+
+void System::add_interface_load(const Body& b, const VectorRef& q_b, const Marker& m, const Eigen::VectorXd& g) const {
+  // The wrench of the generalized force g on the body: its force is g_τ; its moment about τ is the virtual work of a
+  // rigid rotation δθ of the whole body (joint_reaction): Σ_k q_k × g_k over the 3-blocks after τ on a GCMS body,
+  // ½ E(p) g_p = ½ A Ḡ(p) g_p on a floating-frame one. Both go to body axes, the moment about the interface's point.
+  const Eigen::Vector3d force = g.head<3>();
+  Eigen::Vector3d about_tau = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d a;
+  if (b.model.floating()) {
+    const Eigen::Vector4d p = q_b.segment<4>(3);
+    a = euler_rotation(p);
+    about_tau = 0.5 * a * (euler_body_velocity_matrix(p) * g.segment<4>(3));
+  } else {
+    a = orientation_of(q_b);
+    for (Eigen::Index k = 1; k < q_b.size() / 3; ++k) about_tau += q_b.segment<3>(3 * k).cross(g.segment<3>(3 * k));
+  }
+  const Eigen::Vector3d moment = about_tau - (marker_position(m, q_b) - q_b.head<3>()).cross(force);
+  InterfaceLoad& load = b.prestress.loads[static_cast<std::size_t>(m.interface)];
+  load.force += a.transpose() * force;
+  load.moment += a.transpose() * moment;
+}
+
+std::string System::prestress_gap(int body) const {
+  const Body& b = bodies_.at(static_cast<std::size_t>(body));
+  if (!b.model.prestress) return "it has no geometric stiffness";
+  auto elsewhere = [&](const Marker& m) { return m.body == body && m.interface < 0; };
+  auto missing = [](const std::string& what, const Marker& m) {
+    return what + " acts on it at " + m.name + ", which is not an interface, so its prestress leaves that load out";
+  };
+  for (const Joint& j : joints_)
+    if (elsewhere(j.first) || elsewhere(j.second)) return missing("joint '" + j.name + "'", elsewhere(j.first) ? j.first : j.second);
+  for (const PointForce& p : forces_)
+    if (elsewhere(p.marker)) return missing("a force", p.marker);
+  for (const PointTorque& p : torques_)
+    if (elsewhere(p.marker)) return missing("a torque", p.marker);
+  for (const SpringDamper& s : springs_)
+    if (elsewhere(s.first) || elsewhere(s.second))
+      return missing("spring '" + s.name + "'", elsewhere(s.first) ? s.first : s.second);
+  return {};
+}
+
+void System::set_prestress(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& lambda,
+                           double lambda_scale) const {
+  update_prestress(t, q, v, lambda, lambda_scale, true);
+}
+
+void System::add_prestress_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                    const Eigen::VectorXd& mu, double scale, Eigen::VectorXd& residual) const {
+  if (!has_prestress()) return;
+  update_prestress(t, q, v, mu, scale, false);
+  for (const Body& b : bodies_)
+    if (b.prestress.active) add_prestress_forces(b, q, residual.segment(b.offset, b.model.coordinate_count()), -1.0 / scale);
+}
+
+void System::update_prestress(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& lambda,
+                              double lambda_scale, bool evaluate_joints) const {
+  if (!has_prestress()) return;
+  for (const Body& b : bodies_)
+    if (b.model.prestress)
+      for (InterfaceLoad& l : b.prestress.loads) l = InterfaceLoad{};
+  auto loaded = [&](const Marker& m) {  // a marker at an interface of a prestressed body
+    return m.body != kGround && m.interface >= 0 && bodies_[static_cast<std::size_t>(m.body)].model.prestress != nullptr;
+  };
+  // The joints' reactions: the generalized force −Φ_qᵀ λ of each joint on each of its bodies.
+  if (lambda.size() == constraint_count()) {
+    for (std::size_t k = 0; k < joints_.size(); ++k) {
+      const Joint& j = joints_[k];
+      if (!loaded(j.first) && !loaded(j.second)) continue;
+      const JointEvaluation& e = evaluate_joints ? evaluated(k, t, q) : joint_work_[k];
+      const auto lambda_j = lambda.segment(joint_row(k), j.rows());
+      for (int side = 0; side < 2; ++side) {
+        const Marker& m = side == 0 ? j.first : j.second;
+        if (!loaded(m)) continue;
+        const Body& b = bodies_[static_cast<std::size_t>(m.body)];
+        const Eigen::MatrixXd& jacobian = side == 0 ? e.jacobian_first : e.jacobian_second;
+        b.prestress.generalized.noalias() = -lambda_scale * (jacobian.transpose() * lambda_j);
+        add_interface_load(b, body_view(q, m.body), m, b.prestress.generalized);
+      }
+    }
+  }
+  for (const PointForce& p : forces_) {
+    if (!loaded(p.marker)) continue;
+    const Body& b = bodies_[static_cast<std::size_t>(p.marker.body)];
+    b.prestress.loads[static_cast<std::size_t>(p.marker.interface)].force +=
+        orientation(p.marker.body, q).transpose() * p.force(t);
+  }
+  for (const PointTorque& p : torques_) {
+    if (!loaded(p.marker)) continue;
+    const Body& b = bodies_[static_cast<std::size_t>(p.marker.body)];
+    b.prestress.loads[static_cast<std::size_t>(p.marker.interface)].moment +=
+        orientation(p.marker.body, q).transpose() * p.torque(t);
+  }
+  for (std::size_t k = 0; k < springs_.size(); ++k) {
+    const SpringDamper& s = springs_[k];
+    if (!loaded(s.first) && !loaded(s.second)) continue;
+    const Eigen::Vector3d force = spring_force(k, q, v);  // on the first marker
+    for (int side = 0; side < 2; ++side) {
+      const Marker& m = side == 0 ? s.first : s.second;
+      if (!loaded(m)) continue;
+      const Body& b = bodies_[static_cast<std::size_t>(m.body)];
+      b.prestress.loads[static_cast<std::size_t>(m.interface)].force +=
+          orientation(m.body, q).transpose() * (side == 0 ? force : Eigen::Vector3d(-force));
+    }
+  }
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    const Body& b = bodies_[i];
+    if (!b.model.prestress) continue;
+    const int body = static_cast<int>(i);
+    const Eigen::Vector3d omega_bar = orientation(body, q).transpose() * angular_velocity(body, q, v);
+    PrestressState& state = b.prestress;
+    runtime::prestress_weights(*b.model.prestress, omega_bar, state.loads, state.weights);
+    state.active = !state.weights.isZero(0.0);
+    weighted_sum(b.model.floating() ? b.model.floating_frame->prestress : b.model.prestress->matrices, state.weights,
+                 state.matrix);
+  }
+}
+
+void System::add_prestress_forces(const Body& b, const Eigen::VectorXd& q, Eigen::Ref<Eigen::VectorXd> f_b,
+                                  double sign) const {
+  PrestressState& state = b.prestress;
+  if (!state.active) return;
+  const Eigen::Index n = b.model.coordinate_count();
+  const auto q_b = q.segment(b.offset, n);
+  if (b.model.floating()) {  // K_g η on the modal rows
+    const Eigen::Index n_m = b.model.modes;
+    state.forces.noalias() = state.matrix * q_b.tail(n_m);
+    f_b.tail(n_m) -= sign * state.forces;
+    return;
+  }
+  // ½ ξ̄ᵀ (K_g ⊗ I3) ξ̄ with K_g the weighted field block: with Ξ̄ = Aᵀ Ξ (3 x n_f) its body-frame forces are
+  // H = Ξ̄ K_g, and ∂/∂ξ = A H, ∂/∂A = Ξ Hᵀ (Eqs. 86-87 with K_g ⊗ I3 for K̂).
+  const Eigen::Index n_f = b.model.field_count();
+  const Eigen::Matrix3d a = orientation_of(q_b);
+  const Eigen::Map<const Eigen::Matrix3Xd> xi(q_b.data() + 12, 3, n_f);
+  state.xi_bar.resize(3 * n_f);
+  state.forces.resize(3 * n_f);
+  Eigen::Map<Eigen::Matrix3Xd> xi_bar(state.xi_bar.data(), 3, n_f), h(state.forces.data(), 3, n_f);
+  xi_bar.noalias() = a.transpose() * xi;
+  h.noalias() = xi_bar * state.matrix.bottomRightCorner(n_f, n_f);
+  const Eigen::Matrix3d grad_a = detail::outer_sum(xi, Eigen::Map<const Eigen::Matrix3Xd>(state.forces.data(), 3, n_f));
+  f_b.segment<9>(3) -= sign * Eigen::Map<const Eigen::Matrix<double, 9, 1>>(grad_a.data());
+  for (Eigen::Index f = 0; f < n_f; ++f) f_b.segment<3>(12 + 3 * f) -= sign * (a * h.col(f));
+}
+
+}  // namespace flexbody::runtime

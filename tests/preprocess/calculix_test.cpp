@@ -5,6 +5,7 @@
 #include "flexbody/preprocess/assembly.hpp"
 #include "flexbody/preprocess/free_free_modes.hpp"
 #include "flexbody/preprocess/tet10_assembly.hpp"
+#include "calculix.hpp"
 #include "test_meshes.hpp"
 
 #include <Eigen/SparseCholesky>
@@ -26,72 +27,20 @@ constexpr double kLength = 0.2;
 
 fp::TetMesh beam() { return flexbody::test::box_mesh(kLength, 0.02, 0.02, 20, 2, 2); }
 
-bool have_ccx() { return std::system("command -v ccx > /dev/null 2>&1") == 0; }
+using flexbody::test::ccx_required;
+using flexbody::test::have_ccx;
+using flexbody::test::read_displacements;
+using flexbody::test::read_eigenvalues;
 
-// CI sets FLEXBODY_REQUIRE_CCX=1 (scripts/test.sh): there a missing ccx fails instead of skipping, so
-// the comparison with an independent code cannot silently stop running.
-bool ccx_required() { return std::getenv("FLEXBODY_REQUIRE_CCX") != nullptr; }
-
-// Mesh and material as Abaqus input (C3D4 or, with 10 nodes per element, C3D10: ccx's node order is Abaqus'); `step`
-// is appended verbatim.
+// Mesh and material as Abaqus input; `step` goes inside one *STEP.
 template <class Elements>
 void write_inp(const std::filesystem::path& path, const fp::RowMatrixX3d& nodes, const Elements& tets,
                const std::string& model_extra, const std::string& step) {
-  std::ofstream inp(path);
-  inp << "*NODE\n";
-  for (Eigen::Index i = 0; i < nodes.rows(); ++i)
-    inp << fmt::format("{}, {:.17g}, {:.17g}, {:.17g}\n", i + 1, nodes(i, 0), nodes(i, 1), nodes(i, 2));
-  inp << "*ELEMENT, TYPE=" << (tets.cols() == 10 ? "C3D10" : "C3D4") << ", ELSET=EALL\n";
-  for (Eigen::Index e = 0; e < tets.rows(); ++e) {
-    inp << e + 1;
-    for (Eigen::Index a = 0; a < tets.cols(); ++a) inp << ", " << tets(e, a) + 1;
-    inp << "\n";
-  }
-  inp << fmt::format("*NSET, NSET=NALL, GENERATE\n1, {}\n", nodes.rows());
-  inp << fmt::format("*MATERIAL, NAME=STEEL\n*ELASTIC\n{:.17g}, {:.17g}\n*DENSITY\n{:.17g}\n", kSteel.youngs_modulus,
-                     kSteel.poisson_ratio, kSteel.density);
-  inp << "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n" << model_extra << "*STEP\n" << step << "*END STEP\n";
+  flexbody::test::write_inp(path, nodes, tets, kSteel.youngs_modulus, kSteel.poisson_ratio, kSteel.density,
+                            model_extra + "*STEP\n" + step + "*END STEP\n");
 }
 
-void run_ccx(const std::filesystem::path& dir, const std::string& job) {
-  // One solver thread: CCX_NPROC_EQUATION_SOLVER=2 made its eigen phase erratically slow here.
-  const std::string command = fmt::format("cd '{}' && CCX_NPROC_EQUATION_SOLVER=1 OMP_NUM_THREADS=1 ccx -i {} > {}.log 2>&1",
-                                          dir.string(), job, job);
-  ASSERT_EQ(std::system(command.c_str()), 0) << "ccx failed, see " << (dir / (job + ".log"));
-}
-
-// The EIGENVALUE column of ccx's eigenvalue table [rad^2/s^2].
-std::vector<double> read_eigenvalues(const std::filesystem::path& dat) {
-  std::ifstream file(dat);
-  std::string line;
-  std::vector<double> values;
-  bool in_table = false;
-  while (std::getline(file, line)) {
-    if (line.find("E I G E N V A L U E   O U T P U T") != std::string::npos) in_table = true;
-    else if (line.find("P A R T I C I P A T I O N") != std::string::npos) break;
-    else if (in_table) {
-      std::istringstream in(line);
-      int mode = 0;
-      double eigenvalue = 0.0;
-      if (in >> mode >> eigenvalue) values.push_back(eigenvalue);
-    }
-  }
-  return values;
-}
-
-// Node displacements from *NODE PRINT U (node label order), node-interleaved.
-Eigen::VectorXd read_displacements(const std::filesystem::path& dat, Eigen::Index nodes) {
-  std::ifstream file(dat);
-  std::string line;
-  Eigen::VectorXd u = Eigen::VectorXd::Constant(3 * nodes, std::nan(""));
-  while (std::getline(file, line)) {
-    std::istringstream in(line);
-    long label = 0;
-    double x = 0, y = 0, z = 0;
-    if (in >> label >> x >> y >> z && label >= 1 && label <= nodes) u.segment<3>(3 * (label - 1)) << x, y, z;
-  }
-  return u;
-}
+void run_ccx(const std::filesystem::path& dir, const std::string& job) { ASSERT_TRUE(flexbody::test::run_ccx(dir, job)); }
 
 }  // namespace
 

@@ -484,6 +484,9 @@ void GeneralizedAlpha::advance(double h, double t1) {
         }
         // The coupled stabilised step with a sparse reduced matrix builds its own system (below).
         const bool sparse_coupled = stabilized && couple_ && sparse_core_ != nullptr;
+        // A floating-frame body's tangent and the dense matrix carry K_g: weigh it at this iterate, not at the last
+        // one evaluated (after a failed attempt, that one may be far off or not finite; helper review of e1a02b5).
+        if (system_.has_prestress()) system_.set_prestress(t1, q, v, mu, beta_prime);
         if (!sparse_coupled) solver_->factor(t1, q, v, qdd, mu, jacobian);
         if (stabilized) {
           if (!projected_->factor(jacobian, squared_scales_)) {  // Φ_q W Φ_qᵀ

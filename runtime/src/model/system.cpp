@@ -59,6 +59,11 @@ void System::check_marker(const Marker& m, const std::string& what) const {
   if (m.floating != model.floating() || (m.floating && m.modal_displacement.cols() != model.modes))
     throw std::invalid_argument(what + ": marker " + m.name + " was made for another formulation of body '" +
                                 bodies_[static_cast<std::size_t>(m.body)].name + "'");
+  // An interface marker books its loads on that interface's prestress cases: it must be this body's interface.
+  if (m.interface >= 0 && (m.interface >= static_cast<int>(model.interfaces.size()) ||
+                           m.y != model.interfaces[static_cast<std::size_t>(m.interface)].y_row))
+    throw std::invalid_argument(what + ": marker " + m.name + " names interface " + std::to_string(m.interface) +
+                                " of body '" + bodies_[static_cast<std::size_t>(m.body)].name + "', which it is not");
 }
 
 int System::add_body(const std::string& name, BodyModel model, const BodyState& initial) {

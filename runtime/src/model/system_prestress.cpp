@@ -8,6 +8,9 @@
 
 #include <Eigen/Geometry>
 
+#include <stdexcept>
+#include <string>
+
 namespace flexbody::runtime {
 
 void System::add_interface_load(const Body& b, const VectorRef& q_b, const Marker& m, const Eigen::VectorXd& g) const {
@@ -34,19 +37,42 @@ void System::add_interface_load(const Body& b, const VectorRef& q_b, const Marke
 std::string System::prestress_gap(int body) const {
   const Body& b = bodies_.at(static_cast<std::size_t>(body));
   if (!b.model.prestress) return "it has no geometric stiffness";
+  const Prestress& p = *b.model.prestress;
+  for (std::size_t c = 0; c < 6; ++c)  // a file may hold a subset of the cases (SCHEMA.md)
+    if (p.centrifugal[c] < 0)
+      return std::string("its body file lacks the case centrifugal:") + format::kCentrifugalCases[c] +
+             ", so its spin's prestress is incomplete";
   auto elsewhere = [&](const Marker& m) { return m.body == body && m.interface < 0; };
+  auto incomplete = [&](const Marker& m) {  // at an interface whose six cases are not all in the file
+    if (m.body != body || m.interface < 0) return false;
+    for (int k : p.interface_cases[static_cast<std::size_t>(m.interface)])
+      if (k < 0) return true;
+    return false;
+  };
   auto missing = [](const std::string& what, const Marker& m) {
     return what + " acts on it at " + m.name + ", which is not an interface, so its prestress leaves that load out";
   };
-  for (const Joint& j : joints_)
+  auto lacking = [](const std::string& what, const Marker& m) {
+    return what + " acts on it at " + m.name + ", whose six load cases its body file does not all hold";
+  };
+  for (const Joint& j : joints_) {
     if (elsewhere(j.first) || elsewhere(j.second)) return missing("joint '" + j.name + "'", elsewhere(j.first) ? j.first : j.second);
-  for (const PointForce& p : forces_)
-    if (elsewhere(p.marker)) return missing("a force", p.marker);
-  for (const PointTorque& p : torques_)
-    if (elsewhere(p.marker)) return missing("a torque", p.marker);
-  for (const SpringDamper& s : springs_)
+    if (incomplete(j.first) || incomplete(j.second)) return lacking("joint '" + j.name + "'", incomplete(j.first) ? j.first : j.second);
+  }
+  for (const PointForce& f : forces_) {
+    if (elsewhere(f.marker)) return missing("a force", f.marker);
+    if (incomplete(f.marker)) return lacking("a force", f.marker);
+  }
+  for (const PointTorque& t : torques_) {
+    if (elsewhere(t.marker)) return missing("a torque", t.marker);
+    if (incomplete(t.marker)) return lacking("a torque", t.marker);
+  }
+  for (const SpringDamper& s : springs_) {
     if (elsewhere(s.first) || elsewhere(s.second))
       return missing("spring '" + s.name + "'", elsewhere(s.first) ? s.first : s.second);
+    if (incomplete(s.first) || incomplete(s.second))
+      return lacking("spring '" + s.name + "'", incomplete(s.first) ? s.first : s.second);
+  }
   return {};
 }
 
@@ -66,6 +92,9 @@ void System::add_prestress_residual(double t, const Eigen::VectorXd& q, const Ei
 void System::update_prestress(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& lambda,
                               double lambda_scale, bool evaluate_joints) const {
   if (!has_prestress()) return;
+  if (lambda.size() != 0 && lambda.size() != constraint_count())
+    throw std::invalid_argument("set_prestress: " + std::to_string(lambda.size()) + " multipliers for " +
+                                std::to_string(constraint_count()) + " constraint rows (all rows, or none)");
   for (const Body& b : bodies_)
     if (b.model.prestress)
       for (InterfaceLoad& l : b.prestress.loads) l = InterfaceLoad{};
@@ -73,7 +102,7 @@ void System::update_prestress(double t, const Eigen::VectorXd& q, const Eigen::V
     return m.body != kGround && m.interface >= 0 && bodies_[static_cast<std::size_t>(m.body)].model.prestress != nullptr;
   };
   // The joints' reactions: the generalized force −Φ_qᵀ λ of each joint on each of its bodies.
-  if (lambda.size() == constraint_count()) {
+  if (lambda.size() != 0) {
     for (std::size_t k = 0; k < joints_.size(); ++k) {
       const Joint& j = joints_[k];
       if (!loaded(j.first) && !loaded(j.second)) continue;

@@ -49,6 +49,81 @@ void project_force(const Eigen::MatrixXd& known, const SparseMatrix& mass, Eigen
   x -= mw;
 }
 
+// Π: each rigid patch's nodes replaced by their least-squares rigid motion t + θ × d_i (d_i from the patch's
+// reference point), the Euclidean projector onto the displacements that move every patch rigidly. With r_i = t −
+// [d_i]× θ − u_i the normal equations are [n I, Dᵀ; D, Σ [d_i]×ᵀ[d_i]×] (t, θ) = (Σ u_i, Σ d_i × u_i), D = Σ [d_i]×.
+class RigidProjector {
+ public:
+  explicit RigidProjector(const RigidPatches& rigid) {
+    if (!rigid.patches.empty() && rigid.nodes == nullptr)
+      throw std::invalid_argument("rigid patches: the node coordinates are missing");
+    for (const RigidInterface& patch : rigid.patches) {
+      const Eigen::Index nodes = rigid.nodes->rows();
+      Patch p;
+      p.nodes = patch.nodes;
+      p.offsets.resize(3, patch.nodes.size());
+      Eigen::Matrix<double, 6, 6> normal = Eigen::Matrix<double, 6, 6>::Zero();
+      for (Eigen::Index a = 0; a < patch.nodes.size(); ++a) {
+        const Eigen::Index i = patch.nodes(a);
+        if (i < 0 || i >= nodes) throw std::invalid_argument("rigid patch: a node index is out of range");
+        const Eigen::Vector3d d = rigid.nodes->row(i).transpose() - patch.reference_point;
+        p.offsets.col(a) = d;
+        Eigen::Matrix<double, 3, 6> row;  // t − [d]× θ
+        row << Eigen::Matrix3d::Identity(), -skew(d);
+        normal.noalias() += row.transpose() * row;
+      }
+      p.normal = normal.ldlt();
+      if (p.normal.info() != Eigen::Success || !(p.normal.vectorD().minCoeff() > 1e-12 * p.normal.vectorD().maxCoeff()))
+        throw std::invalid_argument("rigid patch: its nodes lie on a line, so its rotation about that line is not fixed");
+      patches_.push_back(std::move(p));
+    }
+  }
+  [[nodiscard]] bool empty() const { return patches_.empty(); }
+  /// With the known fields W (M̄-orthonormal, rigid on every patch): Q, the Euclidean projector onto V = {Π u = u,
+  /// Wᵀ M̄ u = 0}, is Π less its part along U = Π M̄ W: Q x = Π x − U (UᵀU)⁻¹ Uᵀ Π x.
+  void set_known(const Eigen::MatrixXd& known, const SparseMatrix& scalar_mass_upper) {
+    along_.resize(known.rows(), known.cols());
+    for (Eigen::Index k = 0; k < known.cols(); ++k) {
+      apply_vector_mass(scalar_mass_upper, known.col(k), along_.col(k));
+      apply(along_.col(k));
+    }
+    gram_ = (along_.transpose() * along_).ldlt();
+  }
+  /// x ← Q x: a displacement into V, or a force to the one that represents it on V (Galerkin: vᵀ f for v in V).
+  void constrain(Eigen::Ref<Eigen::VectorXd> x) const {
+    apply(x);
+    if (along_.cols() > 0) x -= along_ * gram_.solve(along_.transpose() * x);
+  }
+  void apply(Eigen::Ref<Eigen::VectorXd> x) const {
+    for (const Patch& p : patches_) {
+      Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
+      for (Eigen::Index a = 0; a < p.nodes.size(); ++a) {
+        const Eigen::Vector3d u = x.segment<3>(3 * p.nodes(a)), d = p.offsets.col(a);
+        rhs.head<3>() += u;
+        rhs.tail<3>() += d.cross(u);
+      }
+      const Eigen::Matrix<double, 6, 1> motion = p.normal.solve(rhs);
+      for (Eigen::Index a = 0; a < p.nodes.size(); ++a)
+        x.segment<3>(3 * p.nodes(a)) = motion.head<3>() + motion.tail<3>().cross(p.offsets.col(a));
+    }
+  }
+
+ private:
+  static Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+    Eigen::Matrix3d s;
+    s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+    return s;
+  }
+  struct Patch {
+    Eigen::VectorXi nodes;
+    Eigen::Matrix3Xd offsets;
+    Eigen::LDLT<Eigen::Matrix<double, 6, 6>> normal;
+  };
+  std::vector<Patch> patches_;
+  Eigen::MatrixXd along_;  ///< U = Π M̄ W
+  Eigen::LDLT<Eigen::MatrixXd> gram_;
+};
+
 }  // namespace
 
 Eigen::MatrixXd unit_load_vectors(const RowMatrixX3d& nodes, const std::vector<LoadPoint>& points) {
@@ -116,7 +191,7 @@ namespace {
 Eigen::MatrixXd relieved_batch(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
                                const SparseMatrix& scalar_mass_upper, const Eigen::MatrixXd& known,
                                const Eigen::MatrixXd& loads, StaticCorrectionStats& stats,
-                               const std::function<std::string(Eigen::Index)>& name) {
+                               const std::function<std::string(Eigen::Index)>& name, const RigidProjector& rigid) {
   const Eigen::Index n = stiffness_upper.rows();
   const Eigen::Index s = loads.cols();
   // Preconditioned conjugate gradients on PᵀK̄P u = Pᵀ f, one iteration per load (column), the loads in lockstep: the
@@ -125,8 +200,19 @@ Eigen::MatrixXd relieved_batch(ShiftSolve& solve, const SparseMatrix& stiffness_
   Eigen::MatrixXd responses = Eigen::MatrixXd::Zero(n, s), b = loads, r(n, s), z(n, s), p(n, s);
   Eigen::VectorXd b_norm(s), rz(s), q(n), magnitude(n);
   std::vector<Eigen::Index> pending;  // loads to solve (again, in the second pass)
+  // Forces and displacements on the M̄-complement of the known fields: Pᵀ f and P u (inertia relief). With rigid
+  // patches, on V = {u moving each patch rigidly, Wᵀ M̄ u = 0} instead: Q f and Q u (Galerkin on V: the relief and the
+  // patches' constraint forces are what Q removes), the preconditioner Q (K̄ − σM̄)⁻¹ Q.
+  auto as_force = [&](Eigen::Ref<Eigen::VectorXd> x) {
+    if (rigid.empty()) project_force(known, scalar_mass_upper, x);
+    else rigid.constrain(x);
+  };
+  auto as_displacement = [&](Eigen::Ref<Eigen::VectorXd> x) {
+    if (rigid.empty()) project(known, scalar_mass_upper, x);
+    else rigid.constrain(x);
+  };
   for (Eigen::Index c = 0; c < s; ++c) {
-    project_force(known, scalar_mass_upper, b.col(c));
+    as_force(b.col(c));
     b_norm(c) = b.col(c).norm();
     if (b_norm(c) > 1e-14 * loads.col(c).norm()) pending.push_back(c);  // else wholly in the known fields: no response
   }
@@ -140,13 +226,13 @@ Eigen::MatrixXd relieved_batch(ShiftSolve& solve, const SparseMatrix& stiffness_
     for (Eigen::Index j = 0; j < count; ++j) {
       const Eigen::Index c = columns[static_cast<std::size_t>(j)];
       z.col(c) = block_out.col(j);
-      project(known, scalar_mass_upper, z.col(c));
+      as_displacement(z.col(c));
     }
   };
   for (int pass = 0; pass < 2 && !pending.empty(); ++pass) {  // a second pass restarts from u with the true residual
     for (const Eigen::Index c : pending) {
       apply_symmetric(stiffness_upper, responses.col(c), q);
-      project_force(known, scalar_mass_upper, q);
+      as_force(q);
       r.col(c) = b.col(c) - q;
     }
     std::vector<Eigen::Index> active;
@@ -168,7 +254,7 @@ Eigen::MatrixXd relieved_batch(ShiftSolve& solve, const SparseMatrix& stiffness_
           throw std::runtime_error(fmt::format("{}: the preconditioner is not positive definite", name(c)));
         ++stats.iterations;
         apply_symmetric(stiffness_upper, p.col(c), q);
-        project_force(known, scalar_mass_upper, q);
+        as_force(q);
         const double pq = p.col(c).dot(q);
         if (!(pq > 0.0))
           throw std::runtime_error(fmt::format("{}: the stiffness is not positive on the complement of the known "
@@ -190,7 +276,7 @@ Eigen::MatrixXd relieved_batch(ShiftSolve& solve, const SparseMatrix& stiffness_
     std::vector<Eigen::Index> failed;
     for (const Eigen::Index c : pending) {  // the true residual (the recursive one can drift from it)
       apply_symmetric_with_magnitude(stiffness_upper, responses.col(c), q, magnitude);
-      project_force(known, scalar_mass_upper, q);
+      as_force(q);
       const double true_residual = (b.col(c) - q).norm() / b_norm(c);
       const double floor = DBL_EPSILON * magnitude.norm() / b_norm(c);
       if (!(true_residual <= accepted_residual(floor))) {
@@ -212,7 +298,8 @@ Eigen::MatrixXd relieved_batch(ShiftSolve& solve, const SparseMatrix& stiffness_
 Eigen::MatrixXd relieved_static_responses(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
                                           const SparseMatrix& scalar_mass_upper, const Eigen::MatrixXd& known,
                                           const Eigen::MatrixXd& loads, StaticCorrectionStats& stats,
-                                          const std::vector<std::string>& names, std::string_view what) {
+                                          const std::vector<std::string>& names, std::string_view what,
+                                          const RigidPatches& rigid_patches) {
   const Eigen::Index n = stiffness_upper.rows(), s = loads.cols();
   const std::string prefix(what);
   if (solve.rows() != n || scalar_mass_upper.rows() * 3 != n || known.rows() != n || loads.rows() != n)
@@ -226,6 +313,10 @@ Eigen::MatrixXd relieved_static_responses(ShiftSolve& solve, const SparseMatrix&
   // Batches of kStaticBatch loads: the lockstep holds six n x batch work matrices besides the responses (and
   // CHOLMOD's block solve its own), so a part with many interfaces at 1M DOFs does not need gigabytes for them.
   Eigen::MatrixXd responses(n, s);
+  RigidProjector rigid(rigid_patches);
+  if (!rigid.empty()) rigid.set_known(known, scalar_mass_upper);
+  if (!rigid.empty() && rigid_patches.nodes->rows() * 3 != n)
+    throw std::invalid_argument(prefix + ": the rigid patches' mesh and the stiffness differ in size");
   for (Eigen::Index first = 0; first < s; first += kStaticBatch) {
     const Eigen::Index count = std::min(kStaticBatch, s - first);
     auto name = [&](Eigen::Index c) {
@@ -233,7 +324,7 @@ Eigen::MatrixXd relieved_static_responses(ShiftSolve& solve, const SparseMatrix&
                            : fmt::format("{}: {}", prefix, names[static_cast<std::size_t>(first + c)]);
     };
     responses.middleCols(first, count) = relieved_batch(solve, stiffness_upper, scalar_mass_upper, known,
-                                                        loads.middleCols(first, count), stats, name);
+                                                        loads.middleCols(first, count), stats, name, rigid);
   }
   return responses;
 }

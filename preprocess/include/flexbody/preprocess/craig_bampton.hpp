@@ -16,12 +16,7 @@
 
 namespace flexbody::preprocess {
 
-/// One rbe2 interface: its nodes move rigidly with 6 DOFs (translation and small rotation about
-/// `reference_point`).
-struct RigidInterface {
-  Eigen::VectorXi nodes;
-  Eigen::Vector3d reference_point = Eigen::Vector3d::Zero();  ///< same frame as the nodes
-};
+// RigidInterface (one rbe2 interface) is declared in interfaces.hpp: the static solves share it.
 
 struct CraigBamptonOptions {
   /// Normal modes with every interface clamped; 0 = not set (then fmax_hz decides).

@@ -48,6 +48,13 @@ inline constexpr double kDefaultSelectorTolerance = 1e-6;
 
 /// One interface as a body spec asks for it, in the input frame. build_interfaces takes metres;
 /// PrepOptions takes the input's length unit (that of --mesh-size) and converts.
+/// One rbe2 interface: its nodes move rigidly with 6 DOFs (translation and small rotation about
+/// `reference_point`).
+struct RigidInterface {
+  Eigen::VectorXi nodes;
+  Eigen::Vector3d reference_point = Eigen::Vector3d::Zero();  ///< same frame as the nodes
+};
+
 struct InterfaceRequest {
   std::string name;
   Selector select;

@@ -69,6 +69,12 @@ struct StaticCorrectionStats {
   double max_residual_to_floor = 0.0;
 };
 
+/// Patches a part holds rigid (its rbe2 interfaces), for relieved_static_responses.
+struct RigidPatches {
+  const RowMatrixX3d* nodes = nullptr;  ///< the mesh's node coordinates, which the patches' nodes index
+  std::vector<RigidInterface> patches;  ///< disjoint; reference points in the same frame as `nodes`
+};
+
 struct StaticCorrectionModes {
   /// n x (loads − dropped), M̄-orthonormal, M̄-orthogonal to `known`, K̄-orthogonal; ascending in their
   /// Ritz values.
@@ -85,12 +91,19 @@ struct StaticCorrectionModes {
 /// residual (added to what it holds). Errors begin with `what` and name the load by `names` (one per column) or
 /// by its number. Throws std::runtime_error if a solve does not converge (its true residual above max(1e-8,
 /// kResidualFloorFactor x its rounding floor)), std::invalid_argument for sizes that differ.
+///
+/// `rigid` lists patches (rbe2 interfaces, disjoint; nodes of `rigid.nodes`) that the part holds rigid: the responses are then sought among
+/// the displacements that move each patch rigidly, by the same conjugate gradients projected onto them (Π, each
+/// patch's nodes replaced by their least-squares rigid motion: the Euclidean projector, symmetric; the rigid-body
+/// fields of `known` lie in its range). A load on such a patch acts through its resultant and moment; the patch's own
+/// constraint forces (a hub holding a bore) are part of the solution.
 [[nodiscard]] Eigen::MatrixXd relieved_static_responses(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
                                                         const SparseMatrix& scalar_mass_upper,
                                                         const Eigen::MatrixXd& known, const Eigen::MatrixXd& loads,
                                                         StaticCorrectionStats& stats,
                                                         const std::vector<std::string>& names = {},
-                                                        std::string_view what = "static solve");
+                                                        std::string_view what = "static solve",
+                                                        const RigidPatches& rigid = {});
 
 /// Residual static correction modes (see the top of this file). `solve` is a factorization of K̄ − σM̄
 /// with σ <= 0 (its shift as set; for σ < 0 it should deflate the rigid-body fields); `known` (n x w) must be

@@ -179,7 +179,8 @@ TEST(GeometricStiffnessInput, WrongSizesAreRefused) {
 // An rbe2 patch held rigid in the static solves (the prestress of a part held at it, issue 29): the spun bar with its
 // root face rigid. The response moves that face rigidly (its least-squares rigid fit leaves 1e-12 of the largest
 // displacement), stays free of rigid-body motion (Wᵀ M̄ u = 0), and differs from the free bar's, whose face the
-// Poisson effect and the end load deform (more than 1e-3 of the largest displacement off rigid).
+// Poisson effect and the end load deform (more than 1e-3 of the largest displacement off rigid); and it is the
+// solution of the constrained problem written out densely (1e-8 of the largest displacement).
 TEST(GeometricStiffnessRigidPatch, TheHeldFaceMovesRigidly) {
   const SpunBar bar(1);
   const fp::LoadPoint root = bar.end_face("root", -kLength / 2);
@@ -223,4 +224,45 @@ TEST(GeometricStiffnessRigidPatch, TheHeldFaceMovesRigidly) {
   for (Eigen::Index c = 0; c < bar.loads.cols(); ++c)
     if (bar.responses.col(c).cwiseAbs().maxCoeff() > 0.0) largest = std::max(largest, off_rigid(bar.responses.col(c)));
   EXPECT_GT(largest, 1e-3);
+
+  // The constrained problem itself, dense and independent of the projected iteration: unknowns u, the face's rigid
+  // motion (t, θ), the face's constraint forces λ (u_i = t + θ × d_i) and the relief accelerations a (Wᵀ M̄ u = 0):
+  //   K̄ u + Cᵀ λ + M̄ W a = f,  C_mᵀ λ = 0 (the forces on the face balance),  C u + C_m (t, θ) = 0,  Wᵀ M̄ u = 0.
+  const Eigen::Index n = bar.stiffness.rows(), k = root.nodes.size(), w = bar.rigid.cols();
+  const Eigen::Index size = n + 6 + 3 * k + w;
+  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(size, size);
+  kkt.topLeftCorner(n, n) = Eigen::MatrixXd(fp::full_from_upper(bar.stiffness));
+  Eigen::MatrixXd m_w(n, w);
+  for (Eigen::Index c = 0; c < w; ++c) fp::apply_vector_mass(bar.scalar_mass, bar.rigid.col(c), m_w.col(c));
+  for (Eigen::Index a = 0; a < k; ++a) {
+    const Eigen::Vector3d d = bar.nodes.row(root.nodes(a)).transpose() - root.reference_point;
+    Eigen::Matrix<double, 3, 6> master;  // −(t + θ × d)
+    master << -Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, d.z(), -d.y()), Eigen::Vector3d(-d.z(), 0, d.x()),
+        Eigen::Vector3d(d.y(), -d.x(), 0);
+    const Eigen::Index row = n + 6 + 3 * a;
+    kkt.block<3, 3>(row, 3 * root.nodes(a)) = Eigen::Matrix3d::Identity();
+    kkt.block<3, 3>(3 * root.nodes(a), row) = Eigen::Matrix3d::Identity();
+    kkt.block<3, 6>(row, n) = master;
+    kkt.block<6, 3>(n, row) = master.transpose();
+  }
+  kkt.block(0, n + 6 + 3 * k, n, w) = m_w;
+  kkt.block(n + 6 + 3 * k, 0, w, n) = m_w.transpose();
+  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(kkt);
+  for (Eigen::Index c = 0; c < bar.loads.cols(); ++c) {
+    SCOPED_TRACE(c);
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(size);
+    rhs.head(n) = bar.loads.col(c);
+    const Eigen::VectorXd reference = lu.solve(rhs).head(n);
+    if (reference.cwiseAbs().maxCoeff() == 0.0) continue;
+    EXPECT_LT((held.col(c) - reference).cwiseAbs().maxCoeff(), 1e-8 * reference.cwiseAbs().maxCoeff());
+  }
+  // Π is a projector only for disjoint patches: a node in two of them, or on a line of nodes, is refused.
+  fp::RigidPatches twice{&bar.nodes, {rigid.patches[0], rigid.patches[0]}};
+  EXPECT_THROW((void)fp::relieved_static_responses(*solve, bar.stiffness, bar.scalar_mass, bar.rigid, bar.loads, stats, {},
+                                                   "twice", twice),
+               std::invalid_argument);
+  fp::RigidPatches line{&bar.nodes, {fp::RigidInterface{root.nodes.head(1), root.reference_point}}};
+  EXPECT_THROW((void)fp::relieved_static_responses(*solve, bar.stiffness, bar.scalar_mass, bar.rigid, bar.loads, stats, {},
+                                                   "line", line),
+               std::invalid_argument);
 }

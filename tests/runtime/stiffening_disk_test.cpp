@@ -110,6 +110,7 @@ TEST(GeometricStiffening, TheSpinningDiskAgreesWithCalculiX) {
   const flexbody::format::BodyData& body = disk().data;
   const flexbody::format::Interface& bore = body.interfaces[0];
   const double omega_1 = 2 * std::numbers::pi * body.modes.fixed_interface_frequencies_hz(0);
+  std::vector<double> ccx_rest, ours_rest;
   for (const auto& [ratio, tolerance] : std::vector<std::pair<double, double>>{{0.0, 1e-5}, {0.5, 1e-3}, {1.0, 1e-2}}) {
     const double spin = ratio * omega_1;
     const std::vector<double> ccx = flexbody::test::ccx_frequencies(
@@ -120,5 +121,17 @@ TEST(GeometricStiffening, TheSpinningDiskAgreesWithCalculiX) {
     const std::vector<double> ours = runtime_frequencies(spin);
     for (std::size_t k = 0; k < 8; ++k)
       EXPECT_NEAR(ours[k] / ccx[k], 1.0, tolerance) << "mode " << k + 1 << " at " << ratio << " omega_1";
+    if (ratio == 0.0) {
+      ccx_rest = ccx;
+      ours_rest = ours;
+    }
+    // The stiffening itself, (ω² − ω₀²)/Ω² per mode (1.38 for the first): the frequencies' ratios dilute its error
+    // where it is small beside ω₀² (the higher modes). Measured within 0.3 % at 0.5 ω₁; before the fix, 25-33 % off.
+    if (ratio == 0.5)
+      for (std::size_t k = 0; k < 8; ++k) {
+        const double theirs = (ccx[k] * ccx[k] - ccx_rest[k] * ccx_rest[k]) / (spin * spin);
+        EXPECT_NEAR((ours[k] * ours[k] - ours_rest[k] * ours_rest[k]) / (spin * spin) / theirs, 1.0, 0.02)
+            << "mode " << k + 1;
+      }
   }
 }

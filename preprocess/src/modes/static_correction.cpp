@@ -22,6 +22,9 @@ namespace {
 // the load is refused. The check is that of the eigenmodes (eigen_residual.hpp): ‖b − PᵀK̄u‖₂ / ‖b‖₂ <=
 // max(1e-8, kResidualFloorFactor · floor), floor = ε ‖|K̄||u|‖₂ / ‖b‖₂, the rounding error of forming K̄u. The
 // projection adds no cancellation (K̄u is M̄W-free at the solution), so its own rounding, ε‖b‖-sized, is left out.
+// With rigid patches (relieved_static_responses) Q removes the patches' constraint forces from K̄u too, which can be
+// much larger than ‖Qf‖; the floor, from ‖|K̄||u|‖ >= ‖K̄u‖, covers their rounding. There the preconditioned spectrum
+// is no longer bounded by 1 and the iterations grow with the patches' size (66 per load on a disk's bore).
 constexpr double kSolveTolerance = 1e-10;
 constexpr int kMaxIterations = 500;
 // A combination of M̄-normalised responses whose M̄-norm is below 1e-6 adds nothing the others and the known
@@ -49,32 +52,41 @@ void project_force(const Eigen::MatrixXd& known, const SparseMatrix& mass, Eigen
   x -= mw;
 }
 
-// Π: each rigid patch's nodes replaced by their least-squares rigid motion t + θ × d_i (d_i from the patch's
-// reference point), the Euclidean projector onto the displacements that move every patch rigidly. With r_i = t −
-// [d_i]× θ − u_i the normal equations are [n I, Dᵀ; D, Σ [d_i]×ᵀ[d_i]×] (t, θ) = (Σ u_i, Σ d_i × u_i), D = Σ [d_i]×.
+// Π: each rigid patch's nodes replaced by their least-squares rigid motion t + θ × d_i, the Euclidean projector onto
+// the displacements that move every patch rigidly (it does not depend on the point the motion is written about). With
+// d_i from the patch's centroid, Σ d_i = 0 and the normal equations split: n t = Σ u_i, J θ = Σ d_i × u_i with
+// J = Σ (|d_i|² I − d_i d_iᵀ), the patch's polar tensor (unit weights).
 class RigidProjector {
  public:
-  explicit RigidProjector(const RigidPatches& rigid) {
-    if (!rigid.patches.empty() && rigid.nodes == nullptr)
-      throw std::invalid_argument("rigid patches: the node coordinates are missing");
+  RigidProjector(const RigidPatches& rigid, Eigen::Index dofs) {
+    if (rigid.patches.empty()) return;
+    if (rigid.nodes == nullptr) throw std::invalid_argument("rigid patches: the node coordinates are missing");
+    const Eigen::Index nodes = rigid.nodes->rows();
+    if (3 * nodes != dofs) throw std::invalid_argument("rigid patches: their mesh and the stiffness differ in size");
+    std::vector<char> taken(static_cast<std::size_t>(nodes), 0);  // Π is a projector only for disjoint patches
     for (const RigidInterface& patch : rigid.patches) {
-      const Eigen::Index nodes = rigid.nodes->rows();
       Patch p;
       p.nodes = patch.nodes;
-      p.offsets.resize(3, patch.nodes.size());
-      Eigen::Matrix<double, 6, 6> normal = Eigen::Matrix<double, 6, 6>::Zero();
-      for (Eigen::Index a = 0; a < patch.nodes.size(); ++a) {
-        const Eigen::Index i = patch.nodes(a);
+      if (p.nodes.size() == 0) throw std::invalid_argument("rigid patch: no nodes");
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (Eigen::Index a = 0; a < p.nodes.size(); ++a) {
+        const Eigen::Index i = p.nodes(a);
         if (i < 0 || i >= nodes) throw std::invalid_argument("rigid patch: a node index is out of range");
-        const Eigen::Vector3d d = rigid.nodes->row(i).transpose() - patch.reference_point;
-        p.offsets.col(a) = d;
-        Eigen::Matrix<double, 3, 6> row;  // t − [d]× θ
-        row << Eigen::Matrix3d::Identity(), -skew(d);
-        normal.noalias() += row.transpose() * row;
+        if (taken[static_cast<std::size_t>(i)]++) throw std::invalid_argument("rigid patches: a node is in two of them (or twice in one)");
+        centroid += rigid.nodes->row(i).transpose();
       }
-      p.normal = normal.ldlt();
-      if (p.normal.info() != Eigen::Success || !(p.normal.vectorD().minCoeff() > 1e-12 * p.normal.vectorD().maxCoeff()))
+      centroid /= static_cast<double>(p.nodes.size());
+      p.offsets.resize(3, p.nodes.size());
+      Eigen::Matrix3d polar = Eigen::Matrix3d::Zero();
+      for (Eigen::Index a = 0; a < p.nodes.size(); ++a) {
+        const Eigen::Vector3d d = rigid.nodes->row(p.nodes(a)).transpose() - centroid;
+        p.offsets.col(a) = d;
+        polar += d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose();
+      }
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> spectrum(polar);
+      if (!(spectrum.eigenvalues()(0) > 1e-10 * spectrum.eigenvalues()(2)))
         throw std::invalid_argument("rigid patch: its nodes lie on a line, so its rotation about that line is not fixed");
+      p.polar = polar.ldlt();
       patches_.push_back(std::move(p));
     }
   }
@@ -88,6 +100,9 @@ class RigidProjector {
       apply(along_.col(k));
     }
     gram_ = (along_.transpose() * along_).ldlt();
+    // WᵀU = Wᵀ M̄ W = I: UᵀU is positive definite whenever W is M̄-orthonormal and rigid on the patches.
+    if (gram_.info() != Eigen::Success || !(gram_.vectorD().minCoeff() > 0.0))
+      throw std::invalid_argument("rigid patches: the known fields do not move the patches rigidly");
   }
   /// x ← Q x: a displacement into V, or a force to the one that represents it on V (Galerkin: vᵀ f for v in V).
   void constrain(Eigen::Ref<Eigen::VectorXd> x) const {
@@ -96,28 +111,22 @@ class RigidProjector {
   }
   void apply(Eigen::Ref<Eigen::VectorXd> x) const {
     for (const Patch& p : patches_) {
-      Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero(), moment = Eigen::Vector3d::Zero();
       for (Eigen::Index a = 0; a < p.nodes.size(); ++a) {
-        const Eigen::Vector3d u = x.segment<3>(3 * p.nodes(a)), d = p.offsets.col(a);
-        rhs.head<3>() += u;
-        rhs.tail<3>() += d.cross(u);
+        const Eigen::Vector3d u = x.segment<3>(3 * p.nodes(a));
+        sum += u;
+        moment += p.offsets.col(a).cross(u);
       }
-      const Eigen::Matrix<double, 6, 1> motion = p.normal.solve(rhs);
-      for (Eigen::Index a = 0; a < p.nodes.size(); ++a)
-        x.segment<3>(3 * p.nodes(a)) = motion.head<3>() + motion.tail<3>().cross(p.offsets.col(a));
+      const Eigen::Vector3d t = sum / static_cast<double>(p.nodes.size()), theta = p.polar.solve(moment);
+      for (Eigen::Index a = 0; a < p.nodes.size(); ++a) x.segment<3>(3 * p.nodes(a)) = t + theta.cross(p.offsets.col(a));
     }
   }
 
  private:
-  static Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-    Eigen::Matrix3d s;
-    s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-    return s;
-  }
   struct Patch {
     Eigen::VectorXi nodes;
-    Eigen::Matrix3Xd offsets;
-    Eigen::LDLT<Eigen::Matrix<double, 6, 6>> normal;
+    Eigen::Matrix3Xd offsets;  ///< from the patch's centroid
+    Eigen::LDLT<Eigen::Matrix3d> polar;
   };
   std::vector<Patch> patches_;
   Eigen::MatrixXd along_;  ///< U = Π M̄ W
@@ -214,7 +223,8 @@ Eigen::MatrixXd relieved_batch(ShiftSolve& solve, const SparseMatrix& stiffness_
   for (Eigen::Index c = 0; c < s; ++c) {
     as_force(b.col(c));
     b_norm(c) = b.col(c).norm();
-    if (b_norm(c) > 1e-14 * loads.col(c).norm()) pending.push_back(c);  // else wholly in the known fields: no response
+    // Else wholly in the known fields (or, with rigid patches, self-equilibrated on a patch): no response.
+    if (b_norm(c) > 1e-14 * loads.col(c).norm()) pending.push_back(c);
   }
   Eigen::MatrixXd block_in, block_out;
   auto precondition = [&](const std::vector<Eigen::Index>& columns) {  // z = P (K̄ − σM̄)⁻¹ r for these columns
@@ -313,10 +323,8 @@ Eigen::MatrixXd relieved_static_responses(ShiftSolve& solve, const SparseMatrix&
   // Batches of kStaticBatch loads: the lockstep holds six n x batch work matrices besides the responses (and
   // CHOLMOD's block solve its own), so a part with many interfaces at 1M DOFs does not need gigabytes for them.
   Eigen::MatrixXd responses(n, s);
-  RigidProjector rigid(rigid_patches);
+  RigidProjector rigid(rigid_patches, n);
   if (!rigid.empty()) rigid.set_known(known, scalar_mass_upper);
-  if (!rigid.empty() && rigid_patches.nodes->rows() * 3 != n)
-    throw std::invalid_argument(prefix + ": the rigid patches' mesh and the stiffness differ in size");
   for (Eigen::Index first = 0; first < s; first += kStaticBatch) {
     const Eigen::Index count = std::min(kStaticBatch, s - first);
     auto name = [&](Eigen::Index c) {

@@ -92,11 +92,11 @@ struct StaticCorrectionModes {
 /// by its number. Throws std::runtime_error if a solve does not converge (its true residual above max(1e-8,
 /// kResidualFloorFactor x its rounding floor)), std::invalid_argument for sizes that differ.
 ///
-/// `rigid` lists patches (rbe2 interfaces, disjoint; nodes of `rigid.nodes`) that the part holds rigid: the responses are then sought among
-/// the displacements that move each patch rigidly, by the same conjugate gradients projected onto them (Π, each
-/// patch's nodes replaced by their least-squares rigid motion: the Euclidean projector, symmetric; the rigid-body
-/// fields of `known` lie in its range). A load on such a patch acts through its resultant and moment; the patch's own
-/// constraint forces (a hub holding a bore) are part of the solution.
+/// `rigid` lists patches (rbe2 interfaces of `rigid.nodes`; disjoint, a node in two is refused) that the part holds
+/// rigid: the responses are then sought in V, the displacements that move each patch rigidly and hold no rigid-body
+/// field, by the same conjugate gradients with forces and displacements both mapped by Q, the Euclidean projector onto
+/// V (Galerkin: Q K̄ u = Q f). A load on such a patch acts through its resultant and moment; the patch's own constraint
+/// forces (a hub holding a bore) are what Q removes. Throws std::invalid_argument for a patch on a line.
 [[nodiscard]] Eigen::MatrixXd relieved_static_responses(ShiftSolve& solve, const SparseMatrix& stiffness_upper,
                                                         const SparseMatrix& scalar_mass_upper,
                                                         const Eigen::MatrixXd& known, const Eigen::MatrixXd& loads,

@@ -27,8 +27,6 @@ constexpr double kLength = 0.2;
 
 fp::TetMesh beam() { return flexbody::test::box_mesh(kLength, 0.02, 0.02, 20, 2, 2); }
 
-using flexbody::test::ccx_required;
-using flexbody::test::have_ccx;
 using flexbody::test::read_displacements;
 using flexbody::test::read_eigenvalues;
 
@@ -45,10 +43,7 @@ void run_ccx(const std::filesystem::path& dir, const std::string& job) { ASSERT_
 }  // namespace
 
 TEST(CalculiX, FrequenciesWithTheOnePointMassAgreeTo1e6) {
-  if (!have_ccx()) {
-    if (ccx_required()) FAIL() << "ccx not installed but FLEXBODY_REQUIRE_CCX is set";
-    GTEST_SKIP() << "ccx not installed (scripts/setup.sh installs calculix-ccx)";
-  }
+  FLEXBODY_REQUIRE_CCX_OR_SKIP();
   const fp::TetMesh mesh = beam();
   const auto dir = flexbody::test::scratch_dir();
   write_inp(dir / "modes.inp", mesh.nodes, mesh.tets, "", "*FREQUENCY\n14\n");
@@ -68,10 +63,7 @@ TEST(CalculiX, FrequenciesWithTheOnePointMassAgreeTo1e6) {
 }
 
 TEST(CalculiX, StaticDeflectionOfTheCantileverAgreesTo1e6) {
-  if (!have_ccx()) {
-    if (ccx_required()) FAIL() << "ccx not installed but FLEXBODY_REQUIRE_CCX is set";
-    GTEST_SKIP() << "ccx not installed (scripts/setup.sh installs calculix-ccx)";
-  }
+  FLEXBODY_REQUIRE_CCX_OR_SKIP();
   const fp::TetMesh mesh = beam();
   const Eigen::Index n = mesh.node_count();
   std::vector<Eigen::Index> clamped, tip;
@@ -124,10 +116,7 @@ TEST(CalculiX, StaticDeflectionOfTheCantileverAgreesTo1e6) {
 // ccx's; with the same 4-point mass (Tet10MassRule::four_point) they agree to 1e-8 for the first pair and to 1.3e-6
 // at most (the next, close pair, 0.16 % apart: ccx's Lanczos tolerance beside its 7 printed digits, 5e-7).
 TEST(CalculiX, FrequenciesOfQuadraticTetrahedraWithTheFourPointMass) {
-  if (!have_ccx()) {
-    if (ccx_required()) FAIL() << "ccx not installed but FLEXBODY_REQUIRE_CCX is set";
-    GTEST_SKIP() << "ccx not installed (scripts/setup.sh installs calculix-ccx)";
-  }
+  FLEXBODY_REQUIRE_CCX_OR_SKIP();
   const fp::Tet10Mesh mesh = fp::quadratic_mesh(beam());
   const auto dir = flexbody::test::scratch_dir();
   write_inp(dir / "modes10.inp", mesh.nodes, mesh.tets, "", "*FREQUENCY\n14\n");

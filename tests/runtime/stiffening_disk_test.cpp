@@ -103,10 +103,7 @@ std::vector<double> runtime_frequencies(double spin) {
 // spin softening, the stiffening of the clamped bore and ccx's nonlinear geometry (the rim expands by 0.7 % of the
 // radius there) all show. Asserted: 1e-5, 1e-3 and issue 29's 1 %.
 TEST(GeometricStiffening, TheSpinningDiskAgreesWithCalculiX) {
-  if (!flexbody::test::have_ccx()) {
-    if (flexbody::test::ccx_required()) FAIL() << "ccx not installed but FLEXBODY_REQUIRE_CCX is set";
-    GTEST_SKIP() << "ccx not installed (scripts/setup.sh installs calculix-ccx)";
-  }
+  FLEXBODY_REQUIRE_CCX_OR_SKIP();
   const flexbody::format::BodyData& body = disk().data;
   const flexbody::format::Interface& bore = body.interfaces[0];
   const double omega_1 = 2 * std::numbers::pi * body.modes.fixed_interface_frequencies_hz(0);

@@ -16,6 +16,16 @@ namespace flexbody::test {
 /// comparisons with an independent code cannot silently stop running.
 [[nodiscard]] bool ccx_required();
 
+/// At the top of a test that needs ccx: skips it where ccx is missing, or fails it where CI requires ccx.
+#define FLEXBODY_REQUIRE_CCX_OR_SKIP()                                              \
+  do {                                                                              \
+    if (!::flexbody::test::have_ccx()) {                                            \
+      if (::flexbody::test::ccx_required())                                         \
+        FAIL() << "ccx not installed but FLEXBODY_REQUIRE_CCX is set";              \
+      GTEST_SKIP() << "ccx not installed (scripts/setup.sh installs calculix-ccx)"; \
+    }                                                                               \
+  } while (false)
+
 /// The mesh (C3D4, or C3D10 for 10 nodes per element: ccx's node order is Abaqus', and the body file's) with node sets
 /// NALL and element set EALL, one isotropic material STEEL on EALL, then `rest` verbatim (boundary conditions, steps).
 void write_inp(const std::filesystem::path& path, const Eigen::Ref<const Eigen::MatrixXd>& nodes,

@@ -808,17 +808,23 @@ JointReaction System::joint_reaction(std::size_t joint, double t, const Eigen::V
   const Eigen::VectorXd q1 = body_coordinates(q, j.first.body);
   const JointEvaluation e = evaluate_joint(j, t, q1, body_coordinates(q, j.second.body));
   const Eigen::VectorXd generalized = -e.jacobian_first.transpose() * lambda.segment(joint_row(joint), j.rows());
-  JointReaction r;
-  r.force = generalized.head<3>();
+  return wrench(bodies_[static_cast<std::size_t>(j.first.body)], q1, generalized, marker_position(j.first, q1));
+}
+
+JointReaction System::wrench(const Body& b, const VectorRef& q_b, const Eigen::VectorXd& g,
+                             const Eigen::Vector3d& point) {
+  JointReaction w;
+  w.force = g.head<3>();
+  // The moment about τ: the virtual work of a rigid rotation δθ of the whole body.
   Eigen::Vector3d about_tau = Eigen::Vector3d::Zero();
-  if (model(j.first.body).floating()) {  // δp = ½ E(p)ᵀ δθ, η unchanged by a rigid rotation
-    about_tau = 0.5 * euler_global_velocity_matrix(q1.segment<4>(3)) * generalized.segment<4>(3);
+  if (b.model.floating()) {  // δp = ½ E(p)ᵀ δθ, η unchanged by a rigid rotation
+    about_tau = 0.5 * euler_global_velocity_matrix(q_b.segment<4>(3)) * g.segment<4>(3);
   } else {
-    for (Eigen::Index k = 1; k < q1.size() / 3; ++k)  // the columns a_j of A, then the fields ξ_f: 3-blocks after τ
-      about_tau += q1.segment<3>(3 * k).cross(generalized.segment<3>(3 * k));
+    for (Eigen::Index k = 1; k < q_b.size() / 3; ++k)  // the columns a_j of A, then the fields ξ_f: 3-blocks after τ
+      about_tau += q_b.segment<3>(3 * k).cross(g.segment<3>(3 * k));
   }
-  r.moment = about_tau - (marker_position(j.first, q1) - q1.head<3>()).cross(r.force);
-  return r;
+  w.moment = about_tau - (point - q_b.head<3>()).cross(w.force);
+  return w;
 }
 
 Energies System::energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {

@@ -13,27 +13,6 @@
 
 namespace flexbody::runtime {
 
-void System::add_interface_load(const Body& b, const VectorRef& q_b, const Marker& m, const Eigen::VectorXd& g) const {
-  // The wrench of the generalized force g on the body: its force is g_τ; its moment about τ is the virtual work of a
-  // rigid rotation δθ of the whole body (joint_reaction): Σ_k q_k × g_k over the 3-blocks after τ on a GCMS body,
-  // ½ E(p) g_p = ½ A Ḡ(p) g_p on a floating-frame one. Both go to body axes, the moment about the interface's point.
-  const Eigen::Vector3d force = g.head<3>();
-  Eigen::Vector3d about_tau = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d a;
-  if (b.model.floating()) {
-    const Eigen::Vector4d p = q_b.segment<4>(3);
-    a = euler_rotation(p);
-    about_tau = 0.5 * a * (euler_body_velocity_matrix(p) * g.segment<4>(3));
-  } else {
-    a = orientation_of(q_b);
-    for (Eigen::Index k = 1; k < q_b.size() / 3; ++k) about_tau += q_b.segment<3>(3 * k).cross(g.segment<3>(3 * k));
-  }
-  const Eigen::Vector3d moment = about_tau - (marker_position(m, q_b) - q_b.head<3>()).cross(force);
-  InterfaceLoad& load = b.prestress.loads[static_cast<std::size_t>(m.interface)];
-  load.force += a.transpose() * force;
-  load.moment += a.transpose() * moment;
-}
-
 std::string System::prestress_gap(int body) const {
   const Body& b = bodies_.at(static_cast<std::size_t>(body));
   if (!b.model.prestress) return "it has no geometric stiffness";
@@ -95,9 +74,16 @@ void System::update_prestress(double t, const Eigen::VectorXd& q, const Eigen::V
   if (lambda.size() != 0 && lambda.size() != constraint_count())
     throw std::invalid_argument("set_prestress: " + std::to_string(lambda.size()) + " multipliers for " +
                                 std::to_string(constraint_count()) + " constraint rows (all rows, or none)");
-  for (const Body& b : bodies_)
-    if (b.model.prestress)
-      for (InterfaceLoad& l : b.prestress.loads) l = InterfaceLoad{};
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    const Body& b = bodies_[i];
+    if (!b.model.prestress) continue;
+    for (InterfaceLoad& l : b.prestress.loads) l = InterfaceLoad{};
+    b.prestress.orientation = orientation(static_cast<int>(i), q);  // the loads go to body axes
+  }
+  auto add_force = [&](const Marker& m, const Eigen::Vector3d& force) {  // world axes, at marker m
+    PrestressState& state = bodies_[static_cast<std::size_t>(m.body)].prestress;
+    state.loads[static_cast<std::size_t>(m.interface)].force += state.orientation.transpose() * force;
+  };
   auto loaded = [&](const Marker& m) {  // a marker at an interface of a prestressed body
     return m.body != kGround && m.interface >= 0 && bodies_[static_cast<std::size_t>(m.body)].model.prestress != nullptr;
   };
@@ -114,40 +100,34 @@ void System::update_prestress(double t, const Eigen::VectorXd& q, const Eigen::V
         const Body& b = bodies_[static_cast<std::size_t>(m.body)];
         const Eigen::MatrixXd& jacobian = side == 0 ? e.jacobian_first : e.jacobian_second;
         b.prestress.generalized.noalias() = -lambda_scale * (jacobian.transpose() * lambda_j);
-        add_interface_load(b, body_view(q, m.body), m, b.prestress.generalized);
+        const VectorRef q_b = body_view(q, m.body);
+        const JointReaction w = wrench(b, q_b, b.prestress.generalized, marker_position(m, q_b));
+        InterfaceLoad& load = b.prestress.loads[static_cast<std::size_t>(m.interface)];
+        load.force += b.prestress.orientation.transpose() * w.force;
+        load.moment += b.prestress.orientation.transpose() * w.moment;
       }
     }
   }
-  for (const PointForce& p : forces_) {
-    if (!loaded(p.marker)) continue;
-    const Body& b = bodies_[static_cast<std::size_t>(p.marker.body)];
-    b.prestress.loads[static_cast<std::size_t>(p.marker.interface)].force +=
-        orientation(p.marker.body, q).transpose() * p.force(t);
-  }
+  for (const PointForce& p : forces_)
+    if (loaded(p.marker)) add_force(p.marker, p.force(t));
   for (const PointTorque& p : torques_) {
     if (!loaded(p.marker)) continue;
-    const Body& b = bodies_[static_cast<std::size_t>(p.marker.body)];
-    b.prestress.loads[static_cast<std::size_t>(p.marker.interface)].moment +=
-        orientation(p.marker.body, q).transpose() * p.torque(t);
+    PrestressState& state = bodies_[static_cast<std::size_t>(p.marker.body)].prestress;
+    state.loads[static_cast<std::size_t>(p.marker.interface)].moment += state.orientation.transpose() * p.torque(t);
   }
   for (std::size_t k = 0; k < springs_.size(); ++k) {
     const SpringDamper& s = springs_[k];
     if (!loaded(s.first) && !loaded(s.second)) continue;
     const Eigen::Vector3d force = spring_force(k, q, v);  // on the first marker
-    for (int side = 0; side < 2; ++side) {
-      const Marker& m = side == 0 ? s.first : s.second;
-      if (!loaded(m)) continue;
-      const Body& b = bodies_[static_cast<std::size_t>(m.body)];
-      b.prestress.loads[static_cast<std::size_t>(m.interface)].force +=
-          orientation(m.body, q).transpose() * (side == 0 ? force : Eigen::Vector3d(-force));
-    }
+    if (loaded(s.first)) add_force(s.first, force);
+    if (loaded(s.second)) add_force(s.second, -force);
   }
   for (std::size_t i = 0; i < bodies_.size(); ++i) {
     const Body& b = bodies_[i];
     if (!b.model.prestress) continue;
     const int body = static_cast<int>(i);
-    const Eigen::Vector3d omega_bar = orientation(body, q).transpose() * angular_velocity(body, q, v);
     PrestressState& state = b.prestress;
+    const Eigen::Vector3d omega_bar = state.orientation.transpose() * angular_velocity(body, q, v);
     runtime::prestress_weights(*b.model.prestress, omega_bar, state.loads, state.weights);
     state.active = !state.weights.isZero(0.0);
     weighted_sum(b.model.floating() ? b.model.floating_frame->prestress : b.model.prestress->matrices, state.weights,

@@ -282,6 +282,7 @@ class System {
   /// A prestressed body's weights and their sum, and scratch for the loads at its interfaces.
   struct PrestressState {
     Eigen::VectorXd weights;           ///< λ, one per case
+    Eigen::Matrix3d orientation;       ///< A at the last update: body axes of the loads
     std::vector<InterfaceLoad> loads;  ///< per interface, body axes
     /// Σ λ_k Ĝ_k ((4 + n_f) square; its field block acts on ξ̄) on a GCMS body, Σ λ_k K_g,k (n_m square) on a
     /// floating-frame one.
@@ -310,8 +311,11 @@ class System {
   /// Adds `sign` times the geometric stiffness's forces −K_g ξ̄ (−K_g η) of body b at q to its slice f_b, if its weights
   /// are set.
   void add_prestress_forces(const Body& b, const Eigen::VectorXd& q, Eigen::Ref<Eigen::VectorXd> f_b, double sign) const;
-  /// Adds the wrench of generalized force `g` on body b (coordinates q_b) to the load at marker m's interface.
-  void add_interface_load(const Body& b, const VectorRef& q_b, const Marker& m, const Eigen::VectorXd& g) const;
+  /// The wrench of a generalized force `g` on body b (coordinates q_b), world axes: its force g_τ and its moment about
+  /// `point`, from the virtual work of a rigid translation and rotation of the whole body (joint_reaction, and the
+  /// prestress's loads at interfaces).
+  [[nodiscard]] static JointReaction wrench(const Body& b, const VectorRef& q_b, const Eigen::VectorXd& g,
+                                            const Eigen::Vector3d& point);
   /// Spring k's force on its first marker (its negative acts on the second), global frame [N]: zero for coincident
   /// markers.
   [[nodiscard]] Eigen::Vector3d spring_force(std::size_t k, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const;

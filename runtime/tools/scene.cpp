@@ -64,6 +64,14 @@ std::function<double(double)> ramped_angle(double speed, double ramp) {
   };
 }
 
+// Its φ̇ [rad/s], so that the constraints' time derivative is exact (joint.hpp: Joint::angle_rate).
+std::function<double(double)> ramped_angle_rate(double speed, double ramp) {
+  return [speed, ramp](double t) {
+    if (ramp <= 0.0 || t >= ramp) return speed;
+    return 0.5 * speed * (1.0 - std::cos(std::numbers::pi * t / ramp));
+  };
+}
+
 }  // namespace
 
 Scene read_scene(const std::filesystem::path& file) {
@@ -284,16 +292,17 @@ Scene read_scene(const std::filesystem::path& file) {
       Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
       if (has_axis) axis = r.vector3(r.required(j, "axis", where), where + " axis");
       else if (j["axis"]) r.fail(j["axis"], fmt::format("{}: a {} joint has no axis", where, r.text(j["type"], "type")));
-      std::function<double(double)> angle;
+      std::function<double(double)> angle, angle_rate;
       if (type == runtime::JointType::driven_revolute) {
         const double speed = r.number(r.required(j, "speed", where), where + " speed");
         const double ramp = j["ramp"] ? r.positive(j["ramp"], where + " ramp") : 0.0;
         angle = ramped_angle(speed, ramp);
+        angle_rate = ramped_angle_rate(speed, ramp);
       } else if (j["speed"] || j["ramp"]) {
         r.fail(j["speed"] ? j["speed"] : j["ramp"], fmt::format("{}: speed and ramp belong to driven-revolute joints", where));
       }
       try {
-        scene.system.add_joint(runtime::make_joint(name, type, m1, m2, axis, q1, q2, angle));
+        scene.system.add_joint(runtime::make_joint(name, type, m1, m2, axis, q1, q2, angle, angle_rate));
       } catch (const std::invalid_argument& e) {
         r.fail(j, e.what());
       }

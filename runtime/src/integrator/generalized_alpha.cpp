@@ -17,16 +17,21 @@ namespace flexbody::runtime {
 namespace {
 
 // d/dt (Φ_q q̇ + Φ_t) at fixed q̇, by central differences along (q + s q̇, t + s): the acceleration-level
-// right-hand side of the consistent initial accelerations (a directional derivative, accurate to ~1e-10).
-Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
-  const double s = 1e-6 / std::max(1.0, v.cwiseAbs().maxCoeff());
+// right-hand side of the consistent initial accelerations (a directional derivative). The step is ∛ε over the fastest
+// relative rate of a coordinate, |q̇_i| / (|q_i| + scale_i), or 1/h, as constraint_rate's (stabilized_coupling.cpp):
+// truncation and rounding both ~ε^⅔ of the terms. (A fixed 1e-6 s differenced a 1 mm part spinning at 3.3e5 rad/s
+// over 0.3 rad, and its initial accelerations were off by 40 %, issue 29's scale test.)
+Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                     const Eigen::VectorXd& scales, double h) {
+  double fastest = 1.0 / h;
+  for (Eigen::Index i = 0; i < q.size(); ++i) fastest = std::max(fastest, std::abs(v(i)) / (std::abs(q(i)) + scales(i)));
+  const double guess = std::cbrt(std::numeric_limits<double>::epsilon()) / fastest, exact = (t + guess) - t;
+  const double s = exact > 0.0 ? exact : guess;  // t ± s exact, so that the time part's step is s
   auto phi_dot = [&](double shift) {
     const Eigen::VectorXd qs = q + shift * v;
-    const double ts = t + shift, dt = 1e-6;
-    const Eigen::VectorXd phi_t = (system.constraints(ts + dt, qs) - system.constraints(ts - dt, qs)) / (2 * dt);
     Eigen::SparseMatrix<double> jacobian;
-    system.sparse_constraint_jacobian(ts, qs, jacobian);
-    return Eigen::VectorXd(jacobian * v + phi_t);
+    system.sparse_constraint_jacobian(t + shift, qs, jacobian);
+    return Eigen::VectorXd(jacobian * v + system.constraint_time_derivative(t + shift, qs, h));
   };
   return (phi_dot(s) - phi_dot(-s)) / (2 * s);
 }
@@ -305,8 +310,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   // Consistent velocities: the M-nearest v with Φ_q v + Φ_t = 0 (a driven joint that starts moving, or initial
   // velocities that fight a joint, would otherwise give a velocity jump and a spike in the multipliers).
   {
-    const double dt = 1e-6;
-    const Eigen::VectorXd phi_t = (system.constraints(t_ + dt, q_) - system.constraints(t_ - dt, q_)) / (2 * dt);
+    const Eigen::VectorXd phi_t = system.constraint_time_derivative(t_, q_, options.step);
     // Row by row against the row's own terms |Φ_q| |v| + |Φ_t|: the rows carry m/s, 1/s and kg^1/2 m/s.
     const Eigen::ArrayXd violation = (jac * v_ + phi_t).cwiseAbs().array();
     const Eigen::ArrayXd terms = (Eigen::SparseMatrix<double>(jac.cwiseAbs()) * v_.cwiseAbs()).array() + phi_t.cwiseAbs().array();
@@ -324,7 +328,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   // that starts undeformed (K_g ξ̄ = 0 for ξ̄ = 0); one that starts deformed keeps the second solve's multipliers.
   for (int pass = 0; pass < (system.has_prestress() ? 2 : 1); ++pass) {
     system.set_prestress(t_, q_, v_, pass == 0 ? Eigen::VectorXd() : Eigen::VectorXd(x.tail(m)));
-    rhs << system.forces(t_, q_, v_), -constraint_curvature(system, t_, q_, v_);
+    rhs << system.forces(t_, q_, v_), -constraint_curvature(system, t_, q_, v_, scales_, options.step);
     x = saddle.solve(rhs);
     if (!solved(x, rhs)) refuse();
   }
@@ -524,7 +528,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
       // The rows after a new Newton matrix, which may have moved ν's correction to its Jacobian's direction.
       if (stabilized) {
         system_.constraints_and_rates(t1, q, v, phi, velocity_rows);  // Φ and Φ_q v, each joint evaluated once
-        if (time_dependent_) system_.add_constraint_time_derivative(t1, q, velocity_rows);
+        if (time_dependent_) system_.add_constraint_time_derivative(t1, q, h, velocity_rows);
         velocity_rows /= gamma_prime;
       } else {
         system_.constraints(t1, q, phi);

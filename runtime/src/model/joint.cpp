@@ -8,6 +8,7 @@
 #include <bit>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -73,13 +74,15 @@ int Joint::type_rows() const {
 }
 
 Joint make_joint(const std::string& name, JointType type, Marker first, Marker second, const Eigen::Vector3d& axis,
-                 const VectorRef& q1, const VectorRef& q2, std::function<double(double)> angle) {
+                 const VectorRef& q1, const VectorRef& q2, std::function<double(double)> angle,
+                 std::function<double(double)> angle_rate) {
   Joint j;
   j.name = name;
   j.type = type;
   j.first = std::move(first);
   j.second = std::move(second);
   j.angle = std::move(angle);
+  j.angle_rate = std::move(angle_rate);
   const Eigen::Matrix3d a1 = frame_of(j.first, q1), a2 = frame_of(j.second, q2);
   j.triad_first = a1.transpose();
   j.triad_second = a2.transpose();
@@ -103,6 +106,26 @@ Joint make_joint(const std::string& name, JointType type, Marker first, Marker s
   }
   // Markers apart are the assembly's to close (assembly.hpp); GeneralizedAlpha refuses a state that violates a row.
   return j;
+}
+
+double driven_row_time_derivative(const Joint& j, double t, double time_scale, const VectorRef& q1, const VectorRef& q2,
+                                  std::array<Eigen::MatrixXd, 2>& frames) {
+  if (j.type != JointType::driven_revolute) return 0.0;
+  double rate = 0.0;
+  if (j.angle_rate) {
+    rate = j.angle_rate(t);
+  } else {
+    const double dt = std::cbrt(std::numeric_limits<double>::epsilon()) * (std::abs(t) + std::abs(time_scale));
+    const double before = t - dt, after = t + dt;  // divided by after − before: exact, whatever t + dt rounds to
+    rate = (j.angle(after) - j.angle(before)) / (after - before);
+  }
+  // The row is u1 · (cos φ n_b − sin φ n_a) (evaluate_joint); its φ-derivative u1 · (−sin φ n_b − cos φ n_a), with
+  // the directions linear in the body-fixed vector they turn.
+  const double phi = j.angle(t);
+  detail::MarkerFrame f1, f2;
+  f1.evaluate(j.first, q1, frames[0]);
+  f2.evaluate(j.second, q2, frames[1]);
+  return rate * f1.direction(j.reference_first).dot(f2.direction(-std::sin(phi) * j.normal_b - std::cos(phi) * j.normal_a));
 }
 
 void evaluate_joint(const Joint& j, double t, const VectorRef& q1, const VectorRef& q2, JointEvaluation& out) {

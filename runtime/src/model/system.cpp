@@ -686,23 +686,20 @@ Eigen::VectorXd System::constraint_jacobian_product(double t, const Eigen::Vecto
   return out;
 }
 
-Eigen::VectorXd System::constraint_time_derivative(double t, const Eigen::VectorXd& q) const {
+Eigen::VectorXd System::constraint_time_derivative(double t, const Eigen::VectorXd& q, double time_scale) const {
   Eigen::VectorXd rate = Eigen::VectorXd::Zero(constraint_count());
-  add_constraint_time_derivative(t, q, rate);
+  add_constraint_time_derivative(t, q, time_scale, rate);
   return rate;
 }
 
-void System::add_constraint_time_derivative(double t, const Eigen::VectorXd& q, Eigen::VectorXd& out) const {
-  Eigen::Index row = reference_total_;
-  const double dt = std::cbrt(std::numeric_limits<double>::epsilon() * (1.0 + std::abs(t)));
-  const double before = t - dt, after = t + dt;  // divided by after − before: exact, whatever t + dt rounds to
+void System::add_constraint_time_derivative(double t, const Eigen::VectorXd& q, double time_scale,
+                                            Eigen::VectorXd& out) const {
+  constexpr unsigned kAngleRow = 5;  // a driven revolute joint's last row, the only one that depends on t
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
-    if (j.type == JointType::driven_revolute) {
-      out.segment(row, j.rows()) += evaluated(k, after, q).residual / (after - before);
-      out.segment(row, j.rows()) -= evaluated(k, before, q).residual / (after - before);
-    }
-    row += j.rows();
+    if (j.type != JointType::driven_revolute || ((j.removed >> kAngleRow) & 1U) != 0) continue;
+    out(joint_row(k) + j.rows() - 1) += driven_row_time_derivative(j, t, time_scale, body_view(q, j.first.body),
+                                                                   body_view(q, j.second.body), joint_work_[k].frames);
   }
 }
 

@@ -41,6 +41,9 @@ struct Joint {
   Eigen::Vector2d offset = Eigen::Vector2d::Zero();
   /// Driven revolute: the angle about the axis [rad] as a function of time, φ(0) = 0.
   std::function<double(double)> angle;
+  /// Driven revolute, optional: φ̇(t) [rad/s]. Without it, the constraints' time derivative differentiates φ
+  /// numerically (driven_row_time_derivative).
+  std::function<double(double)> angle_rate;
   /// Rows of the type's equations left out because they repeat other constraints (bit k: the type's row k), as
   /// System::remove_redundant_constraints finds them. The constraints they repeat carry their reactions.
   unsigned removed = 0;
@@ -65,7 +68,8 @@ struct Joint {
 /// or markers apart for a joint that ties their positions.
 [[nodiscard]] Joint make_joint(const std::string& name, JointType type, Marker first, Marker second,
                                const Eigen::Vector3d& axis, const VectorRef& q1, const VectorRef& q2,
-                               std::function<double(double)> angle = {});
+                               std::function<double(double)> angle = {},
+                               std::function<double(double)> angle_rate = {});
 
 /// Residuals, and Jacobians with respect to each marker's body coordinates (rows x n_b; 0 columns for ground).
 struct JointEvaluation {
@@ -85,6 +89,13 @@ struct JointEvaluation {
 /// The same into `out`: an evaluation reused for the same joint allocates nothing (the Newton iteration's
 /// joints, System).
 void evaluate_joint(const Joint& joint, double t, const VectorRef& q1, const VectorRef& q2, JointEvaluation& out);
+/// ∂Φ/∂t of a driven revolute joint's angle row (its type's last): φ̇(t) ∂Φ/∂φ, where ∂Φ/∂φ is exact (the row with
+/// φ + π/2) and φ̇ is Joint::angle_rate or, without one, the central difference of φ with the step ∛ε (|t| + time_scale)
+/// [s]: time_scale is a time over which φ turns by little (the integrator's step), so that the step follows the
+/// scene's own time scale (a fixed ∛ε s differenced a 1 mm part's 3e5 rad/s spin over 2 rad). `frames` is work storage
+/// (JointEvaluation::frames). Zero for other types.
+[[nodiscard]] double driven_row_time_derivative(const Joint& joint, double t, double time_scale, const VectorRef& q1,
+                                                const VectorRef& q2, std::array<Eigen::MatrixXd, 2>& frames);
 /// Every row of the joint's type at (t, q1, q2), the removed ones included (type_rows()): how far a removed row is off.
 [[nodiscard]] Eigen::VectorXd joint_type_residuals(const Joint& joint, double t, const VectorRef& q1, const VectorRef& q2);
 

@@ -185,11 +185,12 @@ class System {
   /// Φ and Φ_q v in one pass, each joint evaluated once (an iteration of the stabilised index-2 form needs both).
   void constraints_and_rates(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& phi,
                              Eigen::VectorXd& rate) const;
-  /// Φ_t: zero but in the rows of driven joints, where it is the central difference in t of the joint's rows, with
-  /// the step ∛(ε (1 + |t|)) that balances truncation (step² φ‴) against the rounding of the angle (ε |φ|).
-  [[nodiscard]] Eigen::VectorXd constraint_time_derivative(double t, const Eigen::VectorXd& q) const;
+  /// Φ_t: zero but in the angle rows of driven joints (driven_row_time_derivative: exact with a joint's angle_rate,
+  /// else φ differenced over a step relative to `time_scale` [s], a time over which φ turns by little, such as the
+  /// integrator's step).
+  [[nodiscard]] Eigen::VectorXd constraint_time_derivative(double t, const Eigen::VectorXd& q, double time_scale) const;
   /// Adds Φ_t to `out` (m), allocating nothing.
-  void add_constraint_time_derivative(double t, const Eigen::VectorXd& q, Eigen::VectorXd& out) const;
+  void add_constraint_time_derivative(double t, const Eigen::VectorXd& q, double time_scale, Eigen::VectorXd& out) const;
   /// Σ_k λ_k ∂²Φ_k/∂q² of the reference conditions (exact) and of the joints (joint_hessian, over every coordinate).
   [[nodiscard]] Eigen::MatrixXd constraint_hessian(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const;
   /// Adds Σ_j ∂(Φ_jᵀ λ_j)/∂q of the joints at time t (a driven joint's rows turn with φ(t)) to `out`, over the first counts[b] coordinates of each body b, placed at

@@ -72,7 +72,8 @@ TEST(GeometricStiffnessCalculiX, TheSpunPartsStressedShapeIsCalculiXs) {
   const Eigen::Vector3d e = Eigen::Vector3d(1.0, 1.0, 0.0).normalized();
   const Eigen::Vector3d p = root.reference_point + Eigen::Vector3d(0.0, 0.1, 0.0);
   const Eigen::Vector3d omega = kSpin * e;
-  // The weights of the six centrifugal cases (geometric_stiffness.hpp): ω_x², ω_y², ω_z², ω_x ω_y, ω_x ω_z, ω_y ω_z.
+  // The weights of the six centrifugal cases (geometric_stiffness.hpp): ω_x², ω_y², ω_z², ω_x ω_y, ω_x ω_z, ω_y ω_z, as
+  // runtime::prestress_weights forms them (this test does not link the runtime).
   Eigen::Matrix<double, 6, 1> spin_weights;
   spin_weights << omega.x() * omega.x(), omega.y() * omega.y(), omega.z() * omega.z(), omega.x() * omega.y(),
       omega.x() * omega.z(), omega.y() * omega.z();

@@ -265,3 +265,30 @@ TEST(RedundantConstraints, ASecondCallMapsRowsPastTheOnesRemovedBefore) {
   EXPECT_EQ(system.joints()[1].rows(), 1);
   EXPECT_EQ(system.first_redundant_constraint(0.0, q), -1);
 }
+
+// A drive that repeats what the joints before it hold would be dropped with its row: refused, naming the joint. A bar
+// welded to ground (fixed joint) and then driven about z at the same pin: the drive's five revolute rows give way
+// as redundant, its angle row is refused.
+TEST(RedundantConstraints, ARedundantDriveIsRefusedNotDropped) {
+  std::vector<fr::BodyModel> models;
+  models.reserve(1);
+  fr::System system;
+  const Link bar = add_bar(system, models, "bar", kA, kB, kMasses[0]);
+  const Eigen::VectorXd q = system.initial_coordinates();
+  const Eigen::VectorXd q_bar = system.body_coordinates(q, bar.body);
+  system.add_joint(fr::make_joint("weld", fr::JointType::fixed, bar.from, fr::ground_marker(kA), Eigen::Vector3d::UnitZ(),
+                                  q_bar, Eigen::VectorXd()));
+  system.add_joint(fr::make_joint("drive", fr::JointType::driven_revolute, bar.from, fr::ground_marker(kA),
+                                  Eigen::Vector3d::UnitZ(), q_bar, Eigen::VectorXd(), [](double t) { return t; },
+                                  [](double) { return 1.0; }));
+  try {
+    (void)system.remove_redundant_constraints(0.0, q);
+    FAIL() << "a redundant drive was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("joint 'drive': its driven angle is redundant"), std::string::npos) << e.what();
+  }
+  // An angle on a joint that is not driven is refused where it is made.
+  EXPECT_THROW((void)fr::make_joint("hinge", fr::JointType::revolute, bar.from, fr::ground_marker(kA), Eigen::Vector3d::UnitZ(),
+                                    q_bar, Eigen::VectorXd(), [](double t) { return t; }),
+               std::invalid_argument);
+}

@@ -127,6 +127,9 @@ std::vector<RemovedConstraint> System::remove_redundant_constraints(double t, co
     int kept = static_cast<int>(row - joint_row(k)), type_row = 0;  // the kept-th kept row of the type's rows
     for (;; ++type_row)
       if (!((j.removed >> type_row) & 1U) && kept-- == 0) break;
+    if (j.type == JointType::driven_revolute && type_row == j.type_rows() - 1)  // leaving it out would drop the drive
+      throw std::invalid_argument("joint '" + j.name + "': its driven angle is redundant: the constraints before it "
+                                  "already hold that rotation, so the drive cannot act");
     masks[k] |= 1U << type_row;
     const Eigen::VectorXd q1 = body_coordinates(q, j.first.body), q2 = body_coordinates(q, j.second.body);
     removed.push_back({k, j.name, type_row, joint_row_meaning(j, type_row, q1, q2),

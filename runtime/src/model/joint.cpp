@@ -100,6 +100,8 @@ Joint make_joint(const std::string& name, JointType type, Marker first, Marker s
   }
   if (type == JointType::driven_revolute && !j.angle)
     throw std::invalid_argument("joint '" + name + "': a driven revolute joint needs an angle function");
+  if (type != JointType::driven_revolute && (j.angle || j.angle_rate))
+    throw std::invalid_argument("joint '" + name + "': only a driven revolute joint takes an angle and its rate");
   const Eigen::Vector3d gap = marker_position(j.first, q1) - marker_position(j.second, q2);
   if (type == JointType::prismatic) {
     j.offset = {gap.dot(a2 * j.normal_a), gap.dot(a2 * j.normal_b)};
@@ -115,7 +117,10 @@ double driven_row_time_derivative(const Joint& j, double t, double time_scale, c
   if (j.angle_rate) {
     rate = j.angle_rate(t);
   } else {
-    const double dt = std::cbrt(std::numeric_limits<double>::epsilon()) * (std::abs(t) + std::abs(time_scale));
+    // ∛(ε (1 + |t|/h)) h: the step that balances truncation (step² φ‴) against the angle's rounding (ε |φ|, |φ| growing
+    // with t), with time in units of h; a step ∛ε (|t| + h) let the truncation grow as t² (review of bdd6de4).
+    const double h = std::abs(time_scale);
+    const double dt = std::cbrt(std::numeric_limits<double>::epsilon() * (1.0 + std::abs(t) / h)) * h;
     const double before = t - dt, after = t + dt;  // divided by after − before: exact, whatever t + dt rounds to
     rate = (j.angle(after) - j.angle(before)) / (after - before);
   }

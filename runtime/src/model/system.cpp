@@ -694,10 +694,10 @@ Eigen::VectorXd System::constraint_time_derivative(double t, const Eigen::Vector
 
 void System::add_constraint_time_derivative(double t, const Eigen::VectorXd& q, double time_scale,
                                             Eigen::VectorXd& out) const {
-  constexpr unsigned kAngleRow = 5;  // a driven revolute joint's last row, the only one that depends on t
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
-    if (j.type != JointType::driven_revolute || ((j.removed >> kAngleRow) & 1U) != 0) continue;
+    // The type's last row, the angle, is the only one that depends on t (never removed: remove_redundant_constraints).
+    if (j.type != JointType::driven_revolute) continue;
     out(joint_row(k) + j.rows() - 1) += driven_row_time_derivative(j, t, time_scale, body_view(q, j.first.body),
                                                                    body_view(q, j.second.body), joint_work_[k].frames);
   }

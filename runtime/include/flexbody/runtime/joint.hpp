@@ -64,7 +64,8 @@ struct Joint {
 [[nodiscard]] std::string joint_row_meaning(const Joint& j, int row, const VectorRef& q1, const VectorRef& q2);
 
 /// A joint assembled at the initial body coordinates q1, q2 (empty for ground): `axis` is global (revolute,
-/// prismatic, driven revolute; ignored otherwise). Throws std::invalid_argument naming the joint for a zero axis
+/// prismatic, driven revolute; ignored otherwise); `angle` and (optional, for an exact Φ_t) `angle_rate` drive a
+/// driven revolute joint. Throws std::invalid_argument naming the joint for a zero axis, an angle on another type,
 /// or markers apart for a joint that ties their positions.
 [[nodiscard]] Joint make_joint(const std::string& name, JointType type, Marker first, Marker second,
                                const Eigen::Vector3d& axis, const VectorRef& q1, const VectorRef& q2,
@@ -90,9 +91,9 @@ struct JointEvaluation {
 /// joints, System).
 void evaluate_joint(const Joint& joint, double t, const VectorRef& q1, const VectorRef& q2, JointEvaluation& out);
 /// ∂Φ/∂t of a driven revolute joint's angle row (its type's last): φ̇(t) ∂Φ/∂φ, where ∂Φ/∂φ is exact (the row with
-/// φ + π/2) and φ̇ is Joint::angle_rate or, without one, the central difference of φ with the step ∛ε (|t| + time_scale)
-/// [s]: time_scale is a time over which φ turns by little (the integrator's step), so that the step follows the
-/// scene's own time scale (a fixed ∛ε s differenced a 1 mm part's 3e5 rad/s spin over 2 rad). `frames` is work storage
+/// φ + π/2) and φ̇ is Joint::angle_rate or, without one, the central difference of φ with the step ∛(ε (1 + |t|/h)) h,
+/// h = time_scale [s], a time over which φ turns by little (the integrator's step): the step follows the scene's own
+/// time scale (a fixed ∛ε s differenced a 1 mm part's 3e5 rad/s spin over 2 rad). `frames` is work storage
 /// (JointEvaluation::frames). Zero for other types.
 [[nodiscard]] double driven_row_time_derivative(const Joint& joint, double t, double time_scale, const VectorRef& q1,
                                                 const VectorRef& q2, std::array<Eigen::MatrixXd, 2>& frames);

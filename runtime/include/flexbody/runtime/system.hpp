@@ -217,7 +217,8 @@ class System {
   /// are dependent only in that configuration (a linkage at a dead point) are removed too, so call it with the
   /// assembled initial coordinates (runtime::assemble refuses removed rows that the closed loop leaves off by more
   /// than its tolerance), and before a GeneralizedAlpha is built on the system: the row count changes. Rows once
-  /// removed stay removed. Throws std::invalid_argument when a body's own reference rows are dependent.
+  /// removed stay removed. Throws std::invalid_argument when a body's own reference rows are dependent, or a driven
+  /// joint's angle row is (leaving it out would drop the drive).
   std::vector<RemovedConstraint> remove_redundant_constraints(double t, const Eigen::VectorXd& q);
   /// What constraint row k is: "body 'bar': orthogonality", "body 'bar': Tisserand", "joint 'pivot'", "body 'bar':
   /// normalisation of the Euler parameters".

@@ -100,8 +100,6 @@ Joint make_joint(const std::string& name, JointType type, Marker first, Marker s
   }
   if (type == JointType::driven_revolute && !j.angle)
     throw std::invalid_argument("joint '" + name + "': a driven revolute joint needs an angle function");
-  if (type != JointType::driven_revolute && (j.angle || j.angle_rate))
-    throw std::invalid_argument("joint '" + name + "': only a driven revolute joint takes an angle and its rate");
   const Eigen::Vector3d gap = marker_position(j.first, q1) - marker_position(j.second, q2);
   if (type == JointType::prismatic) {
     j.offset = {gap.dot(a2 * j.normal_a), gap.dot(a2 * j.normal_b)};

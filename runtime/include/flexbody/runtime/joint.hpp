@@ -65,7 +65,7 @@ struct Joint {
 
 /// A joint assembled at the initial body coordinates q1, q2 (empty for ground): `axis` is global (revolute,
 /// prismatic, driven revolute; ignored otherwise); `angle` and (optional, for an exact Φ_t) `angle_rate` drive a
-/// driven revolute joint. Throws std::invalid_argument naming the joint for a zero axis, an angle on another type,
+/// driven revolute joint (ignored for other types). Throws std::invalid_argument naming the joint for a zero axis
 /// or markers apart for a joint that ties their positions.
 [[nodiscard]] Joint make_joint(const std::string& name, JointType type, Marker first, Marker second,
                                const Eigen::Vector3d& axis, const VectorRef& q1, const VectorRef& q2,

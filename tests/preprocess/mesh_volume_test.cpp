@@ -20,7 +20,8 @@ namespace {
 
 constexpr double kRadius = 0.05;
 
-fp::ImportedMesh cylinder(double length, double size, int order = 1, double tolerance = 5e-3) {
+fp::ImportedMesh cylinder(double length, double size, int order = 1, double tolerance = 5e-3,
+                          double search_elements = 2e6) {
   const auto dir = flexbody::test::scratch_dir();
   std::ofstream(dir / "volume_cylinder.geo") << "SetFactory(\"OpenCASCADE\");\nCylinder(1) = {0, 0, 0, 0, 0, "
                                              << length << ", " << kRadius << "};\n";
@@ -29,6 +30,7 @@ fp::ImportedMesh cylinder(double length, double size, int order = 1, double tole
   options.mesh_size = size;
   options.order = order;
   options.volume_tolerance = tolerance;
+  options.volume_search_elements = search_elements;
   return fp::import_tet_mesh(dir / "volume_cylinder.geo", options);
 }
 
@@ -79,4 +81,21 @@ TEST(MeshVolume, AUserSizeThatMissesTheVolumeIsRefusedWithOneThatHoldsIt) {
   const fp::ImportedMesh taken = cylinder(0.2, 0.02, 1, 0.03);
   EXPECT_NEAR(taken.mesh_size_m, 0.02, 1e-15);
   EXPECT_EQ(taken.refined_from_m, 0.0);
+}
+
+// The search for a size that would hold the volume stops before a mesh beyond GmshImportOptions::volume_search_elements
+// (2e6 tetrahedra by default, about 1e6 linear DOFs: no search costs more than a run). With the bound at 100 the
+// 0.2 m cylinder's first halving is not tried, and the refusal says why and what else to do.
+TEST(MeshVolume, TheSearchStopsAtItsElementBoundAndSaysSo) {
+  try {
+    (void)cylinder(0.2, 0.02, 1, 5e-3, 100.0);
+    FAIL() << "a mesh missing 2 % of the volume was taken";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.find('\n'), std::string::npos);
+    EXPECT_NE(what.find("the mesh at --mesh-size 0.02 m holds 98."), std::string::npos) << what;
+    EXPECT_NE(what.find("a finer mesh would pass 1e+02 tetrahedra, so none was tried: --order 2 follows curved faces"),
+              std::string::npos) << what;
+    EXPECT_NE(what.find("(or --volume-tolerance 0.021 accepts this mesh)"), std::string::npos) << what;
+  }
 }

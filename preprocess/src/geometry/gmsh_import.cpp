@@ -34,13 +34,11 @@ constexpr double kMaxEstimatedElements = 2e7;
 // A part smaller than this across, in gmsh's own coordinates, is where gmsh's and OpenCASCADE's absolute
 // tolerances start to spoil the mesh (see import_tet_mesh): 1e-2 of the file's unit.
 constexpr double kSmallInModelUnits = 1e-2;
-// Halvings of the element size tried when a mesh misses the CAD solid's volume (mesh_resolving_the_volume), and the
-// estimated tetrahedra beyond which no finer mesh is tried (the search for a size to advise must not cost more than
-// a run: 2e6 tetrahedra are ~1e6 linear DOFs). Measured on the corpus (bench/cad_corpus_bench.py): the one default
-// linear mesh that needed four halvings was a curved solid of as1-tu-203 (64.4 % at 8 mm, 99.50 % at 1 mm, held at
-// 0.5 mm).
+// Halvings of the element size tried when a mesh misses the CAD solid's volume (mesh_resolving_the_volume; the
+// estimated tetrahedra beyond which no finer mesh is tried: GmshImportOptions::volume_search_elements). Measured on
+// the corpus (bench/cad_corpus_bench.py): the one default linear mesh that needed four halvings was a curved solid of
+// as1-tu-203 (64.4 % at 8 mm, 99.50 % at 1 mm, held at 0.5 mm).
 constexpr int kVolumeRefinements = 4;
-constexpr double kVolumeSearchElements = 2e6;
 // Faces closer than this fraction of the part's bounding-box diagonal are sewn together (shell_sewing.hpp):
 // OpenCASCADE's sewing tolerance, relative so that a part sews the same in any unit.
 constexpr double kSewingTolerance = 1e-6;
@@ -439,7 +437,7 @@ GmshTetrahedra mesh_resolving_the_volume(const std::string& name, double size, s
   std::optional<CurvedElementRepair> finer_repair;
   bool found = false, limited = false;
   for (int k = 1; k <= kVolumeRefinements && !found; ++k) {
-    if (estimated * 8.0 > kVolumeSearchElements) {
+    if (estimated * 8.0 > options.volume_search_elements) {
       limited = true;
       break;
     }
@@ -477,7 +475,7 @@ GmshTetrahedra mesh_resolving_the_volume(const std::string& name, double size, s
         "{}: the mesh at {} holds {:.2f} % of the CAD solid's volume ({:.4g} m^3), beyond the {:.2g} % tolerance; {}{}",
         name, size_text, 100.0 * (1.0 + first_error), *solid * std::pow(unit.gmsh_to_metres, 3), 100.0 * tolerance,
         limited ? fmt::format("a finer mesh would pass {:.0e} tetrahedra, so none was tried: --order 2 follows curved "
-                              "faces", kVolumeSearchElements)
+                              "faces", options.volume_search_elements)
                 : std::string("a finer mesh falls apart: the CAD solid may be open or self-intersecting"),
         or_accept));
   throw std::runtime_error(fmt::format(

@@ -38,12 +38,12 @@ std::optional<std::uint64_t> keyed_value(const fs::path& path, const std::string
 // minus its usage, the inactive page cache not counted as used (the kernel reclaims it first, as `docker stats`
 // counts it). cgroup v2 ("0::/path" in /proc/self/cgroup; memory.max, memory.current, inactive_file) and v1 (the
 // "memory" controller's line; memory.limit_in_bytes, memory.usage_in_bytes, total_inactive_file).
-std::optional<std::uint64_t> cgroup_room() {
+std::optional<std::uint64_t> cgroup_room(const fs::path& proc, const fs::path& cgroup) {
   struct Layout {
     fs::path root;
     std::string limit, usage, inactive;
   };
-  std::ifstream in("/proc/self/cgroup");
+  std::ifstream in(proc / "self/cgroup");
   std::string line;
   std::vector<std::pair<Layout, fs::path>> hierarchies;
   while (std::getline(in, line)) {
@@ -52,9 +52,9 @@ std::optional<std::uint64_t> cgroup_room() {
     const std::string controllers = line.substr(first + 1, second - first - 1);
     const fs::path relative = fs::path(line.substr(second + 1)).relative_path();
     if (line.compare(0, 3, "0::") == 0)
-      hierarchies.push_back({{"/sys/fs/cgroup", "memory.max", "memory.current", "inactive_file"}, relative});
+      hierarchies.push_back({{cgroup, "memory.max", "memory.current", "inactive_file"}, relative});
     else if (("," + controllers + ",").find(",memory,") != std::string::npos)
-      hierarchies.push_back({{"/sys/fs/cgroup/memory", "memory.limit_in_bytes", "memory.usage_in_bytes",
+      hierarchies.push_back({{cgroup / "memory", "memory.limit_in_bytes", "memory.usage_in_bytes",
                               "total_inactive_file"},
                              relative});
   }
@@ -77,10 +77,12 @@ std::optional<std::uint64_t> cgroup_room() {
 
 }  // namespace
 
-std::optional<std::uint64_t> available_memory_bytes() {
-  std::optional<std::uint64_t> kernel = keyed_value("/proc/meminfo", "MemAvailable:");
+std::optional<std::uint64_t> available_memory_bytes() { return available_memory_bytes("/proc", "/sys/fs/cgroup"); }
+
+std::optional<std::uint64_t> available_memory_bytes(const std::filesystem::path& proc, const std::filesystem::path& cgroup) {
+  std::optional<std::uint64_t> kernel = keyed_value(proc / "meminfo", "MemAvailable:");
   if (kernel) *kernel *= 1024;  // kB
-  const std::optional<std::uint64_t> room = cgroup_room();
+  const std::optional<std::uint64_t> room = cgroup_room(proc, cgroup);
   if (kernel && room) return std::min(*kernel, *room);
   return kernel ? kernel : room;
 }

@@ -3,6 +3,7 @@
 // fit is refused before the work (issue 28: CHOLMOD's "status -2" came after up to 80 s).
 
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 
 namespace flexbody::preprocess::detail {
@@ -12,5 +13,8 @@ namespace flexbody::preprocess::detail {
 /// (v2 or v1; a container, a batch system or a systemd slice sets them), the inactive page cache counted as free;
 /// nullopt where neither can be read.
 [[nodiscard]] std::optional<std::uint64_t> available_memory_bytes();
+/// The same read from other roots than /proc and /sys/fs/cgroup (tests: a container's or a batch job's files).
+[[nodiscard]] std::optional<std::uint64_t> available_memory_bytes(const std::filesystem::path& proc,
+                                                                  const std::filesystem::path& cgroup);
 
 }  // namespace flexbody::preprocess::detail

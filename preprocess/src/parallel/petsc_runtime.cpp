@@ -1,5 +1,7 @@
 #include "petsc_runtime.hpp"
 
+#include "mumps_status.hpp"
+
 #include <slepcsys.h>
 
 #include <fmt/format.h>
@@ -84,7 +86,9 @@ void check(PetscErrorCode code, const char* what) {
     text = generic != nullptr ? generic : "unknown error";
   }
   while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
-  throw std::runtime_error(fmt::format("{}: {} (PETSc error {})", what, text, static_cast<int>(code)));
+  // MUMPS's status in words, with the ways out (mumps_status.hpp): "INFOG(1)=-9" alone tells a user nothing.
+  throw std::runtime_error(
+      detail::with_mumps_words(fmt::format("{}: {} (PETSc error {})", what, text, static_cast<int>(code))));
 }
 
 void send_command(Command command) {

@@ -51,6 +51,9 @@ struct GmshImportOptions {
   /// How far the mesh's volume may be from the CAD solid's, relative to it (dimensionless): the default element size is
   /// halved until the mesh holds it, a size the user gave is refused if it does not (with a size that would do).
   double volume_tolerance = 5e-3;
+  /// The search for a size that holds the volume meshes no size whose estimated tetrahedra exceed this count (its
+  /// cost must stay below a run's: 2e6 tetrahedra are about 1e6 linear DOFs); past it, the refusal says so.
+  double volume_search_elements = 2e6;
   /// The 3D algorithm (ignored for a .msh, whose tetrahedra are used as they are).
   MeshAlgorithm algorithm = MeshAlgorithm::delaunay;
   /// Called with a short message before each long step.

@@ -1,5 +1,6 @@
 // PrepSummary::full_report() and json(): what fbprep did, for people and for programs.
 #include "flexbody/preprocess/fbprep_pipeline.hpp"
+#include "flexbody/preprocess/length_unit.hpp"
 
 #include "flexbody/preprocess/eigen_residual.hpp"
 
@@ -7,6 +8,7 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -45,10 +47,21 @@ std::string PrepSummary::accuracy_warning() const {
   const std::string amount = std::isfinite(frequency_errors(0))
                                  ? fmt::format("{:.0f} % too high", 100.0 * frequency_errors(0))
                                  : std::string("not resolved at all");
+  // A size to try: an eigenvalue's error falls like h^(2p) for elements of order p, so h (e_target / e)^(1/(2p)) with
+  // e_target half the warning level, and at least a halving (a thin feature's estimate is pre-asymptotic: RLF_7030's
+  // 18 % estimate was 26 % against its refined mesh).
+  std::string smaller = "a smaller --mesh-size";
+  const std::optional<LengthUnit> in = length_unit_from_string(unit);
+  if (mesh_size_m > 0.0 && in && std::isfinite(frequency_errors(0))) {
+    const double factor =
+        std::min(0.5, std::pow(0.5 * kAccuracyWarning / frequency_errors(0), 1.0 / (2.0 * element_order)));
+    smaller = fmt::format("a smaller --mesh-size (about {:.2g} {}, {:.2g} of this mesh's)",
+                          factor * mesh_size_m / metres_per(*in), unit, factor);
+  }
   return fmt::format("the first frequency ({:.4g} Hz) is likely {} with {} elements at this mesh (estimate from "
                      "the stresses' jumps between elements): {}", frequencies_hz(0), amount,
                      element_order == 2 ? "quadratic" : "linear",
-                     element_order == 2 ? "give a smaller --mesh-size" : "use --order 2, or a smaller --mesh-size");
+                     element_order == 2 ? "give " + smaller : "use --order 2, or " + smaller);
 }
 
 double PrepSummary::max_residual_to_floor() const {

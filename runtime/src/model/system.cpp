@@ -122,6 +122,16 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
       throw std::invalid_argument("body '" + name + "': its prestress cases do not match its matrices, interfaces or "
                                   "floating frame");
     prestress.weights = Eigen::VectorXd::Zero(cases);
+    // The block the forces use (a GCMS body's field block, a floating frame's modal matrices), its lower triangle
+    // packed column by column, one column per case: the weighted sum is one product over a third of the entries at
+    // 18 fields (the sum over the whole (4 + n_f)² matrices took as long as the body's elastic forces).
+    const std::vector<Eigen::MatrixXd>& used = model.floating() ? model.floating_frame->prestress : p.matrices;
+    const Eigen::Index n = model.floating() ? model.modes : model.field_count(), skip = model.floating() ? 0 : 4;
+    prestress.packed_cases.resize(n * (n + 1) / 2, cases);
+    for (Eigen::Index k = 0; k < cases; ++k)
+      for (Eigen::Index c = 0, e = 0; c < n; ++c)
+        for (Eigen::Index r = c; r < n; ++r) prestress.packed_cases(e++, k) = used[static_cast<std::size_t>(k)](skip + r, skip + c);
+    prestress.matrix.setZero(n, n);
     prestress.loads.assign(model.interfaces.size(), InterfaceLoad{});
     prestress.generalized.resize(model.coordinate_count());
     ++prestressed_bodies_;
@@ -499,7 +509,7 @@ Eigen::MatrixXd System::stiffness(const Eigen::VectorXd& q) const {
       Eigen::MatrixXd k_g = Eigen::MatrixXd::Zero(n_xi, n_xi);
       for (Eigen::Index f = 0; f < n_f; ++f)
         for (Eigen::Index c = 0; c < n_f; ++c)
-          k_g.block<3, 3>(3 * f, 3 * c).diagonal().setConstant(b.prestress.matrix(4 + f, 4 + c));
+          k_g.block<3, 3>(3 * f, 3 * c).diagonal().setConstant(b.prestress.matrix(f, c));
       const ElasticTangent geometric = elastic_tangent(k_g, orientation_of(q_b), q_b.tail(n_xi), true);
       t.aa += geometric.aa;
       t.a_xi += geometric.a_xi;

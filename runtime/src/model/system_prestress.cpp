@@ -130,8 +130,10 @@ void System::update_prestress(double t, const Eigen::VectorXd& q, const Eigen::V
     const Eigen::Vector3d omega_bar = state.orientation.transpose() * angular_velocity(body, q, v);
     runtime::prestress_weights(*b.model.prestress, omega_bar, state.loads, state.weights);
     state.active = !state.weights.isZero(0.0);
-    weighted_sum(b.model.floating() ? b.model.floating_frame->prestress : b.model.prestress->matrices, state.weights,
-                 state.matrix);
+    state.packed.noalias() = state.packed_cases * state.weights;  // Σ λ_k of the used block's lower triangle
+    const Eigen::Index n = state.matrix.rows();
+    for (Eigen::Index c = 0, e = 0; c < n; ++c)
+      for (Eigen::Index r = c; r < n; ++r, ++e) state.matrix(r, c) = state.matrix(c, r) = state.packed(e);
   }
 }
 
@@ -156,7 +158,7 @@ void System::add_prestress_forces(const Body& b, const Eigen::VectorXd& q, Eigen
   state.forces.resize(3 * n_f);
   Eigen::Map<Eigen::Matrix3Xd> xi_bar(state.xi_bar.data(), 3, n_f), h(state.forces.data(), 3, n_f);
   xi_bar.noalias() = a.transpose() * xi;
-  h.noalias() = xi_bar * state.matrix.bottomRightCorner(n_f, n_f);
+  h.noalias() = xi_bar * state.matrix;
   const Eigen::Matrix3d grad_a = detail::outer_sum(xi, Eigen::Map<const Eigen::Matrix3Xd>(state.forces.data(), 3, n_f));
   f_b.segment<9>(3) -= sign * Eigen::Map<const Eigen::Matrix<double, 9, 1>>(grad_a.data());
   for (Eigen::Index f = 0; f < n_f; ++f) f_b.segment<3>(12 + 3 * f) -= sign * (a * h.col(f));

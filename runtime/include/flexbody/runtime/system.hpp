@@ -286,9 +286,10 @@ class System {
     Eigen::VectorXd weights;           ///< λ, one per case
     Eigen::Matrix3d orientation;       ///< A at the last update: body axes of the loads
     std::vector<InterfaceLoad> loads;  ///< per interface, body axes
-    /// Σ λ_k Ĝ_k ((4 + n_f) square; its field block acts on ξ̄) on a GCMS body, Σ λ_k K_g,k (n_m square) on a
-    /// floating-frame one.
+    /// Σ λ_k Ĝ_k[4:, 4:] (n_f square, acting on ξ̄) on a GCMS body, Σ λ_k K_g,k (n_m square) on a floating-frame one.
     Eigen::MatrixXd matrix;
+    Eigen::MatrixXd packed_cases;  ///< those blocks' lower triangles packed by column, one column per case
+    Eigen::VectorXd packed;        ///< their weighted sum, packed
     Eigen::VectorXd xi_bar;       ///< ξ̄ = Âᵀ ξ
     Eigen::VectorXd generalized;  ///< a joint's generalized force on the body
     Eigen::VectorXd forces;       ///< (K_g ⊗ I3) ξ̄ (3 n_f) or K_g η (n_m)

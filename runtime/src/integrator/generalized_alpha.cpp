@@ -324,12 +324,12 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
     const Eigen::VectorXd phi_t = system.constraint_time_derivative(t_, q_, options.step);
     // Row by row against the row's own terms |Φ_q| |v| + |Φ_t|: the rows carry m/s, 1/s and kg^1/2 m/s.
     const Eigen::SparseMatrix<double> jac_abs = jac.cwiseAbs();
-    auto violated = [&](const Eigen::VectorXd& velocities) {
+    auto violated = [&](const Eigen::VectorXd& velocities, double tolerance) {
       const Eigen::ArrayXd violation = (jac * velocities + phi_t).cwiseAbs().array();
       const Eigen::ArrayXd terms = (jac_abs * velocities.cwiseAbs()).array() + phi_t.cwiseAbs().array();
-      return (violation > 1e-12 * terms).any();
+      return (violation > tolerance * terms).any();
     };
-    if (violated(v_)) {
+    if (violated(v_, 1e-12)) {
       std::vector<bool> deformation(static_cast<std::size_t>(n), false);
       for (int b = 0; b < system.body_count(); ++b) {
         const BodyModel& model = system.model(b);
@@ -346,8 +346,8 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
         if (deformation[static_cast<std::size_t>(k)]) rigid_entries.emplace_back(k, k, 1.0);
       Eigen::SparseMatrix<double> rigid_metric(n, n);
       rigid_metric.setFromTriplets(rigid_entries.begin(), rigid_entries.end());
-      // Its rows: those with a rigid velocity in them (a row on deformation rates alone, such as a body's Tisserand
-      // rows, keeps its value: it is checked with the others below).
+      // Its rows: those with a rigid velocity in them (a row on deformation rates alone, such as a Tisserand row of an
+      // undeformed body, keeps its value: it is checked with the others below).
       std::vector<Eigen::Index> row_index(static_cast<std::size_t>(m), -1);
       Eigen::Index rigid_m = 0;
       for (Eigen::Index k = 0; k < jac.outerSize(); ++k)
@@ -382,14 +382,15 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
       auto energy_of = [&](const Eigen::VectorXd& change) { return change.dot(mass * change); };
       const double nearest_change = energy_of(nearest.head(n) - v_);
       Eigen::VectorXd chosen = nearest.head(n);
-      if (rigid.ok()) {
+      if (rigid_m > 0 && rigid.ok()) {
         Eigen::VectorXd rigid_rhs(n + rigid_m);
         rigid_rhs << rigid_metric * v_, -rigid_phi_t;
         const Eigen::VectorXd projected = rigid.solve(rigid_rhs);
-        // Taken when it closes every row and costs at most kRigidCorrectionRatio times the M-nearest change's kinetic
-        // energy: rows that only a deformation rate holds well (a deformed spinning body's Tisserand rows) would
-        // otherwise be closed by an enormous rigid velocity.
-        if (projected.allFinite() && !violated(projected.head(n)) &&
+        // Taken when it closes every row (to 1e-10 of its terms; the M-nearest solve is held to 1e-8 of its own) and
+        // costs at most kRigidCorrectionRatio times the M-nearest change's kinetic energy: rows that only a deformation
+        // rate holds well (a deformed spinning body's Tisserand rows) would otherwise be closed by an enormous rigid
+        // velocity.
+        if (projected.allFinite() && !violated(projected.head(n), 1e-10) &&
             energy_of(projected.head(n) - v_) <= kRigidCorrectionRatio * nearest_change)
           chosen = projected.head(n);
       }

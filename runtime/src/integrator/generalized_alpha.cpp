@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 namespace flexbody::runtime {
@@ -64,7 +65,6 @@ constexpr double kStagnationFloors = 1000.0;
 // at its rbe3 root in the scale test 20 times (the M-nearest one moved the root through the modes' rotation), the
 // pinned beam of fast_spin_test 1.0; a deformed tumbling beam's Tisserand rows 4e31 times (rejected).
 constexpr double kRigidCorrectionRatio = 100.0;
-
 
 // The length scale of each of one body's coordinates (GeneralizedAlphaOptions::tolerance): the radius of gyration
 // r = √(tr J / m) for τ, 1 for vec(A) (δa moves a point at distance r by r δa, as δτ = r δa would), and for a field
@@ -337,7 +337,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
           deformation[static_cast<std::size_t>(system.offset(b) + k)] = true;
       }
       // The rigid velocities' problem: M's rigid block, the deformation rates decoupled (identity) and out of the rows.
-      std::vector<Eigen::Triplet<double>> rigid_entries;  // M's rigid block, the deformation rates decoupled
+      std::vector<Eigen::Triplet<double>> rigid_entries;
       for (Eigen::Index k = 0; k < mass.outerSize(); ++k)
         for (Eigen::SparseMatrix<double>::InnerIterator it(mass, k); it; ++it)
           if (!deformation[static_cast<std::size_t>(it.row())] && !deformation[static_cast<std::size_t>(it.col())])
@@ -373,7 +373,6 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
               row_entries.emplace_back(row_index[static_cast<std::size_t>(it.row())], k, it.value());
       Eigen::SparseMatrix<double> rigid_rows(rigid_m, n);
       rigid_rows.setFromTriplets(row_entries.begin(), row_entries.end());
-      const detail::SaddlePointSolver rigid(rigid_metric, rigid_rows, mesh_sized);
       // The M-nearest correction over all velocities, the fallback and the yardstick.
       Eigen::VectorXd rhs(n + m);
       rhs << mass * v_, -phi_t;
@@ -382,10 +381,13 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
       auto energy_of = [&](const Eigen::VectorXd& change) { return change.dot(mass * change); };
       const double nearest_change = energy_of(nearest.head(n) - v_);
       Eigen::VectorXd chosen = nearest.head(n);
-      if (rigid_m > 0 && rigid.ok()) {
+      const std::optional<detail::SaddlePointSolver> rigid =
+          rigid_m > 0 ? std::optional<detail::SaddlePointSolver>(std::in_place, rigid_metric, rigid_rows, mesh_sized)
+                      : std::nullopt;  // no row a rigid velocity reaches: nothing to factorize
+      if (rigid && rigid->ok()) {
         Eigen::VectorXd rigid_rhs(n + rigid_m);
         rigid_rhs << rigid_metric * v_, -rigid_phi_t;
-        const Eigen::VectorXd projected = rigid.solve(rigid_rhs);
+        const Eigen::VectorXd projected = rigid->solve(rigid_rhs);
         // Taken when it closes every row (to 1e-10 of its terms; the M-nearest solve is held to 1e-8 of its own) and
         // costs at most kRigidCorrectionRatio times the M-nearest change's kinetic energy: rows that only a deformation
         // rate holds well (a deformed spinning body's Tisserand rows) would otherwise be closed by an enormous rigid

@@ -3,6 +3,8 @@
 // issue asks for, including the ξ and R terms of the marker directions.
 #include "flexbody/runtime/joint.hpp"
 
+#include "model/joint_rows.hpp"  // internal: the Newton iteration's matrix-free products
+
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
@@ -32,6 +34,21 @@ Eigen::VectorXd random_state(double angle) {
                             1e-3 * Eigen::Matrix3d::Random();
   q << Eigen::Vector3d::Random(), Eigen::Map<const Eigen::Matrix<double, 9, 1>>(a.data()),
       2e-3 * Eigen::VectorXd::Random(3 * kFields);
+  return q;
+}
+
+// A marker on a floating-frame body (coordinates [τ; p; η], n_m modes), as marker.cpp's `finished` makes one.
+constexpr Eigen::Index kModes = 5;
+fr::Marker random_floating_marker(int body) {
+  fr::Marker m = random_marker(body);
+  m.floating = true;
+  m.modal_displacement = Eigen::Matrix3Xd::Random(3, kModes) * 0.1;
+  m.modal_rotation = Eigen::Matrix3Xd::Random(3, kModes) * 0.5;
+  return m;
+}
+Eigen::VectorXd random_floating_state() {
+  Eigen::VectorXd q(7 + kModes);
+  q << Eigen::Vector3d::Random(), Eigen::Vector4d::Random().normalized(), 0.05 * Eigen::VectorXd::Random(kModes);
   return q;
 }
 
@@ -128,4 +145,78 @@ TEST(JointDerivatives, TheDrivenAngleRowsTimeDerivativeFollowsTheScenesTimeScale
   }
   joint.type = fr::JointType::revolute;
   EXPECT_EQ(fr::driven_row_time_derivative(joint, 0.1, 1e-3, q1, q2, frames), 0.0);
+}
+
+// The Newton iteration's residual, rates Φ_q q̇ and products Φ_qᵀ μ are formed without the Jacobian
+// (model/joint_rows.hpp); against evaluate_joint's Jacobian, which the test above checks against differences: every
+// joint type, GCMS and floating-frame markers and ground on either side, with and without removed rows. The two
+// sum the same terms in a different order: agreement to 1e-13 of the terms' size.
+TEST(JointDerivatives, TheMatrixFreeProductsMatchTheJacobian) {
+  std::srand(13);
+  struct Side {
+    fr::Marker marker;
+    Eigen::VectorXd q, v;
+  };
+  auto gcms = [](int body, double angle) { return Side{random_marker(body), random_state(angle), Eigen::VectorXd::Random(12 + 3 * kFields)}; };
+  auto floating = [](int body) { return Side{random_floating_marker(body), random_floating_state(), Eigen::VectorXd::Random(7 + kModes)}; };
+  auto ground = [] { return Side{fr::ground_marker(Eigen::Vector3d(0.1, 0.2, 0.3)), Eigen::VectorXd(), Eigen::VectorXd()}; };
+  const std::vector<std::pair<Side, Side>> pairs = {
+      {gcms(0, 0.4), gcms(1, -1.1)}, {gcms(0, 0.4), ground()}, {ground(), gcms(1, 2.0)},
+      {floating(0), gcms(1, 0.3)},   {gcms(0, 0.7), floating(1)}, {ground(), floating(1)}};
+  int case_index = 0;
+  for (const fr::JointType type : {fr::JointType::spherical, fr::JointType::fixed, fr::JointType::revolute,
+                                   fr::JointType::prismatic, fr::JointType::driven_revolute}) {
+    for (const auto& [one, two] : pairs) {
+      for (const unsigned removed : {0U, 0b10010U}) {
+        SCOPED_TRACE("case " + std::to_string(case_index++));
+        fr::Joint joint;
+        joint.name = "j";
+        joint.type = type;
+        joint.first = one.marker;
+        joint.second = two.marker;
+        joint.axis_first = Eigen::Vector3d(0.2, 0.3, 1.0).normalized();
+        joint.normal_a = Eigen::Vector3d(-0.1, 0.2, 1.0).normalized().unitOrthogonal();
+        joint.normal_b = Eigen::Vector3d(-0.1, 0.2, 1.0).normalized().cross(joint.normal_a);
+        joint.reference_first = joint.axis_first.unitOrthogonal();
+        joint.triad_first = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()).toRotationMatrix();
+        joint.triad_second = Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+        joint.offset = Eigen::Vector2d(0.01, -0.02);
+        joint.angle = [](double t) { return 0.7 * t * t; };
+        joint.removed = type == fr::JointType::spherical ? (removed & 0b111U) : removed;
+        const double t = 0.8;
+        const fr::JointEvaluation e = fr::evaluate_joint(joint, t, one.q, two.q);
+        const int rows = joint.rows();
+        ASSERT_EQ(e.residual.size(), rows);
+        Eigen::VectorXd residual(rows), rate(rows), only(rows);
+        fr::detail::joint_residual_and_rate(joint, t, one.q, two.q, one.v, two.v, residual, rate);
+        fr::detail::joint_residual(joint, t, one.q, two.q, only);
+        EXPECT_LT((residual - e.residual).cwiseAbs().maxCoeff(), 1e-15 * (1.0 + e.residual.cwiseAbs().maxCoeff()));
+        EXPECT_EQ((only - residual).cwiseAbs().maxCoeff(), 0.0);
+        Eigen::VectorXd expected_rate = Eigen::VectorXd::Zero(rows);
+        double rate_size = 0.0;  // Σ |J_ij v_j|: the size of the terms summed
+        if (e.jacobian_first.cols() > 0) {
+          expected_rate += e.jacobian_first * one.v;
+          rate_size = std::max(rate_size, (e.jacobian_first.cwiseAbs() * one.v.cwiseAbs()).maxCoeff());
+        }
+        if (e.jacobian_second.cols() > 0) {
+          expected_rate += e.jacobian_second * two.v;
+          rate_size = std::max(rate_size, (e.jacobian_second.cwiseAbs() * two.v.cwiseAbs()).maxCoeff());
+        }
+        EXPECT_LT((rate - expected_rate).cwiseAbs().maxCoeff(), 1e-13 * rate_size);
+        const Eigen::VectorXd mu = Eigen::VectorXd::Random(rows);
+        Eigen::VectorXd first, second;
+        fr::detail::joint_transpose_product(joint, t, one.q, two.q, mu, first, second);
+        ASSERT_EQ(first.size(), e.jacobian_first.cols());
+        ASSERT_EQ(second.size(), e.jacobian_second.cols());
+        if (first.size() > 0) {
+          const double size = (e.jacobian_first.cwiseAbs().transpose() * mu.cwiseAbs()).maxCoeff();
+          EXPECT_LT((first - e.jacobian_first.transpose() * mu).cwiseAbs().maxCoeff(), 1e-13 * size);
+        }
+        if (second.size() > 0) {
+          const double size = (e.jacobian_second.cwiseAbs().transpose() * mu.cwiseAbs()).maxCoeff();
+          EXPECT_LT((second - e.jacobian_second.transpose() * mu).cwiseAbs().maxCoeff(), 1e-13 * size);
+        }
+      }
+    }
+  }
 }

@@ -1,5 +1,6 @@
 #include "flexbody/runtime/joint.hpp"
 
+#include "joint_rows.hpp"
 #include "marker_frame.hpp"
 
 #include <Eigen/Geometry>
@@ -15,47 +16,12 @@
 namespace flexbody::runtime {
 namespace {
 
-// A body-fixed direction at a marker and its Jacobian (0 columns on ground), the Jacobian in work storage.
-struct Direction {
-  Eigen::Vector3d value;
-  const Eigen::MatrixXd* jacobian;
-};
-Direction direction(const detail::MarkerFrame& frame, const Eigen::Vector3d& d, Eigen::MatrixXd& storage) {
-  frame.jacobian(d, storage);
-  return {frame.direction(d), &storage};
-}
-
 // The frame of a marker's body: A for a body, identity for ground (directions are fixed in it at assembly).
 Eigen::Matrix3d frame_of(const Marker& m, const VectorRef& q) { return marker_body_orientation(m, q); }
 
 // row = wᵀ J (1 x 3 times 3 x n) into a row of a column-major matrix, column by column: no temporary.
 void set_row(Eigen::MatrixXd& out, int row, const Eigen::Vector3d& w, const Eigen::MatrixXd& jac) {
   for (Eigen::Index c = 0; c < jac.cols(); ++c) out(row, c) = w.dot(jac.col(c));
-}
-
-// Appends rows to an evaluation.
-struct Rows {
-  JointEvaluation& out;
-  int next = 0;
-  // u · w with u at marker 1, w at marker 2.
-  void dot(const Direction& u, const Direction& w) {
-    out.residual(next) = u.value.dot(w.value);
-    set_row(out.jacobian_first, next, w.value, *u.jacobian);
-    set_row(out.jacobian_second, next, u.value, *w.jacobian);
-    ++next;
-  }
-};
-
-// The three rows that keep two triads aligned: z1·y2, z1·x2, y1·x2.
-void orientation_rows(Rows& rows, const Joint& j, const detail::MarkerFrame& f1, const detail::MarkerFrame& f2) {
-  std::array<Eigen::MatrixXd, 4>& d = rows.out.directions;
-  const Direction x2 = direction(f2, j.triad_second.col(0), d[0]);
-  const Direction y2 = direction(f2, j.triad_second.col(1), d[1]);
-  const Direction y1 = direction(f1, j.triad_first.col(1), d[2]);
-  const Direction z1 = direction(f1, j.triad_first.col(2), d[3]);
-  rows.dot(z1, y2);
-  rows.dot(z1, x2);
-  rows.dot(y1, x2);
 }
 
 }  // namespace
@@ -140,55 +106,54 @@ void evaluate_joint(const Joint& j, double t, const VectorRef& q1, const VectorR
     out.jacobian_first.swap(out.all_first);
     out.jacobian_second.swap(out.all_second);
   }
-  const int n_rows = j.type_rows();
+  // The rows as joint_rows.hpp describes them (the matrix-free products use the same description).
+  const detail::JointForm form = detail::joint_form(j, t);
+  const int n_rows = form.row_count;
   out.residual.resize(n_rows);
   out.jacobian_first.setZero(n_rows, j.first.body == kGround ? 0 : q1.size());
   out.jacobian_second.setZero(n_rows, j.second.body == kGround ? 0 : q2.size());
-  Rows rows{out};
   const Eigen::Vector3d gap = marker_position(j.first, q1) - marker_position(j.second, q2);
   Eigen::MatrixXd &jr1 = out.position_first, &jr2 = out.position_second;
   if (j.first.body == kGround) jr1.resize(3, 0); else marker_position_jacobian(j.first, q1, jr1);
   if (j.second.body == kGround) jr2.resize(3, 0); else marker_position_jacobian(j.second, q2, jr2);
-  if (j.type != JointType::prismatic)
-    for (int k = 0; k < 3; ++k) {
-      out.residual(k) = gap(k);
-      if (jr1.cols()) out.jacobian_first.row(k) = jr1.row(k);
-      if (jr2.cols()) out.jacobian_second.row(k) = -jr2.row(k);
-    }
-  rows.next = j.type == JointType::prismatic ? 0 : 3;
-  std::array<Eigen::MatrixXd, 4>& d = out.directions;
-  detail::MarkerFrame f1, f2;  // each marker's rotation, shared by its directions
-  if (j.type != JointType::spherical) {
+  // Each marker's rotation once, shared by its directions; the directions' values and Jacobians: marker 1's in
+  // out.directions[0, 2), marker 2's in [2, 6).
+  std::array<Eigen::Vector3d, 2> u;
+  std::array<Eigen::Vector3d, 4> w;
+  std::array<Eigen::MatrixXd, 6>& d = out.directions;
+  if (form.first_count + form.second_count > 0) {
+    detail::MarkerFrame f1, f2;
     f1.evaluate(j.first, q1, out.frames[0]);
     f2.evaluate(j.second, q2, out.frames[1]);
-  }
-  switch (j.type) {
-    case JointType::spherical: break;
-    case JointType::fixed: orientation_rows(rows, j, f1, f2); break;
-    case JointType::prismatic: {
-      for (int k = 0; k < 2; ++k) {  // gap · n with n at marker 2: ∂/∂q1 = nᵀ J_r1, ∂/∂q2 = −nᵀ J_r2 + gapᵀ J_n
-        const Direction n = direction(f2, k == 0 ? j.normal_a : j.normal_b, d[0]);
-        out.residual(k) = gap.dot(n.value) - j.offset(k);
-        set_row(out.jacobian_first, k, n.value, jr1);
-        for (Eigen::Index c = 0; c < n.jacobian->cols(); ++c)
-          out.jacobian_second(k, c) = -n.value.dot(jr2.col(c)) + gap.dot(n.jacobian->col(c));
-      }
-      rows.next = 2;
-      orientation_rows(rows, j, f1, f2);
-      break;
+    for (std::size_t k = 0; k < static_cast<std::size_t>(form.first_count); ++k) {
+      u[k] = f1.direction(form.first[k]);
+      f1.jacobian(form.first[k], d[k]);
     }
-    case JointType::revolute:
-    case JointType::driven_revolute: {
-      const Direction axis = direction(f1, j.axis_first, d[0]);
-      rows.dot(axis, direction(f2, j.normal_a, d[1]));
-      rows.dot(axis, direction(f2, j.normal_b, d[1]));
-      if (j.type == JointType::driven_revolute) {
-        // u1 · (cos φ n_b − sin φ n_a) = 0 holds when marker 1 has turned by φ about the axis.
-        const double phi = j.angle(t);
-        rows.dot(direction(f1, j.reference_first, d[2]),
-                 direction(f2, std::cos(phi) * j.normal_b - std::sin(phi) * j.normal_a, d[3]));
-      }
-      break;
+    for (std::size_t k = 0; k < static_cast<std::size_t>(form.second_count); ++k) {
+      w[k] = f2.direction(form.second[k]);
+      f2.jacobian(form.second[k], d[2 + k]);
+    }
+  }
+  for (int r = 0; r < n_rows; ++r) {
+    const detail::JointForm::Row& row = form.rows[static_cast<std::size_t>(r)];
+    const auto a = static_cast<std::size_t>(row.a), b = static_cast<std::size_t>(row.b);
+    switch (row.kind) {
+      case detail::JointForm::Kind::gap:
+        out.residual(r) = gap(row.a);
+        if (jr1.cols()) out.jacobian_first.row(r) = jr1.row(row.a);
+        if (jr2.cols()) out.jacobian_second.row(r) = -jr2.row(row.a);
+        break;
+      case detail::JointForm::Kind::along:  // gap · n with n at marker 2: ∂/∂q1 = nᵀ J_r1, ∂/∂q2 = −nᵀ J_r2 + gapᵀ J_n
+        out.residual(r) = gap.dot(w[a]) - j.offset(row.b);
+        set_row(out.jacobian_first, r, w[a], jr1);
+        for (Eigen::Index c = 0; c < d[2 + a].cols(); ++c)
+          out.jacobian_second(r, c) = -w[a].dot(jr2.col(c)) + gap.dot(d[2 + a].col(c));
+        break;
+      case detail::JointForm::Kind::dot:  // u · w with u at marker 1, w at marker 2
+        out.residual(r) = u[a].dot(w[b]);
+        set_row(out.jacobian_first, r, w[b], d[a]);
+        set_row(out.jacobian_second, r, u[a], d[2 + b]);
+        break;
     }
   }
   if (!some_removed) return;

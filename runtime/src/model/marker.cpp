@@ -137,9 +137,10 @@ Eigen::MatrixXd marker_position_jacobian(const Marker& m, const VectorRef& q_b) 
   return jac;
 }
 
-void detail::MarkerFrame::evaluate(const Marker& m, const VectorRef& q_b, Eigen::MatrixXd& storage) {
+void detail::MarkerFrame::evaluate_values(const Marker& m, const VectorRef& q_b) {
   marker_ = &m;
   turned_ = nullptr;
+  v_ = nullptr;
   small_.setZero();
   if (m.body == kGround) {
     kind_ = Kind::ground;
@@ -148,30 +149,123 @@ void detail::MarkerFrame::evaluate(const Marker& m, const VectorRef& q_b, Eigen:
   }
   check_coordinates(m, q_b);
   size_ = q_b.size();
+  q_ = q_b.data();
   if (m.floating) {
     kind_ = Kind::floating;
     euler_ = euler_of(q_b);
     rotation_ = euler_rotation(euler_);
     small_.noalias() = m.modal_rotation * q_b.tail(size_ - 7);
+    local_ = m.y.segment<3>(1);
+    local_.noalias() += m.modal_displacement * q_b.tail(size_ - 7);
     return;
   }
   kind_ = Kind::gcms;
   rotation_ = orientation_of(q_b);
-  const Eigen::Index n_xi = size_ - 12;
-  if (n_xi == 0) return;
-  // R ξ̄ = Σ_f R_f Aᵀ ξ_f without forming ξ̄; ∂(R ξ̄)/∂A(i, j) = Σ_f R_f(:, j) ξ_f(i) (ξ̄_f = Aᵀ ξ_f); R_f Aᵀ, which
-  // ∂u/∂ξ_f = −A [d]× R_f Aᵀ takes for every direction d.
-  storage.resize(3, n_xi);
+  // R ξ̄ = Σ_f R_f Aᵀ ξ_f without forming ξ̄.
+  for (Eigen::Index f = 0; f < (size_ - 12) / 3; ++f)
+    small_.noalias() += m.rotation.middleCols<3>(3 * f) * (rotation_.transpose() * q_b.segment<3>(12 + 3 * f));
+}
+
+void detail::MarkerFrame::evaluate(const Marker& m, const VectorRef& q_b) { evaluate_values(m, q_b); }
+
+void detail::MarkerFrame::evaluate(const Marker& m, const VectorRef& q_b, Eigen::MatrixXd& storage) {
+  evaluate_values(m, q_b);
+  if (kind_ != Kind::gcms || size_ == 12) return;
+  // ∂(R ξ̄)/∂A(i, j) = Σ_f R_f(:, j) ξ_f(i) (ξ̄_f = Aᵀ ξ_f); R_f Aᵀ, which ∂u/∂ξ_f = −A [d]× R_f Aᵀ takes for every
+  // direction d.
+  storage.resize(3, size_ - 12);
   small_by_a_.setZero();
-  for (Eigen::Index f = 0; f < n_xi / 3; ++f) {
+  for (Eigen::Index f = 0; f < (size_ - 12) / 3; ++f) {
     const Eigen::Vector3d xi_f = q_b.segment<3>(12 + 3 * f);
     const auto r_f = m.rotation.middleCols<3>(3 * f);
-    small_.noalias() += r_f * (rotation_.transpose() * xi_f);
     for (int j = 0; j < 3; ++j)
       for (int i = 0; i < 3; ++i) small_by_a_.col(3 * j + i) += xi_f(i) * r_f.col(j);
     storage.middleCols<3>(3 * f).noalias() = r_f * rotation_.transpose();
   }
   turned_ = &storage;
+}
+
+Eigen::Vector3d detail::MarkerFrame::position() const {
+  switch (kind_) {
+    case Kind::ground: return marker_->ground_point;
+    case Kind::floating: return Eigen::Map<const Eigen::Vector3d>(q_) + rotation_ * local_;
+    case Kind::gcms: break;
+  }
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();
+  for (Eigen::Index k = 0; k < marker_->y.size(); ++k) r += marker_->y(k) * Eigen::Map<const Eigen::Vector3d>(q_ + 3 * k);
+  return r;
+}
+
+void detail::MarkerFrame::set_rates(const VectorRef& v_b) {
+  if (kind_ == Kind::ground) return;
+  if (v_b.size() != size_)
+    throw std::invalid_argument("marker " + marker_->name + ": " + std::to_string(v_b.size()) + " body velocities, expected " +
+                                std::to_string(size_));
+  v_ = v_b.data();
+  if (kind_ == Kind::floating) {  // d(Θ_c η)/dt
+    small_rate_.noalias() = marker_->modal_rotation * v_b.tail(size_ - 7);
+    return;
+  }
+  // d(Σ_f R_f Aᵀ ξ_f)/dt = Σ_f R_f (Ȧᵀ ξ_f + Aᵀ ξ̇_f).
+  rotation_rate_ = Eigen::Map<const Eigen::Matrix3d>(v_ + 3);
+  small_rate_.setZero();
+  for (Eigen::Index f = 0; f < (size_ - 12) / 3; ++f)
+    small_rate_.noalias() += marker_->rotation.middleCols<3>(3 * f) *
+                             (rotation_rate_.transpose() * Eigen::Map<const Eigen::Vector3d>(q_ + 12 + 3 * f) +
+                              rotation_.transpose() * Eigen::Map<const Eigen::Vector3d>(v_ + 12 + 3 * f));
+}
+
+Eigen::Vector3d detail::MarkerFrame::position_rate() const {
+  switch (kind_) {
+    case Kind::ground: return Eigen::Vector3d::Zero();
+    case Kind::floating: {  // τ̇ + ∂(A(p) ū_c)/∂p ṗ + A Ψ_c η̇
+      const Eigen::Map<const Eigen::VectorXd> v(v_, size_);
+      return v.head<3>() + euler_rotation_derivative(euler_, local_) * v.segment<4>(3) +
+             rotation_ * (marker_->modal_displacement * v.tail(size_ - 7));
+    }
+    case Kind::gcms: break;
+  }
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();  // (yᵀ ⊗ I3) q̇_b
+  for (Eigen::Index k = 0; k < marker_->y.size(); ++k) r += marker_->y(k) * Eigen::Map<const Eigen::Vector3d>(v_ + 3 * k);
+  return r;
+}
+
+Eigen::Vector3d detail::MarkerFrame::direction_rate(const Eigen::Vector3d& d) const {
+  if (kind_ == Kind::ground) return Eigen::Vector3d::Zero();
+  // d/dt A (d − [d]× s) = (dA/dt) v − A (d × ṡ), v = d − d × s, s = R ξ̄ or Θ_c η.
+  const Eigen::Vector3d v = d - d.cross(small_);
+  const Eigen::Vector3d turned = rotation_ * d.cross(small_rate_);
+  if (kind_ == Kind::floating) return euler_rotation_derivative(euler_, v) * Eigen::Map<const Eigen::Vector4d>(v_ + 3) - turned;
+  return rotation_rate_ * v - turned;
+}
+
+void detail::MarkerFrame::add_transpose_product(const Eigen::Vector3d& w_r, const Eigen::Vector3d* d, const Eigen::Vector3d* w,
+                                                int count, Eigen::Ref<Eigen::VectorXd> out) const {
+  if (kind_ == Kind::ground) return;
+  // Each direction's J_dᵀ w_k: its A (or p) columns directly, and through s = R ξ̄ (Θ_c η) the sum
+  // σ = Σ_k (−A [d_k]×)ᵀ w_k = Σ_k d_k × (Aᵀ w_k), which every field's columns share.
+  Eigen::Vector3d sigma = Eigen::Vector3d::Zero();
+  for (int k = 0; k < count; ++k) sigma += d[k].cross(rotation_.transpose() * w[k]);
+  if (kind_ == Kind::floating) {  // J_r = [I, ∂(A ū_c)/∂p, A Ψ_c]; J_d = [0, ∂(A v)/∂p, −A [d]× Θ_c]
+    out.head<3>() += w_r;
+    out.segment<4>(3) += euler_rotation_derivative(euler_, local_).transpose() * w_r;
+    for (int k = 0; k < count; ++k)
+      out.segment<4>(3) += euler_rotation_derivative(euler_, d[k] - d[k].cross(small_)).transpose() * w[k];
+    out.tail(size_ - 7).noalias() += marker_->modal_displacement.transpose() * (rotation_.transpose() * w_r);
+    out.tail(size_ - 7).noalias() += marker_->modal_rotation.transpose() * sigma;
+    return;
+  }
+  // J_r = yᵀ ⊗ I3.
+  for (Eigen::Index k = 0; k < marker_->y.size(); ++k) out.segment<3>(3 * k) += marker_->y(k) * w_r;
+  // J_d's A columns: ∂(A v)/∂A(i, j) = e_i v_j, column 3 + 3j + i, i.e. vec(w vᵀ); and through s.
+  Eigen::Map<Eigen::Matrix3d> by_a(out.data() + 3);
+  for (int k = 0; k < count; ++k) by_a.noalias() += w[k] * (d[k] - d[k].cross(small_)).transpose();
+  // With c_f = R_fᵀ σ: ∂s/∂A(i, j) = Σ_f R_f(:, j) ξ_f(i) gives Σ_f ξ_f c_fᵀ, and ∂s/∂ξ_f = R_f Aᵀ gives A c_f.
+  for (Eigen::Index f = 0; f < (size_ - 12) / 3; ++f) {
+    const Eigen::Vector3d c = marker_->rotation.middleCols<3>(3 * f).transpose() * sigma;
+    by_a.noalias() += Eigen::Map<const Eigen::Vector3d>(q_ + 12 + 3 * f) * c.transpose();
+    out.segment<3>(12 + 3 * f).noalias() += rotation_ * c;
+  }
 }
 
 Eigen::Vector3d detail::MarkerFrame::direction(const Eigen::Vector3d& d) const {

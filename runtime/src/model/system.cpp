@@ -3,6 +3,7 @@
 #include "../body/gcms_elastic_padded.hpp"
 #include "../kernels/outer_sum.hpp"
 #include "../kernels/parallel.hpp"
+#include "joint_rows.hpp"
 
 #include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/reference_constraints.hpp"
@@ -613,11 +614,13 @@ Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
 
 void System::constraints(double t, const Eigen::VectorXd& q, Eigen::VectorXd& phi) const {
   phi.resize(constraint_count());
-  Eigen::Index row = reference_residuals(q, phi);
-  for (std::size_t k = 0; k < joints_.size(); ++k) {
-    phi.segment(row, joints_[k].rows()) = evaluated(k, t, q).residual;
-    row += joints_[k].rows();
-  }
+  reference_residuals(q, phi);
+  // Each joint into its own rows, without its Jacobian (joint_rows.hpp).
+  detail::for_each(static_cast<int>(joints_.size()), [&](int k) {
+    const Joint& j = joints_[static_cast<std::size_t>(k)];
+    detail::joint_residual(j, t, body_view(q, j.first.body), body_view(q, j.second.body),
+                           phi.segment(joint_row(static_cast<std::size_t>(k)), j.rows()));
+  });
 }
 
 void System::constraints_and_rates(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& phi,
@@ -626,14 +629,13 @@ void System::constraints_and_rates(double t, const Eigen::VectorXd& q, const Eig
   rate.resize(constraint_count());
   reference_residuals(q, phi);
   reference_rates(q, v, rate);
-  const auto count = static_cast<int>(joints_.size());
-  // Each joint evaluated once for both, into its own rows and work storage.
-  detail::for_each(count, [&](int k) {
+  // Each joint evaluated once for both, into its own rows, without its Jacobian (joint_rows.hpp).
+  detail::for_each(static_cast<int>(joints_.size()), [&](int k) {
     const Joint& j = joints_[static_cast<std::size_t>(k)];
-    const JointEvaluation& e = evaluated(static_cast<std::size_t>(k), t, q);
-    const Eigen::Index row = reference_total_ + joint_start_[static_cast<std::size_t>(k)];
-    phi.segment(row, j.rows()) = e.residual;
-    joint_rate(j, e, v, rate.segment(row, j.rows()));
+    const Eigen::Index row = joint_row(static_cast<std::size_t>(k));
+    detail::joint_residual_and_rate(j, t, body_view(q, j.first.body), body_view(q, j.second.body),
+                                    body_view(v, j.first.body), body_view(v, j.second.body), phi.segment(row, j.rows()),
+                                    rate.segment(row, j.rows()));
   });
 }
 
@@ -670,30 +672,28 @@ void System::add_constraint_jacobian_transpose_product(double t, const Eigen::Ve
         out.segment<3>(b.offset + 12 + 3 * f) += b.model.g_border(0, 4 + f) * mu.segment<3>(row + 9);
     row += reference_rows(b);
   }
+  // Each joint's Φ_qᵀ μ without its Jacobian (joint_rows.hpp), into its own storage in parallel; the sums in joint
+  // order, so that the result is the same for any thread count.
   const auto count = static_cast<int>(joints_.size());
-  if (count >= detail::kParallelFrom)  // the evaluations in parallel; the sums below in joint order
-    detail::for_each(count, [&](int k) { evaluated(static_cast<std::size_t>(k), t, q); });
+  detail::for_each(count, [&](int k) {
+    const auto ks = static_cast<std::size_t>(k);
+    const Joint& j = joints_[ks];
+    JointEvaluation& e = joint_work_[ks];
+    detail::joint_transpose_product(j, t, body_view(q, j.first.body), body_view(q, j.second.body),
+                                    mu.segment(joint_row(ks), j.rows()), e.product_first, e.product_second);
+  });
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
-    const JointEvaluation& e = count >= detail::kParallelFrom ? joint_work_[k] : evaluated(k, t, q);
-    const auto mu_j = mu.segment(row, j.rows());
-    if (j.first.body != kGround)
-      out.segment(offset(j.first.body), e.jacobian_first.cols()).noalias() += e.jacobian_first.transpose() * mu_j;
-    if (j.second.body != kGround)
-      out.segment(offset(j.second.body), e.jacobian_second.cols()).noalias() += e.jacobian_second.transpose() * mu_j;
-    row += j.rows();
+    const JointEvaluation& e = joint_work_[k];
+    if (j.first.body != kGround) out.segment(offset(j.first.body), e.product_first.size()) += e.product_first;
+    if (j.second.body != kGround) out.segment(offset(j.second.body), e.product_second.size()) += e.product_second;
   }
 }
 
 Eigen::VectorXd System::constraint_jacobian_product(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
-  Eigen::VectorXd out(constraint_count());
-  Eigen::Index row = reference_rates(q, v, out);
-  for (std::size_t k = 0; k < joints_.size(); ++k) {
-    const Joint& j = joints_[k];
-    joint_rate(j, evaluated(k, t, q), v, out.segment(row, j.rows()));
-    row += j.rows();
-  }
-  return out;
+  Eigen::VectorXd phi, rate;
+  constraints_and_rates(t, q, v, phi, rate);
+  return rate;
 }
 
 Eigen::VectorXd System::constraint_time_derivative(double t, const Eigen::VectorXd& q, double time_scale) const {

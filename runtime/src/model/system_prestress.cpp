@@ -3,6 +3,7 @@
 #include "flexbody/runtime/system.hpp"
 
 #include "../kernels/outer_sum.hpp"
+#include "joint_rows.hpp"
 
 #include "flexbody/runtime/ffrf_dynamics.hpp"
 
@@ -92,14 +93,15 @@ void System::update_prestress(double t, const Eigen::VectorXd& q, const Eigen::V
     for (std::size_t k = 0; k < joints_.size(); ++k) {
       const Joint& j = joints_[k];
       if (!loaded(j.first) && !loaded(j.second)) continue;
-      const JointEvaluation& e = evaluate_joints ? evaluated(k, t, q) : joint_work_[k];
-      const auto lambda_j = lambda.segment(joint_row(k), j.rows());
+      JointEvaluation& e = joint_work_[k];  // Φ_qᵀ λ per side, matrix-free (joint_rows.hpp)
+      if (evaluate_joints)
+        detail::joint_transpose_product(j, t, body_view(q, j.first.body), body_view(q, j.second.body),
+                                        lambda.segment(joint_row(k), j.rows()), e.product_first, e.product_second);
       for (int side = 0; side < 2; ++side) {
         const Marker& m = side == 0 ? j.first : j.second;
         if (!loaded(m)) continue;
         const Body& b = bodies_[static_cast<std::size_t>(m.body)];
-        const Eigen::MatrixXd& jacobian = side == 0 ? e.jacobian_first : e.jacobian_second;
-        b.prestress.generalized.noalias() = -lambda_scale * (jacobian.transpose() * lambda_j);
+        b.prestress.generalized.noalias() = -lambda_scale * (side == 0 ? e.product_first : e.product_second);
         const VectorRef q_b = body_view(q, m.body);
         const JointReaction w = wrench(b, q_b, b.prestress.generalized, marker_position(m, q_b));
         InterfaceLoad& load = b.prestress.loads[static_cast<std::size_t>(m.interface)];

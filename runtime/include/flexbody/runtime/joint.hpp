@@ -76,11 +76,13 @@ struct Joint {
 struct JointEvaluation {
   Eigen::VectorXd residual;
   Eigen::MatrixXd jacobian_first, jacobian_second;
-  /// Work storage: the markers' position Jacobians, up to four direction Jacobians, and each marker's rotations of
-  /// its fields (R_f Aᵀ, shared by its directions).
+  /// Work storage: the markers' position Jacobians, the direction Jacobians (two at marker 1, four at marker 2), and
+  /// each marker's rotations of its fields (R_f Aᵀ, shared by its directions).
   Eigen::MatrixXd position_first, position_second;
-  std::array<Eigen::MatrixXd, 4> directions;
+  std::array<Eigen::MatrixXd, 6> directions;
   std::array<Eigen::MatrixXd, 2> frames;
+  /// Work storage of System's matrix-free Φ_qᵀ μ: the joint's part on each marker's body.
+  Eigen::VectorXd product_first, product_second;
   /// Work storage of a joint with removed rows: all of its type's rows, before the removed ones are left out.
   Eigen::VectorXd all_residual;
   Eigen::MatrixXd all_first, all_second;

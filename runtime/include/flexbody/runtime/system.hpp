@@ -251,8 +251,8 @@ class System {
   void set_prestress(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& lambda,
                      double lambda_scale = 1.0) const;
   /// The Newton iteration's way to the same: the weights of set_prestress(t, q, q̇, scale μ), read from the joints'
-  /// evaluations at (t, q) that the call add_constraint_jacobian_transpose_product(t, q, ...) just before this one
-  /// left in the System's work storage (so that each joint is evaluated once per iteration), and then the geometric
+  /// products Φ_qᵀ μ that the call add_constraint_jacobian_transpose_product(t, q, μ, ...) just before this one left
+  /// in the System's work storage (so that each joint is evaluated once per iteration), and then the geometric
   /// stiffness's share of the dynamic rows, K_g ξ̄ / scale (what dynamic_residual(..., false) left out, scaled as the
   /// integrator scales those rows), added to `residual`.
   void add_prestress_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& mu,
@@ -308,7 +308,8 @@ class System {
     mutable GcmsWorkspace gcms;  ///< a GCMS body's (dynamic_residual, Φ_qᵀ μ)
     mutable PrestressState prestress;  ///< set_prestress's weights (used when the model has prestress cases)
   };
-  /// set_prestress, with the joints evaluated here or (`evaluate_joints` false) as last evaluated at (t, q).
+  /// set_prestress, with the joints' Φ_qᵀ λ evaluated here or (`evaluate_joints` false) as the last
+  /// add_constraint_jacobian_transpose_product left it (at the same t, q and multipliers).
   void update_prestress(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& lambda,
                         double lambda_scale, bool evaluate_joints) const;
   /// Adds `sign` times the geometric stiffness's forces −K_g ξ̄ (−K_g η) of body b at q to its slice f_b, if its weights

@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 #include <utility>
 
@@ -43,6 +44,27 @@ TEST(DenseProduct, PaddedMatrixGivesTheSameProduct) {
     copy.multiply(x.data(), y.data());
     EXPECT_EQ(y, plain);
   }
+}
+
+// Equal constant matrices are stored once (a scene of copies of one part); a matrix that differs in one bit, even
+// 0.0 against -0.0, or in shape gets its own storage.
+TEST(DenseProduct, SharedMatricesStoreEqualMatricesOnce) {
+  flexbody::runtime::detail::SharedMatrices shared;
+  const Eigen::MatrixXd a = Eigen::MatrixXd::Random(54, 54);
+  const flexbody::runtime::detail::PaddedMatrix first = shared.get(a), again = shared.get(Eigen::MatrixXd(a));
+  EXPECT_EQ(first.storage(), again.storage());
+  EXPECT_TRUE(again.holds(a));
+  Eigen::MatrixXd b = a;
+  b(53, 53) = std::nextafter(b(53, 53), 2.0);
+  const flexbody::runtime::detail::PaddedMatrix other = shared.get(b);
+  EXPECT_NE(other.storage(), first.storage());
+  EXPECT_TRUE(other.holds(b));
+  EXPECT_FALSE(other.holds(a));
+  Eigen::MatrixXd zero = Eigen::MatrixXd::Zero(3, 3), negative = zero;
+  negative(1, 1) = -0.0;
+  EXPECT_NE(shared.get(zero).storage(), shared.get(negative).storage());
+  EXPECT_NE(shared.get(Eigen::MatrixXd::Zero(9, 1)).storage(), shared.get(Eigen::MatrixXd::Zero(3, 3)).storage());
+  EXPECT_EQ(shared.get(a.topRows(20)).storage(), shared.get(Eigen::MatrixXd(a.topRows(20))).storage());  // strided input
 }
 
 }  // namespace

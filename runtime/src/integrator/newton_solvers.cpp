@@ -90,6 +90,7 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
     : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime),
       reduced_(sparse ? std::unique_ptr<ReducedSolver>(std::make_unique<SparseReducedSolver>())
                       : std::make_unique<DenseReducedSolver>()) {
+  SharedMatrices shared;  // copies of one part share one C⁻¹ (equal cores give bitwise-equal inverses)
   for (int b = 0; b < system.body_count(); ++b) {
     const BodyModel& model = system.model(b);
     const Eigen::Index n_f = model.floating() ? 0 : model.field_count();
@@ -124,7 +125,7 @@ ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, 
     // (G_ff = I for a body file's M_s-orthonormal fields, so cond C ≤ 1 + λ_max(K̂ + γ'D̂)/β', with λ_max(K̂) the
     // stiffest shape of the 3 n_f-dimensional field space, above the kept modes' ω²), so the inverse loses only
     // about cond(C)·ε.
-    inverses_.back() = PaddedMatrix(factor.solve(Eigen::MatrixXd::Identity(3 * n_f, 3 * n_f)));
+    inverses_.back() = shared.get(factor.solve(Eigen::MatrixXd::Identity(3 * n_f, 3 * n_f)));
   }
   eliminated_.resize(static_cast<std::size_t>(system.body_count()));
   for (int b = 0; b < system.body_count(); ++b) {

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstring>
 #include <new>
+#include <string_view>
 
 // A portable build compiles the kernel three times, for x86-64-v4 (AVX-512), x86-64-v3 (AVX2 and FMA) and the
 // baseline (SSE2), and the dynamic loader picks the widest the machine has (GCC's target_clones, GCC 12 or later on
@@ -68,6 +70,26 @@ PaddedMatrix::PaddedMatrix(const Eigen::Ref<const Eigen::MatrixXd>& a)
 
 void PaddedMatrix::multiply(const double* x, double* y) const {
   product_kernel(static_cast<std::ptrdiff_t>(rows_), static_cast<std::ptrdiff_t>(cols_), static_cast<std::ptrdiff_t>(stride_), data_.get(), x, y);
+}
+
+bool PaddedMatrix::holds(const Eigen::Ref<const Eigen::MatrixXd>& a) const {
+  if (a.rows() != rows_ || a.cols() != cols_) return false;
+  for (Eigen::Index c = 0; c < cols_; ++c)  // bytes, not values: -0.0 and 0.0 differ, as NaNs would
+    if (std::memcmp(a.col(c).data(), data_.get() + c * stride_, static_cast<std::size_t>(rows_) * sizeof(double)) != 0)
+      return false;
+  return true;
+}
+
+PaddedMatrix SharedMatrices::get(const Eigen::Ref<const Eigen::MatrixXd>& a) {
+  std::size_t hash = std::hash<Eigen::Index>()(a.rows() * 31 + a.cols());
+  for (Eigen::Index c = 0; c < a.cols(); ++c) {
+    const std::string_view bytes(reinterpret_cast<const char*>(a.col(c).data()), static_cast<std::size_t>(a.rows()) * sizeof(double));
+    hash = hash * 1000003U ^ std::hash<std::string_view>()(bytes);
+  }
+  const auto [first, last] = made_.equal_range(hash);
+  for (auto it = first; it != last; ++it)
+    if (it->second.holds(a)) return it->second;
+  return made_.emplace(hash, PaddedMatrix(a))->second;
 }
 
 }  // namespace flexbody::runtime::detail

@@ -108,7 +108,9 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
     throw std::invalid_argument("body '" + name + "': the initial orientation is not a rotation (A^T A = I, det A = 1)");
   const Eigen::Index rows = model.floating() ? 1 : model.rigid() ? 6 : (model.needs_translational_tisserand() ? 12 : 9);
   std::shared_ptr<const detail::PaddedMatrix> stiffness;
-  if (!model.sparse && !model.rigid() && !model.floating()) stiffness = std::make_shared<const detail::PaddedMatrix>(model.stiffness);
+  if (!shared_matrices_) shared_matrices_ = std::make_shared<detail::SharedMatrices>();
+  if (!model.sparse && !model.rigid() && !model.floating())  // copies of one part share one K̂
+    stiffness = std::make_shared<const detail::PaddedMatrix>(shared_matrices_->get(model.stiffness));
   PrestressState prestress;
   if (model.prestress) {
     const Prestress& p = *model.prestress;

@@ -31,6 +31,7 @@ namespace flexbody::runtime {
 
 namespace detail {
 class PaddedMatrix;
+class SharedMatrices;
 }
 
 /// A body's initial state. ξ and ξ̇ are in the global frame (ξ_f = A ξ̄_f); empty means zero.
@@ -345,6 +346,8 @@ class System {
   Eigen::Index coordinates_ = 0;
   Eigen::Index reference_total_ = 0, joint_total_ = 0;  ///< the bodies' reference rows, and the joints' rows
   std::vector<Eigen::Index> joint_start_;  ///< per joint: its first row after the reference rows
+  /// The bodies' constant matrices for the product kernel, each stored once (copies of a part share them).
+  std::shared_ptr<detail::SharedMatrices> shared_matrices_;
 };
 
 }  // namespace flexbody::runtime

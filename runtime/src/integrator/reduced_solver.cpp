@@ -68,7 +68,7 @@ SparseReducedSolver::~SparseReducedSolver() { klu_->free_all(); }
 void SparseReducedSolver::factor(Eigen::Index size, const std::vector<Eigen::Triplet<double>>& entries) {
   if (size > std::numeric_limits<int>::max() / 2)
     throw std::runtime_error("the reduced Newton matrix has more rows than KLU's 32-bit indices take");
-  assemble(size, entries);
+  assembly_.assemble(size, size, entries, matrix_);
   const int n = static_cast<int>(size);
   // KLU factorizes on the union of the nonzeros of every matrix so far, not on the blocks' dense pattern: a rigid
   // body's blocks are (G ⊗ I3)-shaped, two thirds zeros, and dropping them cut KLU's refactorization of a 1024-link
@@ -109,33 +109,6 @@ void SparseReducedSolver::factor(Eigen::Index size, const std::vector<Eigen::Tri
   klu_rcond(klu_->symbolic, klu_->numeric, &klu_->common);
   fresh_rcond_ = klu_->common.rcond;
   singular_ = !(fresh_rcond_ > 0.0);
-}
-
-void SparseReducedSolver::assemble(Eigen::Index size, const std::vector<Eigen::Triplet<double>>& entries) {
-  const std::size_t count = entries.size();
-  bool same = matrix_.rows() == size && matrix_.isCompressed() && rows_.size() == count;
-  for (std::size_t k = 0; same && k < count; ++k)
-    same = entries[k].row() == rows_[k] && entries[k].col() == columns_[k];
-  if (same) {
-    double* values = matrix_.valuePtr();
-    std::fill(values, values + matrix_.nonZeros(), 0.0);
-    for (std::size_t k = 0; k < count; ++k) values[places_[k]] += entries[k].value();
-    return;
-  }
-  matrix_.resize(size, size);
-  matrix_.setFromTriplets(entries.begin(), entries.end());  // sums duplicates; sorted rows in each column
-  matrix_.makeCompressed();
-  rows_.resize(count);
-  columns_.resize(count);
-  places_.resize(count);
-  const int* outer = matrix_.outerIndexPtr();
-  const int* inner = matrix_.innerIndexPtr();
-  for (std::size_t k = 0; k < count; ++k) {
-    rows_[k] = static_cast<int>(entries[k].row());
-    columns_[k] = static_cast<int>(entries[k].col());
-    const int* first = inner + outer[columns_[k]];
-    places_[k] = static_cast<int>(std::lower_bound(first, inner + outer[columns_[k] + 1], rows_[k]) - inner);
-  }
 }
 
 bool SparseReducedSolver::scatter() {

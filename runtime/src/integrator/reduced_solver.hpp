@@ -17,6 +17,7 @@
 //   klu_solve works in place on KLU's own work storage: a solve allocates nothing.
 
 #include "../kernels/dense_product.hpp"
+#include "../kernels/triplet_assembly.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
@@ -68,10 +69,8 @@ class SparseReducedSolver final : public ReducedSolver {
  private:
   struct Klu;  // KLU's objects, kept out of this header
   std::unique_ptr<Klu> klu_;
-  /// matrix_ from `entries`: summed into its kept entries along places_ when the entries' (row, column) sequence is
-  /// the last one's (the Newton matrix's blocks come in the same order at every build), else by setFromTriplets, whose
-  /// sort and transposition took most of a 64-link rigid chain's build outside KLU.
-  void assemble(Eigen::Index size, const std::vector<Eigen::Triplet<double>>& entries);
+  /// matrix_ from `entries` (the Newton matrix's blocks come in the same order at every build).
+  TripletAssembly assembly_;
   /// The matrix's values on the analysed pattern (values_); false if a nonzero lies outside it.
   bool scatter();
   /// The analysed pattern ∪ the matrix's nonzeros (only the nonzeros when `keep` is false: a new size), and its
@@ -80,7 +79,6 @@ class SparseReducedSolver final : public ReducedSolver {
   int growths_ = 0;  ///< times the pattern grew at this size
   std::vector<int> outer_, inner_;  ///< the analysed pattern: every nonzero seen so far
   std::vector<double> values_;      ///< the last matrix on it
-  std::vector<int> rows_, columns_, places_;  ///< the last entries' positions, and each one's index in matrix_
   bool singular_ = true;
   double fresh_rcond_ = 0.0;  ///< KLU's pivot-ratio estimate at the last pivoting factorization
   int analyses_ = 0, pivoting_ = 0;

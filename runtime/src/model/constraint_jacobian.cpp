@@ -4,6 +4,7 @@
 #include "flexbody/runtime/system.hpp"
 
 #include "../kernels/parallel.hpp"
+#include "../kernels/triplet_assembly.hpp"
 
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
@@ -49,8 +50,8 @@ void System::sparse_constraint_jacobian(double t, const Eigen::VectorXd& q, Eige
     if (j.second.body != kGround) add_block(row, offset(j.second.body), e.jacobian_second);
     row += j.rows();
   }
-  out.resize(constraint_count(), coordinates_);
-  out.setFromTriplets(entries.begin(), entries.end());
+  if (!jacobian_assembly_) jacobian_assembly_ = std::make_shared<detail::TripletAssembly>();
+  jacobian_assembly_->assemble(constraint_count(), coordinates_, entries, out);
 }
 
 namespace {

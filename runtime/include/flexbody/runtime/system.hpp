@@ -32,6 +32,7 @@ namespace flexbody::runtime {
 namespace detail {
 class PaddedMatrix;
 class SharedMatrices;
+class TripletAssembly;
 }
 
 /// A body's initial state. ξ and ξ̇ are in the global frame (ξ_f = A ξ̄_f); empty means zero.
@@ -337,6 +338,7 @@ class System {
   std::deque<Body> bodies_;  ///< a deque: add_body never moves a body, so references to its model stay valid
   std::vector<Joint> joints_;
   mutable std::vector<Eigen::Triplet<double>> jacobian_work_;  ///< sparse_constraint_jacobian's entries
+  mutable std::shared_ptr<detail::TripletAssembly> jacobian_assembly_;  ///< and where they land in its matrix
   mutable std::vector<JointEvaluation> joint_work_;  ///< per joint: its last evaluation's storage
   mutable std::vector<std::array<Eigen::MatrixXd, 2>> spring_work_;  ///< per spring: its markers' position Jacobians
   std::vector<PointForce> forces_;

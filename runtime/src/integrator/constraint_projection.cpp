@@ -1,6 +1,7 @@
 #include "constraint_projection.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace flexbody::runtime::detail {
 
@@ -8,27 +9,43 @@ void ConstraintProjection::plan(const Eigen::SparseMatrix<double>& jacobian) {
   const Eigen::Index m = jacobian.rows();
   const int* outer = jacobian.outerIndexPtr();
   const int* inner = jacobian.innerIndexPtr();
-  // The product's entries, column by column of Φ_q: (row(p), row(r)) for each pair with row(p) ≥ row(r).
-  std::vector<Eigen::Triplet<double>> entries;
-  for (Eigen::Index c = 0; c < jacobian.cols(); ++c)
-    for (int p = outer[c]; p < outer[c + 1]; ++p)
-      for (int r = outer[c]; r < outer[c + 1]; ++r)
-        if (inner[p] >= inner[r]) entries.emplace_back(inner[p], inner[r], 0.0);
+  if (bodies_.empty() || bodies_.back() != jacobian.cols())
+    throw std::invalid_argument("ConstraintProjection: the bodies' columns do not cover the Jacobian's");
+  const std::size_t n_b = bodies_.size() - 1;
+  // Each body's rows: those with an entry in its columns.
+  block_rows_.clear();
+  block_start_.assign(1, 0);
+  local_row_.assign(static_cast<std::size_t>(jacobian.nonZeros()), 0);
+  std::vector<Eigen::Triplet<double>> entries;  // the product's lower triangle, once per position
+  for (std::size_t b = 0; b < n_b; ++b) {
+    const auto first = static_cast<std::size_t>(block_start_.back());
+    for (Eigen::Index c = bodies_[b]; c < bodies_[b + 1]; ++c)
+      for (int p = outer[c]; p < outer[c + 1]; ++p) block_rows_.push_back(inner[p]);
+    std::sort(block_rows_.begin() + static_cast<std::ptrdiff_t>(first), block_rows_.end());
+    block_rows_.erase(std::unique(block_rows_.begin() + static_cast<std::ptrdiff_t>(first), block_rows_.end()), block_rows_.end());
+    block_start_.push_back(static_cast<int>(block_rows_.size()));
+    const auto begin = block_rows_.begin() + static_cast<std::ptrdiff_t>(first);
+    for (Eigen::Index c = bodies_[b]; c < bodies_[b + 1]; ++c)
+      for (int p = outer[c]; p < outer[c + 1]; ++p)
+        local_row_[static_cast<std::size_t>(p)] = static_cast<int>(std::lower_bound(begin, block_rows_.end(), inner[p]) - begin);
+    for (auto j = begin; j != block_rows_.end(); ++j)
+      for (auto i = j; i != block_rows_.end(); ++i) entries.emplace_back(*i, *j, 0.0);  // block_rows_ sorted: i ≥ j
+  }
   product_.resize(m, m);
   product_.setFromTriplets(entries.begin(), entries.end());  // each position once, rows sorted in each column
   product_.makeCompressed();
   const int* p_outer = product_.outerIndexPtr();
   const int* p_inner = product_.innerIndexPtr();
   plan_.clear();
-  plan_.reserve(entries.size());
-  for (Eigen::Index c = 0; c < jacobian.cols(); ++c)
-    for (int p = outer[c]; p < outer[c + 1]; ++p)
-      for (int r = outer[c]; r < outer[c + 1]; ++r) {
-        if (inner[p] < inner[r]) continue;
-        const int* first = p_inner + p_outer[inner[r]];  // entry (row(p), row(r)) is in column row(r)
-        const int* last = p_inner + p_outer[inner[r] + 1];
-        plan_.push_back(static_cast<int>(std::lower_bound(first, last, inner[p]) - p_inner));
+  for (std::size_t b = 0; b < n_b; ++b) {
+    const int* rows = block_rows_.data() + block_start_[b];
+    const int count = block_start_[b + 1] - block_start_[b];
+    for (int j = 0; j < count; ++j)
+      for (int i = j; i < count; ++i) {  // entry (rows[i], rows[j]) is in column rows[j]
+        const int* first = p_inner + p_outer[rows[j]];
+        plan_.push_back(static_cast<int>(std::lower_bound(first, p_inner + p_outer[rows[j] + 1], rows[i]) - p_inner));
       }
+  }
   outer_ = Eigen::Map<const Eigen::VectorXi>(outer, jacobian.cols() + 1);
   inner_ = Eigen::Map<const Eigen::VectorXi>(inner, jacobian.nonZeros());
   factor_.analyzePattern(product_);  // AMD ordering and the elimination tree: once per pattern
@@ -43,22 +60,27 @@ bool ConstraintProjection::factor(const Eigen::SparseMatrix<double>& jacobian, c
   if (!jacobian.isCompressed()) return factor(Eigen::SparseMatrix<double>(jacobian), weights);  // compressed copy
   const Eigen::Index columns = jacobian.cols(), nonzeros = jacobian.nonZeros();
   const int* outer = jacobian.outerIndexPtr();
-  const int* inner = jacobian.innerIndexPtr();
   const bool same = outer_.size() == columns + 1 && inner_.size() == nonzeros &&
                     std::equal(outer_.data(), outer_.data() + columns + 1, outer) &&
-                    std::equal(inner_.data(), inner_.data() + nonzeros, inner);
+                    std::equal(inner_.data(), inner_.data() + nonzeros, jacobian.innerIndexPtr());
   if (!same) plan(jacobian);
-  // Σ_c w_c J(i, c) J(k, c) into entry (i, k), i ≥ k, along the plan.
+  // Body by body: J_b W_b J_bᵀ over the body's rows, its lower triangle into the product along the plan.
   double* product = product_.valuePtr();
   std::fill(product, product + product_.nonZeros(), 0.0);
   const double* values = jacobian.valuePtr();
-  std::size_t next = 0;
-  for (Eigen::Index c = 0; c < columns; ++c)
-    for (int p = outer[c]; p < outer[c + 1]; ++p) {
-      const double weighted = weights(c) * values[p];
-      for (int r = outer[c]; r < outer[c + 1]; ++r)
-        if (inner[p] >= inner[r]) product[plan_[next++]] += weighted * values[r];
-    }
+  const int* plan = plan_.data();
+  for (std::size_t b = 0; b + 1 < bodies_.size(); ++b) {
+    const Eigen::Index count = block_start_[b + 1] - block_start_[b], width = bodies_[b + 1] - bodies_[b];
+    if (count == 0) continue;
+    block_.setZero(count, width);
+    for (Eigen::Index c = 0; c < width; ++c)
+      for (int p = outer[bodies_[b] + c]; p < outer[bodies_[b] + c + 1]; ++p) block_(local_row_[static_cast<std::size_t>(p)], c) = values[p];
+    weighted_.noalias() = block_ * weights.segment(bodies_[b], width).asDiagonal();
+    gram_.resize(count, count);
+    gram_.triangularView<Eigen::Lower>() = weighted_ * block_.transpose();
+    for (Eigen::Index j = 0; j < count; ++j)
+      for (Eigen::Index i = j; i < count; ++i) product[*plan++] += gram_(i, j);
+  }
   factor_.factorize(product_);
   return factor_.info() == Eigen::Success;
 }

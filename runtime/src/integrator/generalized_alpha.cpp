@@ -419,7 +419,10 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   sparse_ = options.newton_matrix == NewtonMatrix::constant_core &&
             (options.reduced_matrix == ReducedMatrix::sparse ||
              (options.reduced_matrix == ReducedMatrix::automatic && reduced_rows >= kSparseFromRows));
-  projected_ = std::make_unique<detail::ConstraintProjection>(sparse_);
+  std::vector<Eigen::Index> body_columns;  // each body's first coordinate, and the end
+  for (int b = 0; b < system.body_count(); ++b) body_columns.push_back(system.offset(b));
+  body_columns.push_back(system.coordinate_count());
+  projected_ = std::make_unique<detail::ConstraintProjection>(sparse_, std::move(body_columns));
   couple_ = options.coupled_from_start;
   build_solver(options.step);
 }

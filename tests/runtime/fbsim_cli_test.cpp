@@ -439,15 +439,16 @@ TEST(ParaViewSeries, DrawsRotatedBodiesInWorldAxes) {
 // without their velocity rows are weakly unstable near ρ∞ = 1 (item 5). At 6.93 s it has gained 0.1 % of its
 // kinetic energy, and its angular momentum 0.1 % at 7.33 s, in an oscillation of period 2 h (see kCheckEvery). On
 // 521de58 the same run (then the only form) exited 0 without a word (a 12 s run ended at +17.6 %).
-// With ρ∞ = 0.9 it does not gain.
+// With ρ∞ = 0.9 it does not gain. This needs the GCMS's rigid body (τ and A, `formulation: gcms`); a rigid body's
+// default, position and Euler parameters (7 coordinates, one quadratic row), gains nothing at ρ∞ = 0.99: 6.7e-8.
 TEST(FbsimCli, AConservativeSceneThatGainsEnergyIsFlagged) {
   const auto dir = flexbody::test::scratch_dir();
   write_text(dir / "plate.geo", "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 0.3, 0.2, 0.01};\n");
   write_text(dir / "plate.yaml", "input: plate.geo\nunit: m\nmesh: {size: 0.05}\nreduction: {modes: 1}\noutput_regions: {}\n");
   const CliRun prep = run_fbprep(dir, "plate.yaml -o plate.fbh5 -q");
   ASSERT_EQ(prep.exit_code, 0) << prep.err;
-  auto scene = [](double rho) {
-    return "bodies:\n  plate: {file: plate.fbh5, modes: rigid, angular_velocity: [0.05, 5.0, 0.05]}\n"
+  auto scene = [](double rho, const std::string& formulation = ", formulation: gcms") {
+    return "bodies:\n  plate: {file: plate.fbh5, modes: rigid" + formulation + ", angular_velocity: [0.05, 5.0, 0.05]}\n"
            "integrator: {type: generalized-alpha, rho_inf: " + std::to_string(rho) +
            ", step: 2.0e-3, end: 8.0, constraints: index3}\n";
   };
@@ -472,6 +473,14 @@ TEST(FbsimCli, AConservativeSceneThatGainsEnergyIsFlagged) {
   EXPECT_EQ(quiet["energy_growth"].get<double>(), 0.0);          // measured: it only dissipates
   EXPECT_LT(quiet["angular_momentum_growth"].get<double>(), 1e-5);  // measured 4.2e-6
   EXPECT_TRUE(damped.err.empty()) << damped.err;
+
+  write_text(dir / "euler.yaml", scene(0.99, ""));  // the default rigid body: Euler parameters
+  const CliRun euler = run_fbsim(dir, "euler.yaml -o euler_out --json");
+  ASSERT_EQ(euler.exit_code, 0) << euler.err;
+  const nlohmann::json kept = nlohmann::json::parse(euler.out);
+  EXPECT_EQ(kept["conservation_warnings"].get<int>(), 0) << euler.err;
+  EXPECT_LT(kept["energy_growth"].get<double>(), 1e-6);            // measured 6.7e-8
+  EXPECT_LT(kept["angular_momentum_growth"].get<double>(), 1e-6);  // measured 3.3e-8
 }
 
 // The conservation checks apply only where the laws hold: a pendulum on a joint to ground conserves energy but

@@ -7,6 +7,7 @@
 
 #include <Eigen/SparseCore>
 
+#include <cstdint>
 #include <vector>
 
 namespace flexbody::runtime::detail {
@@ -19,7 +20,8 @@ class TripletAssembly {
                 Eigen::SparseMatrix<double>& matrix);
 
  private:
-  std::vector<int> rows_, columns_, places_;  ///< the last entries' positions, and each one's index in the values
+  std::vector<std::uint64_t> keys_;  ///< the last entries' (row, column), packed
+  std::vector<int> places_;          ///< and each one's index in the values
   std::vector<int> outer_, inner_;            ///< the pattern built last
 };
 

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
@@ -57,6 +58,21 @@ Marker make_marker(int body, std::string name, Eigen::VectorXd y, Eigen::MatrixX
   m.rotation = std::move(rotation);
   m.ground_point = ground_point;
   return m;
+}
+
+// ∂A/∂p_k of the Euler parameters' rotation (euler_rotation): D_0 = 2 (e0 I + [e]×), D_i = 2 (E_i eᵀ + e E_iᵀ − e_i I +
+// e0 [E_i]×), so that euler_rotation_derivative(p, x) = [D_0 x, ..., D_3 x]; once per frame instead of per vector.
+std::array<Eigen::Matrix3d, 4> euler_rotation_partials(const Eigen::Vector4d& p) {
+  const double e0 = p(0);
+  const Eigen::Vector3d e = p.tail<3>();
+  std::array<Eigen::Matrix3d, 4> d;
+  d[0] = 2.0 * (e0 * Eigen::Matrix3d::Identity() + skew(e));
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d unit = Eigen::Vector3d::Unit(i);
+    d[static_cast<std::size_t>(i) + 1] =
+        2.0 * (unit * e.transpose() + e * unit.transpose() - e(i) * Eigen::Matrix3d::Identity() + e0 * skew(unit));
+  }
+  return d;
 }
 
 }  // namespace
@@ -202,7 +218,9 @@ void detail::MarkerFrame::set_rates(const VectorRef& v_b) {
     throw std::invalid_argument("marker " + marker_->name + ": " + std::to_string(v_b.size()) + " body velocities, expected " +
                                 std::to_string(size_));
   v_ = v_b.data();
-  if (kind_ == Kind::floating) {  // d(Θ_c η)/dt
+  if (kind_ == Kind::floating) {  // dA/dt = Σ_k ∂A/∂p_k ṗ_k, d(Θ_c η)/dt
+    const std::array<Eigen::Matrix3d, 4> d = euler_rotation_partials(euler_);
+    rotation_rate_ = d[0] * v_b(3) + d[1] * v_b(4) + d[2] * v_b(5) + d[3] * v_b(6);
     small_rate_.noalias() = marker_->modal_rotation * v_b.tail(size_ - 7);
     return;
   }
@@ -218,10 +236,9 @@ void detail::MarkerFrame::set_rates(const VectorRef& v_b) {
 Eigen::Vector3d detail::MarkerFrame::position_rate() const {
   switch (kind_) {
     case Kind::ground: return Eigen::Vector3d::Zero();
-    case Kind::floating: {  // τ̇ + ∂(A(p) ū_c)/∂p ṗ + A Ψ_c η̇
+    case Kind::floating: {  // τ̇ + Ȧ ū_c + A Ψ_c η̇
       const Eigen::Map<const Eigen::VectorXd> v(v_, size_);
-      return v.head<3>() + euler_rotation_derivative(euler_, local_) * v.segment<4>(3) +
-             rotation_ * (marker_->modal_displacement * v.tail(size_ - 7));
+      return v.head<3>() + rotation_rate_ * local_ + rotation_ * (marker_->modal_displacement * v.tail(size_ - 7));
     }
     case Kind::gcms: break;
   }
@@ -234,9 +251,7 @@ Eigen::Vector3d detail::MarkerFrame::direction_rate(const Eigen::Vector3d& d) co
   if (kind_ == Kind::ground) return Eigen::Vector3d::Zero();
   // d/dt A (d − [d]× s) = (dA/dt) v − A (d × ṡ), v = d − d × s, s = R ξ̄ or Θ_c η.
   const Eigen::Vector3d v = d - d.cross(small_);
-  const Eigen::Vector3d turned = rotation_ * d.cross(small_rate_);
-  if (kind_ == Kind::floating) return euler_rotation_derivative(euler_, v) * Eigen::Map<const Eigen::Vector4d>(v_ + 3) - turned;
-  return rotation_rate_ * v - turned;
+  return rotation_rate_ * v - rotation_ * d.cross(small_rate_);
 }
 
 void detail::MarkerFrame::add_transpose_product(const Eigen::Vector3d& w_r, const Eigen::Vector3d* d, const Eigen::Vector3d* w,
@@ -248,9 +263,11 @@ void detail::MarkerFrame::add_transpose_product(const Eigen::Vector3d& w_r, cons
   for (int k = 0; k < count; ++k) sigma += d[k].cross(rotation_.transpose() * w[k]);
   if (kind_ == Kind::floating) {  // J_r = [I, ∂(A ū_c)/∂p, A Ψ_c]; J_d = [0, ∂(A v)/∂p, −A [d]× Θ_c]
     out.head<3>() += w_r;
-    out.segment<4>(3) += euler_rotation_derivative(euler_, local_).transpose() * w_r;
-    for (int k = 0; k < count; ++k)
-      out.segment<4>(3) += euler_rotation_derivative(euler_, d[k] - d[k].cross(small_)).transpose() * w[k];
+    // Σ wᵀ (∂A/∂p_k) x over the pairs (w_r, ū_c) and (w_k, v_k) is ⟨∂A/∂p_k, Σ w xᵀ⟩.
+    Eigen::Matrix3d weights = w_r * local_.transpose();
+    for (int k = 0; k < count; ++k) weights.noalias() += w[k] * (d[k] - d[k].cross(small_)).transpose();
+    const std::array<Eigen::Matrix3d, 4> partials = euler_rotation_partials(euler_);
+    for (int k = 0; k < 4; ++k) out(3 + k) += partials[static_cast<std::size_t>(k)].cwiseProduct(weights).sum();
     out.tail(size_ - 7).noalias() += marker_->modal_displacement.transpose() * (rotation_.transpose() * w_r);
     out.tail(size_ - 7).noalias() += marker_->modal_rotation.transpose() * sigma;
     return;
@@ -270,7 +287,7 @@ void detail::MarkerFrame::add_transpose_product(const Eigen::Vector3d& w_r, cons
 
 Eigen::Vector3d detail::MarkerFrame::direction(const Eigen::Vector3d& d) const {
   if (kind_ == Kind::ground) return d;
-  return rotation_ * (d - skew(d) * small_);
+  return rotation_ * (d - d.cross(small_));
 }
 
 void detail::MarkerFrame::jacobian(const Eigen::Vector3d& d, Eigen::MatrixXd& jac) const {

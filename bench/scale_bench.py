@@ -23,6 +23,7 @@ exponent fitted from N = 16 to the largest measured N in the legend) and prints 
 
     /usr/bin/python3 bench/scale_bench.py [--build build] [--work bench/results/work/scale] [--sizes 1 4 16 64 256 1024]
     /usr/bin/python3 bench/scale_bench.py --fbsim /path/to/older/fbsim --tag old     # time another build's fbsim
+    /usr/bin/python3 bench/scale_bench.py --threads 2 --tag threads2                 # fbsim --threads 2
     /usr/bin/python3 bench/scale_bench.py --replot                                   # table and plot from the CSV
 """
 import argparse
@@ -50,7 +51,7 @@ STYLE = {"rigid": ("tab:gray", "o"), "gcms": ("tab:blue", "s"), "ffrf": ("tab:re
 FIELDS = ["kind", "scene", "bodies", "joints", "steps", "us_per_step", "integrator_us_per_step", "peak_rss_mb",
           "status",
           "newton_per_step", "run_wall_s", "setup_s", "predicted_s", "others_cores", "warnings",
-          "fbsim"]
+          "fbsim", "threads"]
 
 
 # --------------------------------------------------------------------------------------------------- the bracket --
@@ -199,7 +200,7 @@ def wait_idle(longest, threshold=0.3):
             return time.monotonic() - start
 
 
-def run_fbsim(fbsim, scene, out, timeout):
+def run_fbsim(fbsim, scene, out, timeout, threads=1):
     """Runs fbsim --json on `scene`; returns (summary or None, exit code, stderr, wall s, the child's own peak RSS MB,
     the cores other processes kept busy meanwhile on average).
 
@@ -210,7 +211,8 @@ def run_fbsim(fbsim, scene, out, timeout):
     busy = cpu_busy_seconds()
     start = time.monotonic()
     with open(stdout_path, "w") as so, open(stderr_path, "w") as se:
-        p = subprocess.Popen([str(fbsim), str(scene), "-o", str(out), "--json"], stdout=so, stderr=se)
+        p = subprocess.Popen([str(fbsim), str(scene), "-o", str(out), "--json", "--threads", str(threads)],
+                             stdout=so, stderr=se)
         killed = False
         while True:
             pid, status, usage = os.wait4(p.pid, os.WNOHANG)
@@ -279,11 +281,11 @@ def one_run(args, kind, name, text_of, n_bodies, steps, timeout):
     scene.write_text(text)
     wait_idle(args.wait_idle)  # other work on the machine disturbs the timings: `others` records how much
     out = Path(args.work) / "out" / f"{kind}_{name}"
-    summary, code, err, wall, rss, others = run_fbsim(args.fbsim, scene, out, timeout)
+    summary, code, err, wall, rss, others = run_fbsim(args.fbsim, scene, out, timeout, args.threads)
     row = dict(kind=kind, scene=name, bodies=bodies, joints=joints, steps=steps, us_per_step="",
                integrator_us_per_step="", peak_rss_mb=f"{rss:.1f}", status="ok", newton_per_step="",
                run_wall_s=f"{wall:.2f}", setup_s="", predicted_s="", others_cores=f"{others:.2f}", warnings="",
-               fbsim=args.label)
+               fbsim=args.label, threads=args.threads)
     if summary is None:
         errors = [line for line in err.splitlines() if not line.startswith("fbsim: warning:")]
         last = errors[-1] if errors else err.splitlines()[-1] if err else f"exit code {code}"
@@ -319,7 +321,7 @@ def skipped_row(args, kind, name, bodies, joints, shortest):
                 integrator_us_per_step="", peak_rss_mb="",
                 status=f"skipped: {MIN_STEPS} steps predicted {shortest:.0f} s > --max-run {args.max_run:g}",
                 newton_per_step="", run_wall_s="", setup_s="", predicted_s=f"{shortest:.0f}", others_cores="",
-                warnings="", fbsim=args.label)
+                warnings="", fbsim=args.label, threads=args.threads)
 
 
 def ladder_runs(args, kind, body_file, bracket, history):
@@ -469,6 +471,13 @@ def report(rows, csv_path, png_path, title):
             print(f"  {kind:6s} n/a (fewer than two measured sizes >= 16)")
         else:
             print(f"  {kind:6s} us/step ~ N^{e:.2f} (N = {span[0]}..{span[1]}); peak RSS ~ N^{m:.2f}")
+    # The issue's targets: 64 bodies at most 1.5 x 64 x one body's step; 1024 rigid links at most 10 ms per step.
+    print("64 bodies against 64 single bodies (target 1.5), and the cost at 1024:")
+    for kind in kinds:
+        pts = dict(chain_points(rows, kind))
+        ratio = f"{pts[64] / (64 * pts[1]):.2f}" if 1 in pts and 64 in pts else "n/a"
+        largest = f"{pts[1024] / 1000:.1f} ms" if 1024 in pts else "n/a"
+        print(f"  {kind:6s} 64 / (64 x 1): {ratio}; N = 1024: {largest} per step")
 
     import matplotlib
     matplotlib.use("Agg")
@@ -534,6 +543,7 @@ def main():
                         help="rail links of the ladder scene (3 links bodies; 0: no ladder)")
     parser.add_argument("--wait-idle", type=float, default=120.0,
                         help="before each run, wait up to this long [s] for other processes to leave the cores idle")
+    parser.add_argument("--threads", type=int, default=1, help="fbsim --threads (1: fbsim's default)")
     parser.add_argument("--tag", default="", help="suffix of the output names: scale_bench_<tag>.csv/.png")
     parser.add_argument("--replot", action="store_true", help="table and plot from the CSV, no runs")
     args = parser.parse_args()

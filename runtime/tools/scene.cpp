@@ -205,20 +205,21 @@ Scene read_scene(const std::filesystem::path& file) {
         r.fail(damping, fmt::format("{} damping: {}", where, e.what()));
       }
     }
-    // formulation: gcms (default) | ffrf; frame (ffrf only): mean-axis (default) | {interface: NAME}. A rigid body
+    // formulation: gcms (default for elastic bodies) | ffrf; frame (formulation: ffrf only): mean-axis (default) | {interface: NAME}. A rigid body
     // (modes: rigid) moves in the floating frame's 7 coordinates, position and Euler parameters, with one
     // normalisation row, unless the scene asks for the GCMS's 12 (τ and A) with 6 orthogonality rows: the same
     // motion with 18 unknowns per body instead of 8 (a 1024-link chain 30 % faster per step, bench/README.md).
     bool floating = modes && *modes == 0 && !b["formulation"];
+    bool asked_ffrf = false;  // a frame belongs to a body the scene puts in the floating frame itself
     if (const YAML::Node f = b["formulation"]) {
       const std::string text = r.text(f, where + " formulation");
       if (text != "gcms" && text != "ffrf")
-        r.fail(f, fmt::format("{} formulation '{}' is unknown; use gcms (the improved GCMS, the default) or ffrf (the "
-                              "floating frame of reference formulation with the same modes)", where, text));
-      floating = text == "ffrf";
+        r.fail(f, fmt::format("{} formulation '{}' is unknown; use gcms (the improved GCMS, the default for elastic "
+                              "bodies) or ffrf (the floating frame of reference formulation with the same modes)", where, text));
+      floating = asked_ffrf = text == "ffrf";
     }
     if (const YAML::Node frame = b["frame"]) {
-      if (!floating) r.fail(frame, fmt::format("{}: frame belongs to formulation ffrf (the improved GCMS's frame is always "
+      if (!asked_ffrf) r.fail(frame, fmt::format("{}: frame belongs to formulation ffrf (the improved GCMS's frame is always "
                                                "the mean-axis one)", where));
       runtime::FloatingFrame kind = runtime::FloatingFrame::mean_axis;
       std::string interface;

@@ -720,6 +720,10 @@ TEST(FbsimCli, BadFormulationsNameTheLine) {
                      "body 'bar' formulation 'acf' is unknown; use gcms");
   expect_scene_error("bodies:\n  bar: {file: bar.fbh5, frame: mean-axis}\n" + tail, 2,
                      "body 'bar': frame belongs to formulation ffrf");
+  // A rigid body moves in the floating frame's coordinates by default, but its frame is the scene's only with
+  // formulation: ffrf written out.
+  expect_scene_error("bodies:\n  bar: {file: bar.fbh5, modes: rigid, frame: {interface: root}}\n" + tail, 2,
+                     "body 'bar': frame belongs to formulation ffrf");
   expect_scene_error("bodies:\n  bar: {file: bar.fbh5, formulation: ffrf, frame: {interface: hub}}\n" + tail, 2,
                      "body 'bar' frame: bar.fbh5: no interface 'hub' to attach the floating frame to (interfaces: root, tip)");
   expect_scene_error("bodies:\n  bar: {file: bar.fbh5, formulation: ffrf, frame: tisserand}\n" + tail, 2,

@@ -160,9 +160,26 @@ TEST(JointDerivatives, TheMatrixFreeProductsMatchTheJacobian) {
   auto gcms = [](int body, double angle) { return Side{random_marker(body), random_state(angle), Eigen::VectorXd::Random(12 + 3 * kFields)}; };
   auto floating = [](int body) { return Side{random_floating_marker(body), random_floating_state(), Eigen::VectorXd::Random(7 + kModes)}; };
   auto ground = [] { return Side{fr::ground_marker(Eigen::Vector3d(0.1, 0.2, 0.3)), Eigen::VectorXd(), Eigen::VectorXd()}; };
+  // A rigid body in either form: the GCMS's τ and A without fields, and position and Euler parameters without modes
+  // (fbsim's `modes: rigid`).
+  auto rigid_gcms = [](int body) {
+    fr::Marker m = random_marker(body);
+    m.y.conservativeResize(4);
+    m.rotation.resize(3, 0);
+    return Side{m, random_state(0.9).head(12), Eigen::VectorXd::Random(12)};
+  };
+  auto rigid_floating = [&floating](int body) {
+    Side s = floating(body);
+    s.marker.modal_displacement.resize(3, 0);
+    s.marker.modal_rotation.resize(3, 0);
+    s.q.conservativeResize(7);
+    s.v.conservativeResize(7);
+    return s;
+  };
   const std::vector<std::pair<Side, Side>> pairs = {
       {gcms(0, 0.4), gcms(1, -1.1)}, {gcms(0, 0.4), ground()}, {ground(), gcms(1, 2.0)},
-      {floating(0), gcms(1, 0.3)},   {gcms(0, 0.7), floating(1)}, {ground(), floating(1)}};
+      {floating(0), gcms(1, 0.3)},   {gcms(0, 0.7), floating(1)}, {ground(), floating(1)},
+      {rigid_gcms(0), rigid_floating(1)}, {rigid_floating(0), ground()}};
   int case_index = 0;
   for (const fr::JointType type : {fr::JointType::spherical, fr::JointType::fixed, fr::JointType::revolute,
                                    fr::JointType::prismatic, fr::JointType::driven_revolute}) {

@@ -289,6 +289,47 @@ TEST(SparseNewton, ALongRigidChainConvergesWithTheAlternatingStep) {
   EXPECT_LT(system->constraints(integrator.time(), integrator.coordinates()).cwiseAbs().maxCoeff(), 1e-10);
 }
 
+// The Newton iteration's Φ, Φ_q v and Φ_qᵀ μ are formed joint by joint without the Jacobian (model/joint_rows.hpp), in
+// parallel from 64 joints; against the sparse Jacobian's products on a random mechanism of 80 bodies (every joint type,
+// GCMS, FFRF and rigid bodies, loops) away from its initial state, on one and two threads (the same bits).
+TEST(SparseNewton, TheMatrixFreeProductsMatchTheJacobiansAtSystemLevel) {
+  const auto system = random_mechanism(31, 80, 6);
+  std::mt19937 random(5);
+  std::normal_distribution<double> normal;
+  const Eigen::Index n = system->coordinate_count(), m = system->constraint_count();
+  Eigen::VectorXd q = system->initial_coordinates(), v(n), mu(m);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    q(i) += 1e-3 * normal(random);
+    v(i) = normal(random);
+  }
+  for (Eigen::Index i = 0; i < m; ++i) mu(i) = normal(random);
+  const double t = 0.7;
+  Eigen::SparseMatrix<double> jacobian;
+  system->sparse_constraint_jacobian(t, q, jacobian);
+  const Eigen::VectorXd expected_rate = jacobian * v, expected_product = jacobian.transpose() * mu;
+  // The sizes of the terms summed: |J| |v| and |J|ᵀ |μ|.
+  const Eigen::SparseMatrix<double> magnitude = jacobian.cwiseAbs();
+  const Eigen::VectorXd rate_size = magnitude * v.cwiseAbs(), product_size = magnitude.transpose() * mu.cwiseAbs();
+  Eigen::VectorXd results[2][3];
+  for (const int threads : {1, 2}) {
+    fr::set_threads(threads);
+    Eigen::VectorXd phi, rate, product = Eigen::VectorXd::Zero(n);
+    system->constraints_and_rates(t, q, v, phi, rate);
+    system->add_constraint_jacobian_transpose_product(t, q, mu, product);
+    const Eigen::VectorXd alone = system->constraints(t, q);
+    EXPECT_TRUE(alone == phi);
+    for (Eigen::Index i = 0; i < m; ++i) EXPECT_LE(std::abs(rate(i) - expected_rate(i)), 1e-13 * (1.0 + rate_size(i))) << i;
+    for (Eigen::Index i = 0; i < n; ++i)
+      EXPECT_LE(std::abs(product(i) - expected_product(i)), 1e-13 * (1.0 + product_size(i))) << i;
+    results[threads - 1][0] = phi;
+    results[threads - 1][1] = rate;
+    results[threads - 1][2] = product;
+  }
+  fr::set_threads(1);
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(results[0][k] == results[1][k]);
+  ASSERT_GE(static_cast<int>(system->joints().size()), 64);  // the parallel path
+}
+
 // Per-body work runs on the threads set_threads asks for, from 64 bodies on (runtime/src/kernels/parallel.hpp);
 // each body's arithmetic is the same on any thread and shared rows are summed in a fixed order, so one and two threads give the
 // same bits.

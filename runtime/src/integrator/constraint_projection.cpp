@@ -16,7 +16,7 @@ void ConstraintProjection::plan(const Eigen::SparseMatrix<double>& jacobian) {
   block_rows_.clear();
   block_start_.assign(1, 0);
   local_row_.assign(static_cast<std::size_t>(jacobian.nonZeros()), 0);
-  std::vector<Eigen::Triplet<double>> entries;  // the product's lower triangle, once per position
+  std::vector<Eigen::Triplet<double>> entries;  // the product's lower triangle (a position two bodies share twice)
   for (std::size_t b = 0; b < n_b; ++b) {
     const auto first = static_cast<std::size_t>(block_start_.back());
     for (Eigen::Index c = bodies_[b]; c < bodies_[b + 1]; ++c)
@@ -46,6 +46,14 @@ void ConstraintProjection::plan(const Eigen::SparseMatrix<double>& jacobian) {
         plan_.push_back(static_cast<int>(std::lower_bound(first, p_inner + p_outer[rows[j] + 1], rows[i]) - p_inner));
       }
   }
+  Eigen::Index rows = 0, width = 0;  // the work blocks at their largest, once per pattern
+  for (std::size_t b = 0; b < n_b; ++b) {
+    rows = std::max<Eigen::Index>(rows, block_start_[b + 1] - block_start_[b]);
+    width = std::max(width, bodies_[b + 1] - bodies_[b]);
+  }
+  block_.resize(rows, width);
+  weighted_.resize(rows, width);
+  gram_.resize(rows, rows);
   outer_ = Eigen::Map<const Eigen::VectorXi>(outer, jacobian.cols() + 1);
   inner_ = Eigen::Map<const Eigen::VectorXi>(inner, jacobian.nonZeros());
   factor_.analyzePattern(product_);  // AMD ordering and the elimination tree: once per pattern
@@ -72,14 +80,16 @@ bool ConstraintProjection::factor(const Eigen::SparseMatrix<double>& jacobian, c
   for (std::size_t b = 0; b + 1 < bodies_.size(); ++b) {
     const Eigen::Index count = block_start_[b + 1] - block_start_[b], width = bodies_[b + 1] - bodies_[b];
     if (count == 0) continue;
-    block_.setZero(count, width);
+    auto block = block_.topLeftCorner(count, width);
+    auto weighted = weighted_.topLeftCorner(count, width);
+    auto gram = gram_.topLeftCorner(count, count);
+    block.setZero();
     for (Eigen::Index c = 0; c < width; ++c)
-      for (int p = outer[bodies_[b] + c]; p < outer[bodies_[b] + c + 1]; ++p) block_(local_row_[static_cast<std::size_t>(p)], c) = values[p];
-    weighted_.noalias() = block_ * weights.segment(bodies_[b], width).asDiagonal();
-    gram_.resize(count, count);
-    gram_.triangularView<Eigen::Lower>() = weighted_ * block_.transpose();
+      for (int p = outer[bodies_[b] + c]; p < outer[bodies_[b] + c + 1]; ++p) block(local_row_[static_cast<std::size_t>(p)], c) = values[p];
+    weighted.noalias() = block * weights.segment(bodies_[b], width).asDiagonal();
+    gram.triangularView<Eigen::Lower>() = weighted * block.transpose();
     for (Eigen::Index j = 0; j < count; ++j)
-      for (Eigen::Index i = j; i < count; ++i) product[*plan++] += gram_(i, j);
+      for (Eigen::Index i = j; i < count; ++i) product[*plan++] += gram(i, j);
   }
   factor_.factorize(product_);
   return factor_.info() == Eigen::Success;

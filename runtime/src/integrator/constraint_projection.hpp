@@ -47,7 +47,7 @@ class ConstraintProjection {
   /// Per body, per pair (i ≥ j) of its block's rows, column by column of the lower triangle: the index of entry
   /// (row i, row j) in product_'s values.
   std::vector<int> plan_;
-  Eigen::MatrixXd block_, weighted_, gram_;  ///< work: J_b, J_b W_b and J_b W_b J_bᵀ
+  Eigen::MatrixXd block_, weighted_, gram_;  ///< work: J_b, J_b W_b and J_b W_b J_bᵀ (at the largest body's size)
   Eigen::VectorXd work_;
 };
 

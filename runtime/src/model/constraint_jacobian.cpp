@@ -50,8 +50,8 @@ void System::sparse_constraint_jacobian(double t, const Eigen::VectorXd& q, Eige
     if (j.second.body != kGround) add_block(row, offset(j.second.body), e.jacobian_second);
     row += j.rows();
   }
-  if (!jacobian_assembly_) jacobian_assembly_ = std::make_shared<detail::TripletAssembly>();
-  jacobian_assembly_->assemble(constraint_count(), coordinates_, entries, out);
+  if (!jacobian_assembly_.ptr) jacobian_assembly_.ptr = std::make_shared<detail::TripletAssembly>();
+  jacobian_assembly_.ptr->assemble(constraint_count(), coordinates_, entries, out);
 }
 
 namespace {
@@ -86,7 +86,9 @@ std::vector<Eigen::Index> dependent_rows(const Eigen::SparseMatrix<double>& jac)
   // with the scene's width; the dense Gram-Schmidt it replaces cost O(m² n) in every scene). In row order, a chain's
   // pivots stay at 0.5 whatever its length (each joint brings a body not seen before); a fill-reducing order (AMD)
   // left pivots falling like N^-2.5 (2.5e-5 at 256 rigid links), so that from about 700 links the test failed and the
-  // QR ran: 61 s to set up 1024 links in Euler parameters.
+  // QR ran: 61 s to set up 1024 links in Euler parameters. Row order can fill where a fill-reducing order would not:
+  // a large tree whose joints are listed breadth first makes a frontier as wide as a generation (a scene listed
+  // depth first, or by chains, does not).
   if (!empty_rows) {
     const Eigen::SparseMatrix<double> gram = rows.transpose() * rows;
     const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> ldlt(gram);

@@ -31,8 +31,8 @@ struct JointForm {
 /// The rows of joint j's type at time t (a driven joint's angle φ(t) turns its last direction).
 [[nodiscard]] JointForm joint_form(const Joint& j, double t);
 
-/// Φ_j at (t, q1, q2), its kept rows (j.rows()) into `residual`; with v1, v2 (non-null) also Φ_q,j q̇ into `rate`.
-/// Ground sides take empty vectors.
+/// Φ_j at (t, q1, q2), its kept rows (j.rows()) into `residual`; the second also Φ_q,j q̇ for the body velocities
+/// v1, v2 into `rate`. Ground sides take empty vectors.
 void joint_residual(const Joint& j, double t, const VectorRef& q1, const VectorRef& q2, Eigen::Ref<Eigen::VectorXd> residual);
 void joint_residual_and_rate(const Joint& j, double t, const VectorRef& q1, const VectorRef& q2, const VectorRef& v1,
                              const VectorRef& v2, Eigen::Ref<Eigen::VectorXd> residual, Eigen::Ref<Eigen::VectorXd> rate);

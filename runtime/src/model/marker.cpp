@@ -234,6 +234,7 @@ void detail::MarkerFrame::set_rates(const VectorRef& v_b) {
 }
 
 Eigen::Vector3d detail::MarkerFrame::position_rate() const {
+  if (kind_ != Kind::ground && v_ == nullptr) throw std::logic_error("MarkerFrame: a rate before set_rates");
   switch (kind_) {
     case Kind::ground: return Eigen::Vector3d::Zero();
     case Kind::floating: {  // τ̇ + Ȧ ū_c + A Ψ_c η̇
@@ -249,6 +250,7 @@ Eigen::Vector3d detail::MarkerFrame::position_rate() const {
 
 Eigen::Vector3d detail::MarkerFrame::direction_rate(const Eigen::Vector3d& d) const {
   if (kind_ == Kind::ground) return Eigen::Vector3d::Zero();
+  if (v_ == nullptr) throw std::logic_error("MarkerFrame: a rate before set_rates");
   // d/dt A (d − [d]× s) = (dA/dt) v − A (d × ṡ), v = d − d × s, s = R ξ̄ or Θ_c η.
   const Eigen::Vector3d v = d - d.cross(small_);
   return rotation_rate_ * v - rotation_ * d.cross(small_rate_);
@@ -295,6 +297,8 @@ void detail::MarkerFrame::jacobian(const Eigen::Vector3d& d, Eigen::MatrixXd& ja
     jac.resize(3, 0);
     return;
   }
+  if (kind_ == Kind::gcms && size_ > 12 && turned_ == nullptr)
+    throw std::logic_error("MarkerFrame::jacobian after an evaluate without storage (marker " + marker_->name + ")");
   const Eigen::Matrix3d dx = skew(d);
   const Eigen::Vector3d v = d - dx * small_;
   jac.setZero(3, size_);

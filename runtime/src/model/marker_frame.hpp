@@ -18,8 +18,8 @@ class MarkerFrame {
   /// on ground). `storage` holds R_f Aᵀ of a GCMS marker's fields (3 x 3 n_f): the caller keeps it, so that a frame
   /// evaluated again for the same marker allocates nothing. Throws std::invalid_argument for a q_b of the wrong size.
   void evaluate(const Marker& m, const VectorRef& q_b, Eigen::MatrixXd& storage);
-  /// The frame for directions, rates and products only (jacobian() must not be called): no storage. q_b must
-  /// outlive the frame's use.
+  /// The frame for directions, rates and products only (jacobian() then throws std::logic_error on a GCMS marker
+  /// with fields): no storage. q_b must outlive the frame's use.
   void evaluate(const Marker& m, const VectorRef& q_b);
   /// A body-fixed direction d (body frame) in the global frame: A (d − [d]× R ξ̄), A(p) (d − [d]× Θ_c η), or d on
   /// ground.
@@ -29,7 +29,8 @@ class MarkerFrame {
 
   /// The marker's position r (marker_position).
   [[nodiscard]] Eigen::Vector3d position() const;
-  /// Sets the body's velocities q̇_b (same size as q_b; must outlive the frame's use) for the rates below.
+  /// Sets the body's velocities q̇_b (same size as q_b; must outlive the frame's use) for the rates below, which
+  /// throw std::logic_error without it.
   void set_rates(const VectorRef& v_b);
   /// ṙ = J_r q̇_b, and a direction's rate J_d q̇_b (zero on ground).
   [[nodiscard]] Eigen::Vector3d position_rate() const;
@@ -53,9 +54,9 @@ class MarkerFrame {
   const Eigen::MatrixXd* turned_ = nullptr;  ///< [R_1 Aᵀ, R_2 Aᵀ, ...] (GCMS with fields), in the caller's storage
   const double* q_ = nullptr;                ///< q_b
   Eigen::Vector3d local_;                    ///< X̄_c + Ψ_c η (floating frame)
-  // The rates (set_rates): q̇_b, Ȧ (GCMS) or ∂A/∂p ṗ applied by euler_rotation_derivative (floating), d(R ξ̄)/dt.
+  // The rates (set_rates): q̇_b, Ȧ (on a floating-frame body Σ_k ∂A/∂p_k ṗ_k), and d(R ξ̄)/dt or d(Θ_c η)/dt.
   const double* v_ = nullptr;
-  Eigen::Matrix3d rotation_rate_;            ///< Ȧ (GCMS)
+  Eigen::Matrix3d rotation_rate_;            ///< Ȧ
   Eigen::Vector3d small_rate_ = Eigen::Vector3d::Zero();
 };
 

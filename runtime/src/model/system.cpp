@@ -108,9 +108,9 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
     throw std::invalid_argument("body '" + name + "': the initial orientation is not a rotation (A^T A = I, det A = 1)");
   const Eigen::Index rows = model.floating() ? 1 : model.rigid() ? 6 : (model.needs_translational_tisserand() ? 12 : 9);
   std::shared_ptr<const detail::PaddedMatrix> stiffness;
-  if (!shared_matrices_) shared_matrices_ = std::make_shared<detail::SharedMatrices>();
+  if (!shared_matrices_.ptr) shared_matrices_.ptr = std::make_shared<detail::SharedMatrices>();
   if (!model.sparse && !model.rigid() && !model.floating())  // copies of one part share one K̂
-    stiffness = std::make_shared<const detail::PaddedMatrix>(shared_matrices_->get(model.stiffness));
+    stiffness = std::make_shared<const detail::PaddedMatrix>(shared_matrices_.ptr->get(model.stiffness));
   PrestressState prestress;
   if (model.prestress) {
     const Prestress& p = *model.prestress;
@@ -592,14 +592,6 @@ Eigen::Index System::reference_rates(const Eigen::VectorXd& q, const Eigen::Vect
     row += reference_rows(b);
   }
   return row;
-}
-
-void System::joint_rate(const Joint& j, const JointEvaluation& e, const Eigen::VectorXd& v,
-                        Eigen::Ref<Eigen::VectorXd> rate) const {
-  rate.setZero();
-  if (j.first.body != kGround) rate.noalias() += e.jacobian_first * v.segment(offset(j.first.body), e.jacobian_first.cols());
-  if (j.second.body != kGround)
-    rate.noalias() += e.jacobian_second * v.segment(offset(j.second.body), e.jacobian_second.cols());
 }
 
 const JointEvaluation& System::evaluated(std::size_t k, double t, const Eigen::VectorXd& q) const {

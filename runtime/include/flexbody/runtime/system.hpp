@@ -274,8 +274,6 @@ class System {
   /// The reference rows' residuals and Φ_q v into the first rows of `phi` / `rate`; return how many rows.
   Eigen::Index reference_residuals(const Eigen::VectorXd& q, Eigen::VectorXd& phi) const;
   Eigen::Index reference_rates(const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& rate) const;
-  /// Φ_q v of one joint from its evaluation, into `rate` (the joint's rows).
-  void joint_rate(const Joint& j, const JointEvaluation& e, const Eigen::VectorXd& v, Eigen::Ref<Eigen::VectorXd> rate) const;
   /// Joint k evaluated at (t, q) in its work storage.
   const JointEvaluation& evaluated(std::size_t k, double t, const Eigen::VectorXd& q) const;
   /// A GCMS body's work storage for its forces and reference rows (Newton iterations allocate nothing).
@@ -338,7 +336,22 @@ class System {
   std::deque<Body> bodies_;  ///< a deque: add_body never moves a body, so references to its model stay valid
   std::vector<Joint> joints_;
   mutable std::vector<Eigen::Triplet<double>> jacobian_work_;  ///< sparse_constraint_jacobian's entries
-  mutable std::shared_ptr<detail::TripletAssembly> jacobian_assembly_;  ///< and where they land in its matrix
+  /// A cache that a copy of the System starts without: copies must not share mutable work storage (each may be used
+  /// from its own thread).
+  template <class T>
+  struct OwnCache {
+    std::shared_ptr<T> ptr;
+    OwnCache() = default;
+    OwnCache(const OwnCache&) {}
+    OwnCache& operator=(const OwnCache&) {
+      ptr.reset();
+      return *this;
+    }
+    OwnCache(OwnCache&&) noexcept = default;
+    OwnCache& operator=(OwnCache&&) noexcept = default;
+    ~OwnCache() = default;
+  };
+  mutable OwnCache<detail::TripletAssembly> jacobian_assembly_;  ///< where the Jacobian's entries land in its matrix
   mutable std::vector<JointEvaluation> joint_work_;  ///< per joint: its last evaluation's storage
   mutable std::vector<std::array<Eigen::MatrixXd, 2>> spring_work_;  ///< per spring: its markers' position Jacobians
   std::vector<PointForce> forces_;
@@ -348,8 +361,9 @@ class System {
   Eigen::Index coordinates_ = 0;
   Eigen::Index reference_total_ = 0, joint_total_ = 0;  ///< the bodies' reference rows, and the joints' rows
   std::vector<Eigen::Index> joint_start_;  ///< per joint: its first row after the reference rows
-  /// The bodies' constant matrices for the product kernel, each stored once (copies of a part share them).
-  std::shared_ptr<detail::SharedMatrices> shared_matrices_;
+  /// The bodies' constant matrices for the product kernel, each stored once (copies of a part share them; the
+  /// matrices themselves are immutable and stay shared with a copy of the System, the index does not).
+  OwnCache<detail::SharedMatrices> shared_matrices_;
 };
 
 }  // namespace flexbody::runtime

@@ -53,10 +53,10 @@ std::string PrepSummary::accuracy_warning() const {
   std::string smaller = "a smaller --mesh-size";
   const std::optional<LengthUnit> in = length_unit_from_string(unit);
   if (mesh_size_m > 0.0 && in && std::isfinite(frequency_errors(0))) {
-    const double factor =
+    const double shrink =
         std::min(0.5, std::pow(0.5 * kAccuracyWarning / frequency_errors(0), 1.0 / (2.0 * element_order)));
     smaller = fmt::format("a smaller --mesh-size (about {:.2g} {}, {:.2g} of this mesh's)",
-                          factor * mesh_size_m / metres_per(*in), unit, factor);
+                          shrink * mesh_size_m / metres_per(*in), unit, shrink);
   }
   return fmt::format("the first frequency ({:.4g} Hz) is likely {} with {} elements at this mesh (estimate from "
                      "the stresses' jumps between elements): {}", frequencies_hz(0), amount,

@@ -141,7 +141,7 @@ Scene read_scene(const std::filesystem::path& file) {
     runtime::BodyModel model;
     try {
       model = full ? runtime::full_order_model(data, path.filename().string())
-                   : runtime::make_body_model(data, modes, path.filename().string());
+                   : runtime::make_body_model(data, modes, path.filename().string(), stresses_used.count(name) > 0);
     } catch (const std::invalid_argument& e) {
       r.fail(b["modes"], e.what());
     }

@@ -59,6 +59,9 @@ TEST(BodyModel, FirstKModesAreTheLeadingBlocks) {
     EXPECT_EQ(model.interfaces[0].y_row, body.interfaces[0].y_row.head(4 + n_f));
     EXPECT_EQ(model.interfaces[0].rotation, body.interfaces[0].rotation.leftCols(3 * n_f));
     EXPECT_EQ(model.recovery[0].stress_modes, body.recovery[0].stress_modes.leftCols(3 * n_f));
+    EXPECT_EQ(model.recovery[0].name, body.recovery[0].name);
+    EXPECT_EQ(model.recovery[0].nodes, body.recovery[0].nodes);
+    EXPECT_TRUE(fr::make_body_model(body, k, "synthetic.fbh5", /*with_recovery=*/false).recovery.empty());
     EXPECT_EQ(model.fields, body.gcms.fields.leftCols(n_f));
     EXPECT_EQ(model.mode_coefficients, body.gcms.mode_coefficients.topLeftCorner(n_f, 3 * k));
     EXPECT_EQ(model.frequencies_hz, body.modes.frequencies_hz.head(k));

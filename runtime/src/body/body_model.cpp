@@ -113,7 +113,8 @@ ElasticTangent body_elastic_tangent(const BodyModel& model, const Eigen::Matrix3
                       : elastic_tangent(model.stiffness, a, xi, with_xi_xi);
 }
 
-BodyModel make_body_model(const format::BodyData& body, std::optional<Eigen::Index> modes, const std::string& source) {
+BodyModel make_body_model(const format::BodyData& body, std::optional<Eigen::Index> modes, const std::string& source,
+                          bool with_recovery) {
   const Eigen::Index available = body.modes.count();
   const Eigen::Index k = modes.value_or(available);
   if (k < 0 || k > available)
@@ -152,10 +153,9 @@ BodyModel make_body_model(const format::BodyData& body, std::optional<Eigen::Ind
     i.rotation.conservativeResize(Eigen::NoChange, 3 * n_f);
     model.interfaces.push_back(std::move(i));
   }
-  for (format::RecoveryRegion r : body.recovery) {
-    r.stress_modes.conservativeResize(Eigen::NoChange, 3 * n_f);
-    model.recovery.push_back(std::move(r));
-  }
+  if (with_recovery)
+    for (const format::RecoveryRegion& r : body.recovery)  // the first 3 n_f columns only, copied once
+      model.recovery.push_back({r.name, r.nodes, r.stress_modes.leftCols(3 * n_f)});
   if (!body.geometric_stiffness.empty() && n_f > 0)
     model.prestress = std::make_shared<const Prestress>(make_prestress(body, n_f, model.interfaces));
   return model;

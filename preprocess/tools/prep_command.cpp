@@ -29,7 +29,7 @@ int prep_command(int argc, char** argv) {
              "  fbprep export-vtu FILE.fbh5 -o DIR  mesh, mode shapes, fields, interfaces for ParaView\n"
              "  fbprep list-surfaces INPUT          CAD surface tags, areas, centroids (for body specs)");
   std::string input, output, unit_text, material_text = "steel", solver_text = "auto", mesher_text = "delaunay";
-  double mesh_size = 0.0, fmax = 0.0, volume_tolerance = 5e-3;
+  double mesh_size = 0.0, fmax = 0.0, volume_tolerance = 5e-3, thin_features = 0.0;
   int order = 1, modes = 0;
   bool json = false, quiet = false, geometric_stiffness = false;
   app.add_option("INPUT", input, "STEP/STP, IGES/IGS, BREP, gmsh .geo, gmsh .msh with tetrahedra, or a body spec "
@@ -40,6 +40,9 @@ int prep_command(int argc, char** argv) {
                                       "for IGES. --mesh-size and a spec's lengths are in it");
   app.add_option("--mesh-size", mesh_size, "largest element size in the input's unit (default: bounding-box "
                                            "diagonal / 25; a .msh is used as it is)");
+  app.add_option("--thin-features", thin_features, "mesh thin features (leads, ribs, walls) with about this many "
+                                                   "elements across: each CAD point's size at most its shortest CAD "
+                                                   "curve / N (default: off; 1 or 2 where the accuracy estimate warns)");
   app.add_option("--volume-tolerance", volume_tolerance, "how far the mesh's volume may be from the CAD solid's, "
                                                          "relative (default 0.005): the default size is refined "
                                                          "until it holds, a --mesh-size that misses is refused");
@@ -117,6 +120,13 @@ int prep_command(int argc, char** argv) {
     if (!from_spec || given("--mesh-size")) {
       options.mesh.mesh_size = mesh_size;
       record("mesh_size", fmt::format("{}", mesh_size));
+    }
+    if (given("--thin-features")) {
+      if (!(std::isfinite(thin_features) && thin_features > 0.0))
+        throw std::invalid_argument(fmt::format("--thin-features must be a positive number of elements across a thin "
+                                                "feature (leave it out for none), got {}", thin_features));
+      options.mesh.thin_feature_elements = thin_features;
+      record("thin_features", fmt::format("{}", thin_features));
     }
     if (given("--volume-tolerance") && !(std::isfinite(volume_tolerance) && volume_tolerance > 0.0 && volume_tolerance < 1.0))
       throw std::invalid_argument(fmt::format("--volume-tolerance must be a fraction of the CAD volume between 0 and 1 "

@@ -109,6 +109,21 @@ TEST(BodySpec, ElementOrderFromTheSpecAndItsOverride) {
   for (const auto& [name, value] : body.provenance.options)
     recorded = recorded || (name == "element_order" && value == "2");
   EXPECT_TRUE(recorded);
+  // mesh: {thin_features: N} (GmshImportOptions::thin_feature_elements) is read and recorded; the beam's shortest
+  // curves, its 50 mm edges, ask for 25 mm at 2 across, finer than the 50 mm size: more elements.
+  std::string thin = spec;
+  thin.replace(thin.find("algorithm: hxt}"), 15, "thin_features: 2}");
+  write_text(dir / "part" / "thin.yaml", thin);
+  const CliRun fine = run_fbprep(dir, "part/thin.yaml -o t.fbh5 --order 1 --json");
+  ASSERT_EQ(fine.exit_code, 0) << fine.err;
+  EXPECT_GT(nlohmann::json::parse(fine.out)["elements"].get<int>(), nlohmann::json::parse(linear.out)["elements"].get<int>());
+  bool thin_recorded = false;
+  for (const auto& [name, value] : flexbody::format::read_body_file(dir / "t.fbh5").provenance.options)
+    thin_recorded = thin_recorded || (name == "thin_features" && value == "2");
+  EXPECT_TRUE(thin_recorded);
+  const CliRun refused = run_fbprep(dir, "part/beam.yaml -o r.fbh5 --thin-features -1");
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("--thin-features must be a positive number"), std::string::npos) << refused.err;
   // select: surface takes every boundary node (corners and mid-edge nodes), no other.
   std::set<int> boundary(body.mesh.surface_triangles.data(),
                          body.mesh.surface_triangles.data() + body.mesh.surface_triangles.size());
@@ -124,6 +139,7 @@ TEST(BodySpec, RefusalsNameTheLine) {
   expect_spec_error(head + "material: {E: .nan, nu: 0.3, rho: 7850}\n", 3, "material E must be finite, got '.nan'");
   expect_spec_error(head + "material: {E: 210e9, nu: 0.6, rho: 7850}\n", 3, "material: nu must lie in (-1, 0.5), got 0.6");
   expect_spec_error(head + "mesh: {size: -1}\n", 3, "mesh size must be positive, got -1");
+  expect_spec_error(head + "mesh: {thin_features: 0}\n", 3, "mesh thin_features must be positive, got 0");
   expect_spec_error(head + "mesh: {size: 0.02}\nmesh: {size: 0.03}\n", 4, "key 'mesh' is repeated in the body spec");
   expect_spec_error(head + "mesh: {order: 3}\n", 3, "mesh order 3: the element order is 1 (linear tetrahedra) or 2");
   expect_spec_error(head + "mesh: {algorithm: tetgen}\n", 3, "mesh algorithm 'tetgen' is unknown; use delaunay or hxt");

@@ -99,3 +99,34 @@ TEST(MeshVolume, TheSearchStopsAtItsElementBoundAndSaysSo) {
     EXPECT_NE(what.find("(or --volume-tolerance 0.021 accepts this mesh)"), std::string::npos) << what;
   }
 }
+
+// GmshImportOptions::thin_feature_elements: a block 40 x 40 x 10 mm with a fin 1 mm thick and 10 mm tall on top.
+// The default size (diagonal / 25 = 2.4 mm) leaves the fin about one element thick (measured: 27 nodes strictly
+// inside its thickness); with 2 across, the fin's corners (whose shortest curves are its 1 mm edges) ask for 0.5 mm
+// and gmsh fills the fin (126 nodes), while the block away from it keeps the default size (6991 -> 9550 tetrahedra).
+TEST(MeshVolume, ThinFeaturesGetElementsAcrossThem) {
+  const auto dir = flexbody::test::scratch_dir();
+  std::ofstream(dir / "fin.geo") << "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 0.04, 0.04, 0.01};\n"
+                                    "Box(2) = {0, 0.0195, 0.01, 0.04, 0.001, 0.01};\n"
+                                    "BooleanUnion{ Volume{1}; Delete; }{ Volume{2}; Delete; }\n";
+  auto inside_fin = [](const fp::ImportedMesh& mesh) {
+    int count = 0;
+    for (Eigen::Index i = 0; i < mesh.mesh.nodes.rows(); ++i) {
+      const double y = mesh.mesh.nodes(i, 1), z = mesh.mesh.nodes(i, 2);
+      if (z > 0.0105 && y > 0.0197 && y < 0.0203) ++count;
+    }
+    return count;
+  };
+  fp::GmshImportOptions options;
+  options.unit = fp::LengthUnit::metre;
+  options.order = 1;
+  const fp::ImportedMesh plain = fp::import_tet_mesh(dir / "fin.geo", options);
+  options.thin_feature_elements = 2.0;
+  const fp::ImportedMesh thin = fp::import_tet_mesh(dir / "fin.geo", options);
+  std::printf("fin: %d and %d nodes inside its thickness; %ld and %ld tetrahedra\n", inside_fin(plain), inside_fin(thin),
+              static_cast<long>(plain.mesh.element_count()), static_cast<long>(thin.mesh.element_count()));
+  EXPECT_GT(inside_fin(thin), 3 * inside_fin(plain));
+  EXPECT_GT(thin.mesh.element_count(), plain.mesh.element_count());
+  EXPECT_LT(thin.mesh.element_count(), 3 * plain.mesh.element_count());
+  EXPECT_NEAR(thin.mesh_size_m, plain.mesh_size_m, 1e-12);  // the uniform size is unchanged; only the points'
+}

@@ -14,9 +14,11 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cerrno>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <system_error>
@@ -379,10 +381,44 @@ std::array<int, 3> loose_entities() {
 
 // The model meshed at element size `size` (gmsh's coordinates), its tetrahedra of the order asked read, quadratic ones
 // through gmsh's smoothing (optimize_folded; `repair` says what it did).
+// Each CAD point's element size: at most the shortest CAD curve through it over `across` (GmshImportOptions::
+// thin_feature_elements), and at most `size`; gmsh interpolates point sizes along curves and over faces
+// (Mesh.MeshSizeFromPoints and Mesh.MeshSizeExtendFromBoundary, both on by default).
+void size_thin_features(double size, double across) {
+  gmsh::vectorpair curves;
+  gmsh::model::getEntities(curves, 1);
+  std::map<int, double> sizes;  // by point tag
+  for (const auto& curve : curves) {
+    gmsh::vectorpair ends;
+    gmsh::model::getBoundary({curve}, ends, false, false, false);
+    double length = 0.0;
+    try {  // OpenCASCADE's length; a .geo in gmsh's own kernel has none: the chord between the ends (shorter)
+      detail::SilencedStdStreams quiet;
+      gmsh::model::occ::getMass(1, curve.second, length);
+    } catch (const std::string&) {
+      std::vector<double> a, b;
+      if (ends.size() == 2) {
+        gmsh::model::getValue(0, std::abs(ends[0].second), {}, a);
+        gmsh::model::getValue(0, std::abs(ends[1].second), {}, b);
+        length = std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+      }
+    }
+    for (const auto& end : ends) {
+      const int tag = std::abs(end.second);
+      const double at = std::min(size, length / across);
+      const auto [it, inserted] = sizes.emplace(tag, at);
+      if (!inserted) it->second = std::min(it->second, at);
+    }
+  }
+  for (const auto& [tag, at] : sizes)
+    if (at > 0.0) gmsh::model::mesh::setSize({{0, tag}}, at);
+}
+
 GmshTetrahedra mesh_at(const std::string& name, double size, const GmshImportOptions& options,
                        std::optional<CurvedElementRepair>& repair) {
   gmsh::model::mesh::clear();
   gmsh::option::setNumber("Mesh.MeshSizeMax", size);
+  if (options.thin_feature_elements > 0.0) detail::gmsh_call(name, [&] { size_thin_features(size, options.thin_feature_elements); });
   detail::gmsh_call(name + ": meshing failed", [&] {
     detail::SilencedStdStreams quiet;
     gmsh::model::mesh::generate(3);

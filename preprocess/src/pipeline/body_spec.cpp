@@ -121,8 +121,12 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
                                                   options.material.density));
   }
   if (const YAML::Node mesh = root["mesh"]) {
-    r.expect_map(mesh, "mesh", {"size", "order", "algorithm", "volume_tolerance"});
+    r.expect_map(mesh, "mesh", {"size", "order", "algorithm", "volume_tolerance", "thin_features"});
     if (mesh["size"]) options.mesh.mesh_size = r.positive(mesh["size"], "mesh size");
+    if (mesh["thin_features"]) {
+      options.mesh.thin_feature_elements = r.positive(mesh["thin_features"], "mesh thin_features");
+      recorded.emplace_back("thin_features", fmt::format("{}", options.mesh.thin_feature_elements));
+    }
     if (mesh["volume_tolerance"]) {
       options.mesh.volume_tolerance = r.positive(mesh["volume_tolerance"], "mesh volume_tolerance");
       if (!(options.mesh.volume_tolerance < 1.0))

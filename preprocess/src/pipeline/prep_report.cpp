@@ -59,7 +59,8 @@ std::string PrepSummary::accuracy_warning() const {
                           shrink * mesh_size_m / metres_per(*in), unit, shrink);
   }
   return fmt::format("the first frequency ({:.4g} Hz) is likely {} with {} elements at this mesh (estimate from "
-                     "the stresses' jumps between elements): {}", frequencies_hz(0), amount,
+                     "the stresses' jumps between elements): {}; where thin leads, ribs or walls carry the mode, "
+                     "--thin-features 1 refines them alone", frequencies_hz(0), amount,
                      element_order == 2 ? "quadratic" : "linear",
                      element_order == 2 ? "give " + smaller : "use --order 2, or " + smaller);
 }

@@ -54,6 +54,12 @@ struct GmshImportOptions {
   /// The search for a size that holds the volume meshes no size whose estimated tetrahedra exceed this count (its
   /// cost must stay below a run's: 2e6 tetrahedra are about 1e6 linear DOFs); past it, the refusal says so.
   double volume_search_elements = 2e6;
+  /// Thin features meshed with about this many elements across (0: off, the default): each CAD point's element size
+  /// is at most the shortest CAD curve through it over this count, and gmsh spreads the point sizes over the faces
+  /// and the volume. A part's thin leads, ribs and walls are bounded by short curves, so they refine where the
+  /// uniform size would put one element through them (a thin-leaded inductor's first frequency 26 % high at the
+  /// default quadratic mesh, 4 % with 1 across; bench/README.md "cad_corpus_bench.py").
+  double thin_feature_elements = 0.0;
   /// The 3D algorithm (ignored for a .msh, whose tetrahedra are used as they are).
   MeshAlgorithm algorithm = MeshAlgorithm::delaunay;
   /// Called with a short message before each long step.

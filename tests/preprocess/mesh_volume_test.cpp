@@ -129,4 +129,25 @@ TEST(MeshVolume, ThinFeaturesGetElementsAcrossThem) {
   EXPECT_GT(thin.mesh.element_count(), plain.mesh.element_count());
   EXPECT_LT(thin.mesh.element_count(), 3 * plain.mesh.element_count());
   EXPECT_NEAR(thin.mesh_size_m, plain.mesh_size_m, 1e-12);  // the uniform size is unchanged; only the points'
+
+  // In gmsh's built-in kernel (no OpenCASCADE lengths) the curves are measured by their chords: a plate 40 x 1 x 10 mm
+  // extruded from a rectangle.
+  std::ofstream(dir / "plate.geo") << "Point(1) = {0, 0, 0};\nPoint(2) = {0.04, 0, 0};\nPoint(3) = {0.04, 0.001, 0};\n"
+                                      "Point(4) = {0, 0.001, 0};\nLine(1) = {1, 2};\nLine(2) = {2, 3};\nLine(3) = {3, 4};\n"
+                                      "Line(4) = {4, 1};\nCurve Loop(1) = {1, 2, 3, 4};\nPlane Surface(1) = {1};\n"
+                                      "Extrude {0, 0, 0.01} { Surface{1}; }\n";
+  options.thin_feature_elements = 0.0;
+  const fp::ImportedMesh built_in = fp::import_tet_mesh(dir / "plate.geo", options);
+  options.thin_feature_elements = 2.0;
+  EXPECT_GT(fp::import_tet_mesh(dir / "plate.geo", options).mesh.element_count(), 2 * built_in.mesh.element_count());
+  // A .msh is used as it is: thin features there are refused, not ignored.
+  std::ofstream(dir / "one.msh") << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n"
+                                    "0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n"
+                                    "$EndElements\n";
+  try {
+    (void)fp::import_tet_mesh(dir / "one.msh", options);
+    FAIL() << "--thin-features on a .msh was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("one.msh: --thin-features sizes a mesh fbprep makes"), std::string::npos) << e.what();
+  }
 }

@@ -379,8 +379,6 @@ std::array<int, 3> loose_entities() {
   return loose;
 }
 
-// The model meshed at element size `size` (gmsh's coordinates), its tetrahedra of the order asked read, quadratic ones
-// through gmsh's smoothing (optimize_folded; `repair` says what it did).
 // Each CAD point's element size: at most the shortest CAD curve through it over `across` (GmshImportOptions::
 // thin_feature_elements), and at most `size`; gmsh interpolates point sizes along curves and over faces
 // (Mesh.MeshSizeFromPoints and Mesh.MeshSizeExtendFromBoundary, both on by default).
@@ -400,9 +398,10 @@ void size_thin_features(double size, double across) {
       if (ends.size() == 2) {
         gmsh::model::getValue(0, std::abs(ends[0].second), {}, a);
         gmsh::model::getValue(0, std::abs(ends[1].second), {}, b);
-        length = std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+        if (a.size() == 3 && b.size() == 3) length = std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
       }
     }
+    if (!(length > 0.0)) continue;  // a closed curve without its length (built-in kernel): no measure of it
     for (const auto& end : ends) {
       const int tag = std::abs(end.second);
       const double at = std::min(size, length / across);
@@ -411,9 +410,11 @@ void size_thin_features(double size, double across) {
     }
   }
   for (const auto& [tag, at] : sizes)
-    if (at > 0.0) gmsh::model::mesh::setSize({{0, tag}}, at);
+    gmsh::model::mesh::setSize({{0, tag}}, at);
 }
 
+// The model meshed at element size `size` (gmsh's coordinates), its tetrahedra of the order asked read, quadratic ones
+// through gmsh's smoothing (optimize_folded; `repair` says what it did).
 GmshTetrahedra mesh_at(const std::string& name, double size, const GmshImportOptions& options,
                        std::optional<CurvedElementRepair>& repair) {
   gmsh::model::mesh::clear();
@@ -571,6 +572,12 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
                                             "(quadratic)", *options.order));
   if (!(options.mesh_size >= 0.0) || !std::isfinite(options.mesh_size))
     throw std::invalid_argument(fmt::format("--mesh-size must be a positive length, got {}", options.mesh_size));
+  if (!(options.thin_feature_elements >= 0.0) || !std::isfinite(options.thin_feature_elements))
+    throw std::invalid_argument(fmt::format("--thin-features must be a positive number of elements, got {}",
+                                            options.thin_feature_elements));
+  if (options.thin_feature_elements > 0.0 && result.format == InputFormat::msh)
+    throw std::invalid_argument(fmt::format("{}: --thin-features sizes a mesh fbprep makes; a .msh is used as it is",
+                                            path.filename().string()));
   const UnitDecision unit = decide_unit(path, result.format, options.unit, options.unit_source);
   result.unit = unit.geometry_unit;
   result.unit_reason = unit.reason;

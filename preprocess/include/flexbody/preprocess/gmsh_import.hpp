@@ -57,8 +57,8 @@ struct GmshImportOptions {
   /// Thin features meshed with about this many elements across (0: off, the default): each CAD point's element size
   /// is at most the shortest CAD curve through it over this count, and gmsh spreads the point sizes over the faces
   /// and the volume. A part's thin leads, ribs and walls are bounded by short curves, so they refine where the
-  /// uniform size would put one element through them (a thin-leaded inductor's first frequency 26 % high at the
-  /// default quadratic mesh, 4 % with 1 across; bench/README.md "cad_corpus_bench.py").
+  /// uniform size would put one element through them (a thin-leaded inductor's first frequency 37 % above the
+  /// 2-across mesh's at the default quadratic mesh, 4 % with 1 across; README, `--thin-features`). Refused for a .msh.
   double thin_feature_elements = 0.0;
   /// The 3D algorithm (ignored for a .msh, whose tetrahedra are used as they are).
   MeshAlgorithm algorithm = MeshAlgorithm::delaunay;

@@ -13,6 +13,10 @@ folded quadratic elements. Writes bench/results/cad_corpus_bench.csv and prints
 a table with the first frequency's change from linear to quadratic elements.
 
     /usr/bin/python3 bench/cad_corpus_bench.py [--build build] [--work bench/results/work/corpus] [--only NAME ...]
+                                               [--args "FBPREP OPTIONS" --tag NAME]
+
+--args adds options to every run (e.g. "--thin-features 1"); --tag names the CSV (cad_corpus_bench_NAME.csv), so a
+variant does not overwrite the defaults' results.
 """
 import argparse
 import csv
@@ -67,8 +71,8 @@ def corpus(work):
     return parts
 
 
-def run(fbprep, part, extra, order, work):
-    out = work / f"{part.stem}_{part.suffix[1:].lower()}_o{order}.fbh5"
+def run(fbprep, part, extra, order, work, tag=""):
+    out = work / f"{part.stem}_{part.suffix[1:].lower()}_o{order}{'_' + tag if tag else ''}.fbh5"
     start = time.monotonic()
     proc = subprocess.run([str(fbprep), str(part), "--order", str(order), "--json", "-o", str(out)] + extra,
                           capture_output=True, text=True)
@@ -99,7 +103,11 @@ def main():
     ap.add_argument("--build", default=str(here.parent / "build"))
     ap.add_argument("--work", default=str(here / "results" / "work" / "corpus"))
     ap.add_argument("--only", nargs="*", help="part file names to run (default: all)")
+    ap.add_argument("--args", default="", help="fbprep options added to every run")
+    ap.add_argument("--tag", default="", help="results go to cad_corpus_bench_TAG.csv (needed with --args)")
     args = ap.parse_args()
+    if args.args and not args.tag:
+        sys.exit("cad_corpus_bench: --args needs --tag, so that the defaults' results are not overwritten")
     fbprep = Path(args.build) / "bin" / "fbprep"
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
@@ -109,7 +117,7 @@ def main():
     rows = []
     for part, extra in parts:
         for order in (1, 2):
-            row = run(fbprep, part, extra, order, work)
+            row = run(fbprep, part, extra + args.args.split(), order, work, args.tag)
             rows.append(row)
             print(f"{row['part']:<34} order {order}: {row['outcome']:<9} {row['seconds']:6.1f} s  "
                   + (row.get("message", "") if row["outcome"] == "refused"
@@ -119,7 +127,7 @@ def main():
     fields = ["part", "order", "outcome", "seconds", "mesh_size_m", "dofs", "mass_kg", "volume_m3", "cad_volume_m3", "volume_error", "refined_from_m", "sewn_faces", "loose_faces",
               "first_hz", "first_error_estimate", "folded",
               "folded_after_gmsh", "straightened", "largest_move_m", "message"]
-    results = here / "results" / "cad_corpus_bench.csv"
+    results = here / "results" / f"cad_corpus_bench{'_' + args.tag if args.tag else ''}.csv"
     with open(results, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields)
         w.writeheader()

@@ -30,6 +30,7 @@ int prep_command(int argc, char** argv) {
              "  fbprep list-surfaces INPUT          CAD surface tags, areas, centroids (for body specs)");
   std::string input, output, unit_text, material_text = "steel", solver_text = "auto", mesher_text = "delaunay";
   double mesh_size = 0.0, fmax = 0.0, volume_tolerance = 5e-3, thin_features = 0.0;
+  double error_target = preprocess::kDefaultErrorTarget;
   int order = 1, modes = 0;
   bool json = false, quiet = false, geometric_stiffness = false;
   app.add_option("INPUT", input, "STEP/STP, IGES/IGS, BREP, gmsh .geo, gmsh .msh with tetrahedra, or a body spec "
@@ -43,6 +44,10 @@ int prep_command(int argc, char** argv) {
   app.add_option("--thin-features", thin_features, "mesh thin features (leads, ribs, walls) with about this many "
                                                    "elements across: each CAD point's size at most its shortest CAD "
                                                    "curve / N (default: off; 1 or 2 where the accuracy estimate warns)");
+  app.add_option("--error-target", error_target, "relative error of the first frequency above which the default "
+                                                 "mesh is remeshed once where the error estimate puts the error, "
+                                                 "aiming at half of it with at most 8 times the tetrahedra (default "
+                                                 "0.05; 0: never; not with --mesh-size or --thin-features)");
   app.add_option("--volume-tolerance", volume_tolerance, "how far the mesh's volume may be from the CAD solid's, "
                                                          "relative (default 0.005): the default size is refined "
                                                          "until it holds, a --mesh-size that misses is refused");
@@ -127,6 +132,13 @@ int prep_command(int argc, char** argv) {
                                                 "feature (leave it out for none), got {}", thin_features));
       options.mesh.thin_feature_elements = thin_features;
       record("thin_features", fmt::format("{}", thin_features));
+    }
+    if (given("--error-target")) {
+      if (!(std::isfinite(error_target) && error_target >= 0.0 && error_target < 1.0))
+        throw std::invalid_argument(fmt::format("--error-target must be a relative frequency error in [0, 1) (0.05: "
+                                                "5 %; 0: no refinement), got {}", error_target));
+      options.error_target = error_target;
+      record("error_target", fmt::format("{}", error_target));
     }
     if (given("--volume-tolerance") && !(std::isfinite(volume_tolerance) && volume_tolerance > 0.0 && volume_tolerance < 1.0))
       throw std::invalid_argument(fmt::format("--volume-tolerance must be a fraction of the CAD volume between 0 and 1 "

@@ -91,11 +91,13 @@ TEST(CadCorpus, SurfaceModelsAreSewnOrRefused) {
   }
 }
 
-// Linear elements at the default size on parts with thin leads are far off, and fbprep now says so (issue 28 item 5:
-// the issue's table, against refined quadratic references: RLF_7030 16.3 kHz against 5.58 kHz, TCMT1107_4 44.1 kHz
-// against 19.6 kHz, TSS0P_8 115 kHz against 58.7 kHz, i.e. 96-192 % too high). Each run warns on stderr and in
-// --json; the estimates (measured 133 %, 122 %, 96 %) are above 50 %. 1210_SMD, a compact block, is 3.0 % off (its
-// quadratic mesh: 444.9 against 458.2 kHz): estimated 2.8 %, no warning.
+// Linear elements at the default size on parts with thin leads are far off, and fbprep now refines them and says how
+// far off they still are (issue 28 items 2 and 5: the issue's table, against refined quadratic references: RLF_7030
+// 16.3 kHz against 5.58 kHz, TCMT1107_4 44.1 kHz against 19.6 kHz, TSS0P_8 115 kHz against 58.7 kHz, i.e. 96-192 %
+// too high). The first meshes' estimates (measured 133 %, 122 %, 96 %) are above 50 %; the refinement by the error
+// estimate (mesh_refinement.hpp) is bound by its budget of 8 times the tetrahedra and leaves 38 %, 23 %, 21 %
+// (6.67, 23.8 and 69.9 kHz), above the 5 % that warns: each run warns on stderr and in --json, with the way out. 1210_SMD, a
+// compact block, is 3.0 % off (its quadratic mesh: 444.9 against 458.2 kHz): estimated 2.8 %, not refined, no warning.
 TEST(CadCorpus, LinearElementsThatAreFarOffAreFlagged) {
   if (!std::filesystem::is_directory(kFreecadParts))
     GTEST_SKIP() << kFreecadParts << " is missing: scripts/setup.sh installs Debian's freecad-common";
@@ -110,16 +112,20 @@ TEST(CadCorpus, LinearElementsThatAreFarOffAreFlagged) {
     if (part == "1210_SMD.stp") {
       EXPECT_LT(first, 0.05);
       EXPECT_GT(first, 0.01);
+      EXPECT_TRUE(j["mesh_refinement"].is_null());
       EXPECT_TRUE(j["accuracy_warning"].is_null());
       EXPECT_EQ(run.err, "");
     } else {
-      EXPECT_GT(first, 0.5);
+      EXPECT_GT(j["mesh_refinement"]["first_estimate"].get<double>(), 0.5);
+      EXPECT_TRUE(j["mesh_refinement"]["budget_bound"].get<bool>());
+      EXPECT_LT(first, 0.5 * j["mesh_refinement"]["first_estimate"].get<double>());
+      EXPECT_GT(first, 0.05);
       EXPECT_FALSE(j["accuracy_warning"].is_null());
       EXPECT_EQ(run.err.rfind("fbprep: warning: the first frequency", 0), 0u) << run.err;
       // With a size to try, in the input's unit: the error of an eigenvalue falls like h² with linear elements, so
-      // h (2.5 % / e)^(1/2), below 0.2 of the mesh for these estimates.
+      // h (2.5 % / e)^(1/2), below 0.4 of the mesh size for these estimates.
       EXPECT_NE(run.err.find("use --order 2, or a smaller --mesh-size (about "), std::string::npos) << run.err;
-      EXPECT_NE(run.err.find(" mm, 0.1"), std::string::npos) << run.err;
+      EXPECT_NE(run.err.find(" mm, 0."), std::string::npos) << run.err;
     }
   }
 }

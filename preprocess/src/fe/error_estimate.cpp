@@ -46,30 +46,44 @@ void check_sizes(Eigen::Index nodes, const Eigen::MatrixXd& modes, const Eigen::
     throw std::invalid_argument("frequency_error_estimates: the modes do not match the mesh or the frequencies");
 }
 
-// Each mode's error energy η², Σ_e of what `add(e, energy)` adds for element e into the modes' column `energy`:
-// summed over fixed blocks of elements in parallel, the blocks then added in order, so the same result for any
-// thread count.
+// Each mode's error energy η², Σ_e of what `add(e, energy)` adds for element e into the m-vector `energy` (zeroed per
+// element), and each element's share max_k η²_{e,k} / λ_k: summed over fixed blocks of elements in parallel, the
+// blocks then added in order, so the same result for any thread count.
 template <typename AddElement>
-Eigen::VectorXd error_energies(Eigen::Index elements, Eigen::Index modes, const AddElement& add) {
+FrequencyErrorEstimate error_energies(Eigen::Index elements, const Eigen::VectorXd& frequencies_hz,
+                                      const AddElement& add) {
   constexpr Eigen::Index kBlock = 1024;
-  const Eigen::Index blocks = (elements + kBlock - 1) / kBlock;
+  const Eigen::Index modes = frequencies_hz.size(), blocks = (elements + kBlock - 1) / kBlock;
+  Eigen::VectorXd inverse_eigenvalue(modes);
+  for (Eigen::Index k = 0; k < modes; ++k) {
+    const double omega = 2.0 * std::numbers::pi * frequencies_hz(k);
+    inverse_eigenvalue(k) = omega > 0.0 ? 1.0 / (omega * omega) : 0.0;  // a rigid-body mode has no share
+  }
+  FrequencyErrorEstimate out;
+  out.element_shares.resize(elements);
   Eigen::MatrixXd partial = Eigen::MatrixXd::Zero(modes, blocks);
 #pragma omp parallel for schedule(dynamic)
   for (Eigen::Index block = 0; block < blocks; ++block) {
-    auto energy = partial.col(block);
-    for (Eigen::Index e = block * kBlock; e < std::min(elements, (block + 1) * kBlock); ++e) add(e, energy);
+    Eigen::VectorXd energy(modes);
+    for (Eigen::Index e = block * kBlock; e < std::min(elements, (block + 1) * kBlock); ++e) {
+      energy.setZero();
+      add(e, energy);
+      partial.col(block) += energy;
+      out.element_shares(e) = modes > 0 ? energy.cwiseProduct(inverse_eigenvalue).maxCoeff() : 0.0;
+    }
   }
-  return partial.rowwise().sum();
+  out.relative = relative_frequency_errors(partial.rowwise().sum(), frequencies_hz);
+  return out;
 }
 
 }  // namespace
 
-Eigen::VectorXd frequency_error_estimates(const TetMesh& mesh, const Material& material, const Eigen::MatrixXd& modes,
-                                          const Eigen::VectorXd& frequencies_hz) {
+FrequencyErrorEstimate estimate_frequency_errors(const TetMesh& mesh, const Material& material,
+                                                 const Eigen::MatrixXd& modes, const Eigen::VectorXd& frequencies_hz) {
   check_sizes(mesh.node_count(), modes, frequencies_hz);
   const Eigen::MatrixXd recovered = nodal_stresses(mesh, material, modes);  // 6 n x m, σ* at the nodes
   const double lambda = lame_lambda(material), mu = shear_modulus(material);
-  const Eigen::VectorXd energy = error_energies(mesh.element_count(), modes.cols(), [&](Eigen::Index e, auto& out) {
+  return error_energies(mesh.element_count(), frequencies_hz, [&](Eigen::Index e, Eigen::VectorXd& out) {
     Eigen::Matrix<double, 4, 3> corners;
     for (int a = 0; a < 4; ++a) corners.row(a) = mesh.nodes.row(mesh.tets(e, a));
     const format::Tet4Geometry g = format::tet4_geometry(corners);
@@ -86,11 +100,10 @@ Eigen::VectorXd frequency_error_estimates(const TetMesh& mesh, const Material& m
       out(k) += std::abs(g.volume) / 20.0 * sum;
     }
   });
-  return relative_frequency_errors(energy, frequencies_hz);
 }
 
-Eigen::VectorXd frequency_error_estimates(const Tet10Mesh& mesh, const Material& material, const Eigen::MatrixXd& modes,
-                                          const Eigen::VectorXd& frequencies_hz) {
+FrequencyErrorEstimate estimate_frequency_errors(const Tet10Mesh& mesh, const Material& material,
+                                                 const Eigen::MatrixXd& modes, const Eigen::VectorXd& frequencies_hz) {
   check_sizes(mesh.node_count(), modes, frequencies_hz);
   const Eigen::MatrixXd recovered = nodal_stresses(mesh, material, modes);  // 6 n x m, σ* at every node
   const double lambda = lame_lambda(material), mu = shear_modulus(material);
@@ -107,7 +120,7 @@ Eigen::VectorXd frequency_error_estimates(const Tet10Mesh& mesh, const Material&
       shape(g, 4 + k) = 4.0 * l[i] * l[j];
     }
   }
-  const Eigen::VectorXd energy = error_energies(mesh.element_count(), modes.cols(), [&](Eigen::Index e, auto& out) {
+  return error_energies(mesh.element_count(), frequencies_hz, [&](Eigen::Index e, Eigen::VectorXd& out) {
     format::Tet10Nodes x;
     for (int c = 0; c < 10; ++c) x.row(c) = mesh.nodes.row(mesh.tets(e, c));
     for (int g = 0; g < 4; ++g) {
@@ -126,7 +139,16 @@ Eigen::VectorXd frequency_error_estimates(const Tet10Mesh& mesh, const Material&
       }
     }
   });
-  return relative_frequency_errors(energy, frequencies_hz);
+}
+
+Eigen::VectorXd frequency_error_estimates(const TetMesh& mesh, const Material& material, const Eigen::MatrixXd& modes,
+                                          const Eigen::VectorXd& frequencies_hz) {
+  return estimate_frequency_errors(mesh, material, modes, frequencies_hz).relative;
+}
+
+Eigen::VectorXd frequency_error_estimates(const Tet10Mesh& mesh, const Material& material, const Eigen::MatrixXd& modes,
+                                          const Eigen::VectorXd& frequencies_hz) {
+  return estimate_frequency_errors(mesh, material, modes, frequencies_hz).relative;
 }
 
 }  // namespace flexbody::preprocess

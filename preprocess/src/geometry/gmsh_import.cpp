@@ -379,9 +379,9 @@ std::array<int, 3> loose_entities() {
   return loose;
 }
 
-// Each CAD point's element size: at most the shortest CAD curve through it over `across` (GmshImportOptions::
-// thin_feature_elements), and at most `size`; gmsh interpolates point sizes along curves and over faces
-// (Mesh.MeshSizeFromPoints and Mesh.MeshSizeExtendFromBoundary, both on by default).
+// Each CAD point's element size: the shortest CAD curve through it over `across` (GmshImportOptions::
+// thin_feature_elements), within [kThinFeatureFloor, 1] × `size`; gmsh interpolates point sizes along curves and over
+// faces (Mesh.MeshSizeFromPoints and Mesh.MeshSizeExtendFromBoundary, both on by default).
 void size_thin_features(double size, double across) {
   gmsh::vectorpair curves;
   gmsh::model::getEntities(curves, 1);
@@ -404,7 +404,7 @@ void size_thin_features(double size, double across) {
     if (!(length > 0.0)) continue;  // a closed curve without its length (built-in kernel): no measure of it
     for (const auto& end : ends) {
       const int tag = std::abs(end.second);
-      const double at = std::min(size, length / across);
+      const double at = std::clamp(length / across, kThinFeatureFloor * size, size);
       const auto [it, inserted] = sizes.emplace(tag, at);
       if (!inserted) it->second = std::min(it->second, at);
     }
@@ -413,13 +413,37 @@ void size_thin_features(double size, double across) {
     gmsh::model::mesh::setSize({{0, tag}}, at);
 }
 
+// GmshImportOptions::size_field as gmsh's background mesh: a list-based view of its tetrahedra ("SS": each with its
+// corners' coordinates and a value at each, here the element's size; independent of the model's own mesh, which is
+// cleared) behind a PostView field. Where the view has no element (a curved face beyond the old mesh's chords), gmsh
+// takes the largest size, so Mesh.MeshSizeMax holds. Returns the view's and the field's tags, for removal.
+std::pair<int, int> add_background_sizes(const MeshSizeField& field, double metres_to_gmsh) {
+  const Eigen::Index elements = field.mesh.element_count();
+  std::vector<double> data;
+  data.reserve(static_cast<std::size_t>(16 * elements));
+  for (Eigen::Index e = 0; e < elements; ++e) {
+    for (int axis = 0; axis < 3; ++axis)
+      for (int a = 0; a < 4; ++a) data.push_back(field.mesh.nodes(field.mesh.tets(e, a), axis) * metres_to_gmsh);
+    for (int a = 0; a < 4; ++a) data.push_back(field.sizes(e) * metres_to_gmsh);
+  }
+  const int view = gmsh::view::add("fbprep sizes");
+  gmsh::view::addListData(view, "SS", static_cast<int>(elements), data);
+  const int tag = gmsh::model::mesh::field::add("PostView");
+  gmsh::model::mesh::field::setNumber(tag, "ViewTag", view);
+  gmsh::model::mesh::field::setAsBackgroundMesh(tag);
+  return {view, tag};
+}
+
 // The model meshed at element size `size` (gmsh's coordinates), its tetrahedra of the order asked read, quadratic ones
 // through gmsh's smoothing (optimize_folded; `repair` says what it did).
 GmshTetrahedra mesh_at(const std::string& name, double size, const GmshImportOptions& options,
-                       std::optional<CurvedElementRepair>& repair) {
+                       std::optional<CurvedElementRepair>& repair, double metres_to_gmsh) {
   gmsh::model::mesh::clear();
   gmsh::option::setNumber("Mesh.MeshSizeMax", size);
   if (options.thin_feature_elements > 0.0) detail::gmsh_call(name, [&] { size_thin_features(size, options.thin_feature_elements); });
+  std::optional<std::pair<int, int>> background;
+  if (options.size_field)
+    detail::gmsh_call(name, [&] { background = add_background_sizes(*options.size_field, metres_to_gmsh); });
   detail::gmsh_call(name + ": meshing failed", [&] {
     detail::SilencedStdStreams quiet;
     gmsh::model::mesh::generate(3);
@@ -428,6 +452,11 @@ GmshTetrahedra mesh_at(const std::string& name, double size, const GmshImportOpt
       gmsh::model::mesh::setOrder(2);
     }
   });
+  if (background)
+    detail::gmsh_call(name, [&] {
+      gmsh::model::mesh::field::remove(background->second);
+      gmsh::view::remove(background->first);
+    });
   GmshTetrahedra tetrahedra = tetrahedra_from_gmsh(name, options.order.value_or(kDefaultElementOrder));
   repair.reset();
   if (tetrahedra.quadratic) repair = optimize_folded(name, tetrahedra, options);
@@ -457,7 +486,7 @@ GmshTetrahedra mesh_resolving_the_volume(const std::string& name, double size, s
                                    at * unit.gmsh_to_metres, to_string(options.algorithm)));
   };
   progress(size);
-  GmshTetrahedra tetrahedra = mesh_at(name, size, options, result.curved_repair);
+  GmshTetrahedra tetrahedra = mesh_at(name, size, options, result.curved_repair, 1.0 / unit.gmsh_to_metres);
   if (!solid) return tetrahedra;
   std::optional<double> volume = resolved_volume(tetrahedra);
   if (!volume) return tetrahedra;
@@ -485,7 +514,7 @@ GmshTetrahedra mesh_resolving_the_volume(const std::string& name, double size, s
                                    100.0 * (1.0 + trial_error), 100.0 * tolerance,
                                    by_default ? "refining the default size" : "looking for a size that holds it"));
     progress(next);
-    finer = mesh_at(name, next, options, finer_repair);
+    finer = mesh_at(name, next, options, finer_repair, 1.0 / unit.gmsh_to_metres);
     const std::optional<double> v = resolved_volume(finer);
     if (!v) break;  // the finer mesh fell apart: refused as disconnected below
     trial = next;
@@ -575,6 +604,9 @@ ImportedMesh import_tet_mesh(const std::filesystem::path& path, const GmshImport
   if (!(options.thin_feature_elements >= 0.0) || !std::isfinite(options.thin_feature_elements))
     throw std::invalid_argument(fmt::format("--thin-features must be a positive number of elements, got {}",
                                             options.thin_feature_elements));
+  if (options.size_field && result.format == InputFormat::msh)
+    throw std::invalid_argument(fmt::format("{}: a size field sizes a mesh fbprep makes; a .msh is used as it is",
+                                            path.filename().string()));
   if (options.thin_feature_elements > 0.0 && result.format == InputFormat::msh)
     throw std::invalid_argument(fmt::format("{}: --thin-features sizes a mesh fbprep makes; a .msh is used as it is",
                                             path.filename().string()));

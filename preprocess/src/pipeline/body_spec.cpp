@@ -121,7 +121,14 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
                                                   options.material.density));
   }
   if (const YAML::Node mesh = root["mesh"]) {
-    r.expect_map(mesh, "mesh", {"size", "order", "algorithm", "volume_tolerance", "thin_features"});
+    r.expect_map(mesh, "mesh", {"size", "order", "algorithm", "volume_tolerance", "thin_features", "error_target"});
+    if (mesh["error_target"]) {
+      options.error_target = r.number(mesh["error_target"], "mesh error_target");
+      if (!(options.error_target >= 0.0 && options.error_target < 1.0))
+        r.fail(mesh["error_target"], fmt::format("mesh error_target {} is a relative frequency error in [0, 1) (0.05: "
+                                                 "5 %; 0: no refinement)", options.error_target));
+      recorded.emplace_back("error_target", fmt::format("{}", options.error_target));
+    }
     if (mesh["size"]) options.mesh.mesh_size = r.positive(mesh["size"], "mesh size");
     if (mesh["thin_features"]) {
       options.mesh.thin_feature_elements = r.positive(mesh["thin_features"], "mesh thin_features");

@@ -106,6 +106,14 @@ std::string PrepSummary::full_report() const {
   if (refined_from_m > 0.0 && first_volume_error)
     line("", fmt::format("(the default {:.4g} m held {:.2f} % of the CAD solid's volume: refined)", refined_from_m,
                          100.0 * (1.0 + *first_volume_error)));
+  if (refinement)
+    line("", fmt::format("(refined by the error estimate: the first mesh's {} DOFs put the first frequency, {:.4g} Hz, "
+                         "{:.1f} % too high, beyond the {:.2g} % target; remeshed where the estimate puts the error, "
+                         "{:.3g} tetrahedra planned from {}{})", refinement->first_dofs, refinement->first_frequency_hz,
+                         100.0 * refinement->first_estimate, 100.0 * refinement->error_target,
+                         refinement->predicted_elements, refinement->first_elements,
+                         refinement->budget_bound ? fmt::format(", the budget of {:g} times", kRefinementGrowth)
+                                                  : std::string()));
   line("nodes", fmt::format("{}", nodes));
   line("elements", fmt::format("{}", elements));
   line("DOFs", fmt::format("{}", dofs));
@@ -279,6 +287,18 @@ std::string PrepSummary::json() const {
   j["volume_error"] = cad_volume_m3 ? nlohmann::ordered_json(volume_error()) : nlohmann::ordered_json(nullptr);
   j["mesh_size_refined_from_m"] = refined_from_m > 0.0 ? nlohmann::ordered_json(refined_from_m) : nlohmann::ordered_json(nullptr);
   j["first_volume_error"] = first_volume_error ? nlohmann::ordered_json(*first_volume_error) : nlohmann::ordered_json(nullptr);
+  if (refinement)
+    j["mesh_refinement"] = {{"error_target", refinement->error_target},
+                            {"first_frequency_hz", refinement->first_frequency_hz},
+                            {"first_estimate", refinement->first_estimate},
+                            {"first_dofs", refinement->first_dofs},
+                            {"first_elements", refinement->first_elements},
+                            {"predicted_elements", refinement->predicted_elements},
+                            {"predicted_share", refinement->predicted_share},
+                            {"budget_bound", refinement->budget_bound},
+                            {"first_seconds", refinement->first_seconds}};
+  else
+    j["mesh_refinement"] = nullptr;
   j["material"] = {{"name", material.name},
                    {"E_pa", material.youngs_modulus},
                    {"nu", material.poisson_ratio},

@@ -17,6 +17,22 @@
 
 namespace flexbody::preprocess {
 
+/// The estimate of each mode and where its error lies.
+struct FrequencyErrorEstimate {
+  /// Each mode's estimated relative frequency error f_h / f − 1 (as frequency_error_estimates).
+  Eigen::VectorXd relative;
+  /// Each element's share of the relative eigenvalue error, the largest over the modes: max_k η²_{e,k} / λ_k
+  /// (dimensionless; Σ_e of one mode's shares is its estimated relative eigenvalue error). Drives the refinement of
+  /// mesh_refinement.hpp.
+  Eigen::VectorXd element_shares;
+};
+[[nodiscard]] FrequencyErrorEstimate estimate_frequency_errors(const TetMesh& mesh, const Material& material,
+                                                               const Eigen::MatrixXd& modes,
+                                                               const Eigen::VectorXd& frequencies_hz);
+[[nodiscard]] FrequencyErrorEstimate estimate_frequency_errors(const Tet10Mesh& mesh, const Material& material,
+                                                               const Eigen::MatrixXd& modes,
+                                                               const Eigen::VectorXd& frequencies_hz);
+
 /// Each mode's estimated relative frequency error f_h / f − 1 (≥ 0; +inf when the estimated error energy reaches the
 /// eigenvalue: the mesh does not resolve that mode at all), for M-normalised mode shapes (3 n_n x m, node-interleaved)
 /// with frequencies [Hz] (m). Modes at zero frequency (rigid-body) get 0.

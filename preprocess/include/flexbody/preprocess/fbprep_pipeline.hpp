@@ -46,6 +46,12 @@ inline constexpr double kDefaultRecoveryBytes = 64e6;
 enum class ReductionKind { free_free, craig_bampton };
 [[nodiscard]] std::string_view to_string(ReductionKind kind);  ///< "free-free", "craig-bampton"
 
+/// PrepOptions::error_target's default: the level at which fbprep warns (kAccuracyWarning).
+inline constexpr double kDefaultErrorTarget = 0.05;
+/// The refined mesh has at most this many times the first one's tetrahedra (and at most
+/// GmshImportOptions::volume_search_elements): its modes cost about this much more than the first mesh's.
+inline constexpr double kRefinementGrowth = 8.0;
+
 struct PrepOptions {
   std::filesystem::path input;
   /// The body file to write. It may not be the input or the spec (the same file by any path), and an existing
@@ -67,6 +73,12 @@ struct PrepOptions {
   /// The geometric stiffness of the prestress cases (geometric_stiffness.hpp: the six centrifugal ones and a unit
   /// force and moment at each interface), projected on the GCMS fields, for rotating and preloaded parts (issue 29).
   bool geometric_stiffness = false;
+  /// The relative error of the first frequency (dimensionless, f_h / f − 1 by the error estimate) above which the
+  /// default mesh is refined once where the estimate puts the error (mesh_refinement.hpp), aiming at half of it with
+  /// at most kRefinementGrowth times the tetrahedra; 0: never. Only a mesh fbprep sizes itself is refined: not with
+  /// mesh.mesh_size or mesh.thin_feature_elements given, not a .msh, and free-free modes only (they carry the
+  /// estimate).
+  double error_target = kDefaultErrorTarget;
   /// The options as the user gave them, recorded in the body file's provenance.
   std::vector<std::pair<std::string, std::string>> recorded_options;
   /// Called with a short message at the start of each long step.
@@ -120,6 +132,19 @@ struct PrepSummary {
   /// Free-free: each eigenmode's estimated discretisation error f_h / f − 1 (error_estimate.hpp;
   /// empty otherwise).
   Eigen::VectorXd frequency_errors;
+  /// When the default mesh was refined by the error estimate (PrepOptions::error_target): the first mesh's numbers and
+  /// the plan (mesh_refinement.hpp). Every other field describes the refined mesh.
+  struct MeshRefinement {
+    double error_target = 0.0;        ///< PrepOptions::error_target
+    double first_frequency_hz = 0.0;  ///< the first mesh's first elastic frequency
+    double first_estimate = 0.0;      ///< and its estimated relative error
+    Eigen::Index first_dofs = 0, first_elements = 0;
+    double predicted_elements = 0.0;  ///< the plan's tetrahedra
+    double predicted_share = 0.0;     ///< the plan's estimated relative eigenvalue error left (all modes' shares)
+    bool budget_bound = false;        ///< kRefinementGrowth, not the target, set the sizes
+    double first_seconds = 0.0;       ///< the first mesh's pass, from the import to the estimate
+  };
+  std::optional<MeshRefinement> refinement;
   /// "the first frequency is likely N % too high ..." when the estimate passes kAccuracyWarning, else empty.
   [[nodiscard]] std::string accuracy_warning() const;
   /// Free-free only: each mode's rounding floor of its residual (eigen_residual.hpp).

@@ -9,6 +9,7 @@
 #include <array>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -31,6 +32,18 @@ enum class MeshAlgorithm { delaunay, hxt };
 /// 375 % above the quadratic one (more than 5 % on 30 parts), and reaching 5 % with them costs several halvings of the
 /// size; quadratic ones are within 3 % by the error estimate on all but one, at a median of 4 s instead of 1 s.
 inline constexpr int kDefaultElementOrder = 2;
+
+/// GmshImportOptions::thin_feature_elements sizes no point below this fraction of the mesh size: without it a CAD
+/// curve of a micrometre (a chamfer's edge) asks for micrometre elements (0603_SMD.stp was still meshing at 5 GB
+/// after two minutes).
+inline constexpr double kThinFeatureFloor = 0.25;
+
+/// Element sizes over an earlier mesh of the same part (mesh_refinement.hpp): inside tetrahedron e of `mesh` (corner
+/// nodes, metres, the input's frame) gmsh is asked for elements of `sizes(e)` metres at most.
+struct MeshSizeField {
+  TetMesh mesh;
+  Eigen::VectorXd sizes;
+};
 
 struct GmshImportOptions {
   /// Length unit of the input's coordinates, as the user gives it. It wins over what a STEP file
@@ -55,11 +68,16 @@ struct GmshImportOptions {
   /// cost must stay below a run's: 2e6 tetrahedra are about 1e6 linear DOFs); past it, the refusal says so.
   double volume_search_elements = 2e6;
   /// Thin features meshed with about this many elements across (0: off, the default): each CAD point's element size
-  /// is at most the shortest CAD curve through it over this count, and gmsh spreads the point sizes over the faces
-  /// and the volume. A part's thin leads, ribs and walls are bounded by short curves, so they refine where the
-  /// uniform size would put one element through them (a thin-leaded inductor's first frequency 37 % above the
-  /// 2-across mesh's at the default quadratic mesh, 4 % with 1 across; README, `--thin-features`). Refused for a .msh.
+  /// is the shortest CAD curve through it over this count, clamped to [kThinFeatureFloor, 1] × the mesh size, and
+  /// gmsh spreads the point sizes over the faces and the volume. A part's thin leads, ribs and walls are bounded by
+  /// short curves, so they refine where the uniform size would put one element through them; so do small chamfers,
+  /// which are no thin features (a chip resistor: 18 times the DOFs for 0.01 % of its first frequency), which is why
+  /// fbprep's default is the refinement by the error estimate instead (fbprep_pipeline.hpp, error_target). Refused for
+  /// a .msh.
   double thin_feature_elements = 0.0;
+  /// Sizes from an earlier mesh (fbprep's refinement by the error estimate), on top of mesh_size; null: none. Refused
+  /// for a .msh.
+  std::shared_ptr<const MeshSizeField> size_field;
   /// The 3D algorithm (ignored for a .msh, whose tetrahedra are used as they are).
   MeshAlgorithm algorithm = MeshAlgorithm::delaunay;
   /// Called with a short message before each long step.

@@ -102,8 +102,9 @@ TEST(MeshVolume, TheSearchStopsAtItsElementBoundAndSaysSo) {
 
 // GmshImportOptions::thin_feature_elements: a block 40 x 40 x 10 mm with a fin 1 mm thick and 10 mm tall on top.
 // The default size (diagonal / 25 = 2.4 mm) leaves the fin about one element thick (measured: 27 nodes strictly
-// inside its thickness); with 2 across, the fin's corners (whose shortest curves are its 1 mm edges) ask for 0.5 mm
-// and gmsh fills the fin (126 nodes), while the block away from it keeps the default size (6991 -> 9550 tetrahedra).
+// inside its thickness); with 2 across, the fin's corners (whose shortest curves are its 1 mm edges) ask for 0.5 mm,
+// which the floor of kThinFeatureFloor = 1/4 of the size raises to 0.6 mm, and gmsh fills the fin (94 nodes; 126
+// without the floor), while the block away from it keeps the default size (6991 -> 8812 tetrahedra).
 TEST(MeshVolume, ThinFeaturesGetElementsAcrossThem) {
   const auto dir = flexbody::test::scratch_dir();
   std::ofstream(dir / "fin.geo") << "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 0.04, 0.04, 0.01};\n"

@@ -36,6 +36,9 @@ int main(int argc, char** argv) {
   app.add_option("-o,--output", output, "directory for the CSV files (default: <scene name>_results, here)");
   app.add_flag("--json", json, "print the run summary as one JSON object on stdout");
   app.add_flag("-q,--quiet", quiet, "no progress and no summary (errors still go to stderr)");
+  std::optional<double> end_time;
+  app.add_option("--end", end_time, "end time [s] instead of the scene's integrator end (a shorter trial run, or a "
+                                    "longer one); refused below the integrator step");
   int threads = 1;
   app.add_option("--threads", threads,
                  "threads for the per-body work of scenes of 64 bodies and more (default 1: with the cores shared, more "
@@ -62,7 +65,7 @@ int main(int argc, char** argv) {
   }
   flexbody::fbsim::Scene scene;
   try {
-    scene = flexbody::fbsim::read_scene(scene_path);
+    scene = flexbody::fbsim::read_scene(scene_path, {end_time});
   } catch (const std::invalid_argument& e) {
     return fail(e.what(), kBadInput);
   } catch (const std::exception& e) {

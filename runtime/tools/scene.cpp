@@ -74,7 +74,7 @@ std::function<double(double)> ramped_angle_rate(double speed, double ramp) {
 
 }  // namespace
 
-Scene read_scene(const std::filesystem::path& file) {
+Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overrides) {
   const Reader r(file.string());
   const YAML::Node loaded_root = r.load("scene");
   const YAML::Node& root = loaded_root;
@@ -410,13 +410,22 @@ Scene read_scene(const std::filesystem::path& file) {
   }
   scene.integrator.step = r.positive(r.required(integrator, "step", "integrator"), "integrator step");
   scene.end_time = r.positive(r.required(integrator, "end", "integrator"), "integrator end");
+  if (overrides.end_time) {
+    if (!(*overrides.end_time > 0.0) || !std::isfinite(*overrides.end_time))
+      throw std::invalid_argument(fmt::format("--end must be a positive time in seconds, got {}", *overrides.end_time));
+    if (scene.integrator.step > *overrides.end_time)
+      throw std::invalid_argument(fmt::format("--end {} s is shorter than the scene's integrator step {} s",
+                                              *overrides.end_time, scene.integrator.step));
+    scene.end_time = *overrides.end_time;
+  }
   if (scene.integrator.step > scene.end_time)
     r.fail(integrator["step"], fmt::format("integrator step {} s is larger than the end time {} s",
                                            scene.integrator.step, scene.end_time));
   if (const double steps = step_count(scene.end_time, scene.integrator.step); !(steps <= kMostSteps))
-    r.fail(integrator["step"], fmt::format("integrator step {} s would take {:.3g} steps to the end time {} s; at most "
-                                           "{:.0e} are allowed (is the step meant to be that small?)",
-                                           scene.integrator.step, steps, scene.end_time, kMostSteps));
+    r.fail(integrator["step"], fmt::format("integrator step {} s would take {:.3g} steps to the end time {} s{}; at "
+                                           "most {:.0e} are allowed (is the step meant to be that small?)",
+                                           scene.integrator.step, steps, scene.end_time,
+                                           overrides.end_time ? " (--end)" : "", kMostSteps));
   if (const YAML::Node tol = integrator["tolerance"]) {
     scene.integrator.tolerance = r.positive(tol, "integrator tolerance");
     if (scene.integrator.tolerance > runtime::kLargestTolerance)

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -74,7 +75,12 @@ inline constexpr double kMostSteps = 1e9;
   return std::max(1.0, std::ceil(steps - slack));
 }
 
+/// What fbsim's command line changes in a scene (nullopt: the scene's own).
+struct SceneOverrides {
+  std::optional<double> end_time;  ///< --end [s]: the integrator's end time, checked as the scene's `end` is
+};
+
 /// Reads and assembles a scene; body files are read relative to the scene's directory.
-[[nodiscard]] Scene read_scene(const std::filesystem::path& file);
+[[nodiscard]] Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overrides = {});
 
 }  // namespace flexbody::fbsim

@@ -618,6 +618,30 @@ outputs:
   EXPECT_NEAR(last_y(dir / "every_out" / "tip.csv"), last_y(dir / "even_out" / "tip.csv"), 1e-2 * std::abs(fallen));
 }
 
+// fbsim --end T replaces the scene's integrator end (a short trial run of a long scene; the examples' tests): the
+// issue's 2 s scene at 1e-4 s ends after 20 steps with --end 2e-3, its rows end on 2e-3 s exactly, and what the
+// scene's own end would refuse is refused for --end too, in one line naming the option.
+TEST(FbsimCli, EndOnTheCommandLineReplacesTheScenes) {
+  const auto& dir = bar_folder();
+  write_text(dir / "long.yaml", kIssueScene);
+  const CliRun run = run_fbsim(dir, "long.yaml -o long_out --json --end 2e-3");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(nlohmann::json::parse(run.out)["steps"], 20);
+  const std::vector<double> t = times_of(dir / "long_out" / "tip.csv");
+  ASSERT_FALSE(t.empty());
+  EXPECT_EQ(t.back(), 2e-3);
+  for (const auto& [end, message] : {std::pair<std::string, std::string>{"0", "--end must be a positive time in seconds, got 0"},
+                                     {"1e-5", "--end 1e-05 s is shorter than the scene's integrator step 0.0001 s"},
+                                     {"1e6", "would take 1e+10 steps to the end time 1000000 s (--end); at most 1e+09"}}) {
+    SCOPED_TRACE(end);
+    const CliRun bad = run_fbsim(dir, "long.yaml -o bad_end -q --end " + end);
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_NE(bad.err.find(message), std::string::npos) << bad.err;
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad_end"));
+  }
+}
+
 // Issue 13: an output directory that is an existing file gave "filesystem error: ..." (exit code 1).
 TEST(FbsimCli, AnOutputDirectoryThatIsAFileIsRefused) {
   const auto& dir = bar_folder();

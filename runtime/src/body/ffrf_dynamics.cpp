@@ -1,5 +1,7 @@
 #include "flexbody/runtime/ffrf_dynamics.hpp"
 
+#include "../kernels/rotation.hpp"
+
 #include <Eigen/Geometry>
 
 #include <cmath>
@@ -10,11 +12,7 @@ namespace {
 using Matrix34 = Eigen::Matrix<double, 3, 4>;
 using Matrix44 = Eigen::Matrix<double, 4, 4>;
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
+using detail::skew;
 
 // axial(X)_i = ε_ijk X_jk: ∫ρ a × b = axial(∫ρ a bᵀ).
 Eigen::Vector3d axial(const Eigen::Matrix3d& x) {

@@ -1,5 +1,7 @@
 #include "flexbody/runtime/ffrf_model.hpp"
 
+#include "../kernels/rotation.hpp"
+
 #include <Eigen/Geometry>
 
 #include <stdexcept>
@@ -7,11 +9,7 @@
 namespace flexbody::runtime {
 namespace {
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
+using detail::skew;
 
 // Mode m's body-frame field coordinates c_m (3 n_f): c_m[3f + d] = W_m(4 + f, d).
 Eigen::VectorXd field_coordinates(const Eigen::MatrixXd& w, Eigen::Index mode) {

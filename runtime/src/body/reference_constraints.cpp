@@ -1,6 +1,7 @@
 #include "flexbody/runtime/reference_constraints.hpp"
 
 #include "../kernels/outer_sum.hpp"
+#include "../kernels/rotation.hpp"
 
 #include <Eigen/Geometry>
 
@@ -15,11 +16,7 @@ namespace {
 constexpr std::array<std::pair<int, int>, kOrthogonalityRows> kPairs = {
     std::pair{0, 0}, std::pair{1, 1}, std::pair{2, 2}, std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}};
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
+using detail::skew;
 
 void check_sizes(const TisserandMatrix& g, const VectorRef& xi) {
   if (xi.size() != 3 * g.cols())

@@ -1,6 +1,6 @@
 #pragma once
 // constraint_projection.hpp (internal): the factor of Φ_q W Φ_qᵀ (m x m, W diagonal and positive), with which the
-// stabilised index-2 form moves the positions back onto Φ = 0 (generalized_alpha.cpp). Dense Cholesky for a few
+// stabilised index-2 form moves the positions back onto Φ = 0 (generalized_alpha_newton.cpp). Dense Cholesky for a few
 // bodies; for many, a sparse Cholesky: rows k and l couple only when they share a body, so the matrix has
 // O(m) entries, and its fill-reducing ordering (AMD) is computed once per pattern and kept. The product is summed
 // body by body: the rows that touch a body's columns form a small dense block J_b (a revolute-jointed GCMS body:

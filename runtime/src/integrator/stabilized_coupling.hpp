@@ -15,8 +15,8 @@
 //
 //   (J P − (Z/γ') (X + P)) Δν = Ψ/γ' − Φ + (Z/γ') δ₀.
 //
-// Without Z and X this is J W Φ_q(q_f)ᵀ Δν = Ψ/γ' − Φ, the projection of the alternating step (generalized_alpha.cpp,
-// its factor Φ_q W Φ_qᵀ at q_f):
+// Without Z and X this is J W Φ_q(q_f)ᵀ Δν = Ψ/γ' − Φ, the projection of the alternating step
+// (generalized_alpha_newton.cpp, its factor Φ_q W Φ_qᵀ at q_f):
 // Δν first, then the dynamic rows with the velocity rows at the moved positions. That alternation is cheaper (no
 // solves to build) and converges in two iterations in most scenes, but not where the velocity rows move fast with the
 // positions: a slider-crank whose 0.01 kg carriage (1 cm gyration radius) guides a slider at up to 11 m/s converged
@@ -31,7 +31,7 @@
 // converges (5.6 iterations per step at h = 1e-3 s, with the matrix kept), the coupled one took 5.1 iterations and
 // 1.5 times as long.
 // The matrix parts (X, Y, Z, the m x m factor) are kept with the Newton matrix: from an older matrix the iteration
-// converges more slowly, and P, the kept matrix's, sets where the step ends (generalized_alpha.cpp, correction_of).
+// converges more slowly, and P, the kept matrix's, sets where the step ends (generalized_alpha_newton.cpp, position_correction).
 
 #include "flexbody/runtime/system.hpp"
 

@@ -1,5 +1,7 @@
 #include "flexbody/runtime/marker.hpp"
 
+#include "../kernels/rotation.hpp"
+
 #include "flexbody/runtime/ffrf_dynamics.hpp"
 #include "flexbody/runtime/gcms_elastic.hpp"
 
@@ -14,11 +16,7 @@
 namespace flexbody::runtime {
 namespace {
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
+using detail::skew;
 
 void check_coordinates(const Marker& m, const VectorRef& q_b) {
   const Eigen::Index expected = m.floating ? 7 + m.modal_displacement.cols() : 3 * m.y.size();

@@ -179,7 +179,26 @@ class GeneralizedAlpha {
   [[nodiscard]] const std::vector<std::string>& warnings() const { return warnings_; }
 
  private:
+  /// One step's constants: its size h, end time t1, β' and γ' of the Newmark update, and whether the constraints
+  /// take the stabilised index-2 form.
+  struct StepFrame {
+    double h = 0.0, t1 = 0.0, beta_prime = 0.0, gamma_prime = 0.0;
+    bool stabilized = false;
+  };
   void advance(double h, double t1);  ///< one step of size h to time t1 (step, step_to)
+  void predict(const StepFrame& f);   ///< the Newton iterate's start (generalized_alpha_step.cpp)
+  void accept(const StepFrame& f);    ///< the converged iterate, checked, becomes the state
+  /// One attempt's Newton iterations from the predictor (generalized_alpha_newton.cpp): true when they converged;
+  /// a failure's reason goes to `failure` (the first kept), `fresh` is set when a Newton matrix was built.
+  bool iterate(const StepFrame& f, double extent, bool& fresh, std::string& failure);
+  /// The Newton matrix at the iterate, with Φ_q W Φ_qᵀ and the coupling in the stabilised form; false (the reason
+  /// in `failure`) when the iteration diverged into dependent rows or a non-finite coupling. `evaluated`: the
+  /// residual was evaluated on the way.
+  bool build_newton_matrix(const StepFrame& f, bool& evaluated, std::string& failure);
+  void evaluate_residual(const StepFrame& f);  ///< work_.residual at the iterate: (M q̈ − f)/β' + Φ_qᵀ μ
+  /// W Φ_q(q_f)ᵀ ν, along the Jacobian of the kept Newton matrix.
+  void position_correction(const Eigen::VectorXd& nu, Eigen::VectorXd& out) const;
+  void record_divergence(double t1, const Eigen::VectorXd& phi, std::string& failure) const;
   void build_solver(double h);        ///< the Newton solver for steps of size h (β', γ'), to be factorized
   /// The sparse coupled stabilised step's Newton matrix at the iterate (ConstantCoreNewton::factor_coupled).
   void build_sparse_coupling(double t1, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
@@ -203,7 +222,7 @@ class GeneralizedAlpha {
   } work_;
   /// ConstraintForm::stabilized_index2: Φ_q W Φ_qᵀ at the Newton matrix's iterate q_f, factorized (dependent rows
   /// show there), and the coupling of ν to δ and μ, kept with the Newton matrix; ν corrects the positions along
-  /// W Φ_q(q_f)ᵀ, the same Jacobian (advance's correction_of).
+  /// W Φ_q(q_f)ᵀ, the same Jacobian (position_correction).
   std::unique_ptr<detail::ConstraintProjection> projected_;
   bool sparse_ = false;  ///< the reduced Newton matrix and Φ_q W Φ_qᵀ are factorized sparse
   std::unique_ptr<detail::StabilizedCoupling> coupling_;

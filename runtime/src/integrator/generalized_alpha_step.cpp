@@ -1,0 +1,259 @@
+// GeneralizedAlpha: one step (the predictor, the retries of a step whose Newton iteration fails, the new state) and
+// the checks of the model's validity after it (the deformation and spin limits).
+#include "flexbody/runtime/generalized_alpha.hpp"
+
+#include "finite.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace flexbody::runtime {
+namespace {
+
+using detail::all_finite;
+
+// ∫|u|² dm of body b's elastic displacement [kg m²]: ξ̄ᵀ (G_ff ⊗ I3) ξ̄ (and |ξ̄| = |ξ| for orthogonal A, so without
+// rotating). A floating-frame body's ξ̄ = Σ η_m c_m, the modes without the rigid part an interface frame gives them:
+// ηᵀ M_ff η would count that rigid motion as deformation (a rod in its crank-end frame was stopped at "2 % RMS" while
+// the same motion in the mean-axis frame was at 0.4 %).
+double elastic_mass_norm_squared(const System& system, int b, const Eigen::VectorXd& q) {
+  const BodyModel& model = system.model(b);
+  const Eigen::Index o = system.offset(b), n = model.coordinate_count();
+  if (model.floating())
+    return field_mass_norm_squared(model, ffrf_field_coordinates(*model.floating_frame, q.segment(o, n)));
+  return field_mass_norm_squared(model, q.segment(o + 12, n - 12));
+}
+
+}  // namespace
+
+void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) const {
+  if (!(options_.deformation_limit > 0.0)) return;
+  for (int b = 0; b < system_.body_count(); ++b) {
+    const BodyModel& model = system_.model(b);
+    if (model.rigid()) continue;
+    double squared = 0.0;
+    if (model.floating()) {  // ηᵀ Γ η with Γ = Cᵀ (G_ff ⊗ I3) C: the same as ‖Σ η_k c_k‖², without a vector of 3 n_f
+      const Eigen::MatrixXd& gram = modal_grams_[static_cast<std::size_t>(b)];
+      const auto eta = q.segment(system_.offset(b) + 7, gram.rows());
+      for (Eigen::Index k = 0; k < gram.rows(); ++k) squared += eta(k) * gram.col(k).dot(eta);
+    } else {
+      squared = elastic_mass_norm_squared(system_, b, q);
+    }
+    const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
+    const double size = body_sizes_[static_cast<std::size_t>(b)];
+    if (rms > options_.deformation_limit * size) {
+      std::ostringstream why;
+      why << "t = " << t << " s: body '" << system_.body_name(b) << "' left the small-deformation range of its linear "
+          << "model: RMS elastic displacement " << rms << " m = " << 100.0 * rms / size << " % of its size (limit "
+          << 100.0 * options_.deformation_limit << " %). ";
+      if (prestress_gaps_[static_cast<std::size_t>(b)].empty())
+        why << "Its model is linear in the deformation (its geometric stiffening covers the prestress, not large "
+            << "deformation): a load beyond linear elasticity, or a spin beyond the stiffened model's range";
+      else
+        why << "The model has no geometric stiffening for it (FORMULATION.md section 8): a spin above the first "
+            << "bending frequency, or a load beyond linear elasticity";
+      throw StepFailure(why.str());
+    }
+  }
+}
+
+void GeneralizedAlpha::check_spin(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
+  for (int b = 0; b < system_.body_count(); ++b) {
+    const BodyModel& model = system_.model(b);
+    if (model.rigid() || !(model.lowest_frequency_hz > 0.0)) continue;
+    const std::string& gap = prestress_gaps_[static_cast<std::size_t>(b)];
+    const bool stiffened = gap.empty();
+    const double warning = stiffened ? options_.stiffened_spin_warning : options_.spin_warning;
+    const double limit = stiffened ? options_.stiffened_spin_limit : options_.spin_limit;
+    if (!(warning > 0.0) && !(limit > 0.0)) continue;
+    const double spin = system_.angular_velocity(b, q, v).norm();
+    const double ratio = spin / (2.0 * std::numbers::pi * model.lowest_frequency_hz);
+    const bool over_limit = limit > 0.0 && ratio > limit;
+    const bool warn = warning > 0.0 && ratio > warning && !spin_warned_[static_cast<std::size_t>(b)];
+    if (!over_limit && !warn) continue;  // the message only when it is said: this runs every step
+    std::ostringstream what;
+    what << "t = " << t << " s: body '" << system_.body_name(b) << "' spins at " << spin << " rad/s = " << ratio
+         << " of its lowest elastic frequency (" << model.lowest_frequency_hz << " Hz); ";
+    if (stiffened) {
+      what << "its geometric stiffening was verified up to 2 times that frequency (a rotating cantilever within "
+           << "0.12 %); beyond, the fixed modes and the terms still left out (large deformation, the modes' change with "
+           << "the speed) limit it, and the improved GCMS showed a spurious mode in the plane of rotation at 3-4 times "
+           << "it (FORMULATION.md section 8.1)";
+    } else {
+      what << "a linear corotational model has no centrifugal stiffening (FORMULATION.md section 8), so its "
+           << "deformation is wrong by about " << 100.0 * 0.36 * ratio * ratio << " % in the spin plane and "
+           << 100.0 * 1.2 * ratio * ratio << " % out of it";
+      if (model.prestress) what << " (" << gap << ")";
+    }
+    if (over_limit) {
+      what << " (limit: " << limit << " of it)";
+      throw StepFailure(what.str());
+    }
+    spin_warned_[static_cast<std::size_t>(b)] = 1;
+    what << " (warning above " << warning << " of it)";
+    warnings_.push_back(what.str());
+  }
+}
+
+// Why a step may have failed, from the last converged state (the failed iterate says nothing reliable): the body
+// that turned most per step, and the one closest to the deformation limit.
+std::string GeneralizedAlpha::last_state_diagnosis() const {
+  const double h = options_.step;
+  int fastest = -1, most_deformed = -1;
+  double largest_turn = 0.0, largest_share = 0.0, rms_of_most = 0.0;
+  for (int b = 0; b < system_.body_count(); ++b) {
+    const double turn = system_.angular_velocity(b, q_, v_).norm() * h;
+    if (!(turn <= largest_turn)) largest_turn = turn, fastest = b;  // a non-finite rate is the one to report
+    const BodyModel& model = system_.model(b);
+    const double size = body_sizes_[static_cast<std::size_t>(b)];
+    if (model.rigid() || !(size > 0.0)) continue;
+    const double squared = elastic_mass_norm_squared(system_, b, q_);
+    const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
+    if (!(rms / size < largest_share)) largest_share = rms / size, most_deformed = b, rms_of_most = rms;
+  }
+  std::ostringstream out;
+  out << "; at the last converged step, t = " << t_ << " s,";
+  if (fastest >= 0)
+    out << " body '" << system_.body_name(fastest) << "' turned " << largest_turn << " rad per step"
+        << (largest_turn > 0.1 ? " (more than 0.1 rad per step: try a smaller step)" : "");
+  if (most_deformed >= 0)
+    out << (fastest >= 0 ? " and" : "") << " body '" << system_.body_name(most_deformed) << "' had an RMS elastic "
+        << "displacement of " << rms_of_most << " m = " << 100.0 * largest_share << " % of its size ("
+        << (options_.deformation_limit > 0.0 ? "limit " + std::to_string(100.0 * options_.deformation_limit) + " %"
+                                             : std::string("no limit set")) << ")";
+  if (fastest < 0 && most_deformed < 0) out << " every body was at rest and undeformed";
+  return out.str();
+}
+
+void GeneralizedAlpha::step() {
+  advance(options_.step, t0_ + static_cast<double>(steps_ + 1) * options_.step);
+  ++steps_;
+}
+
+void GeneralizedAlpha::step_to(double t_end) {
+  const double h = t_end - t_;
+  // t_ after many steps carries the rounding of t0 + k h, about ε |t_end|: beyond 1e7 steps that exceeds 1e-9 h.
+  const double slack = std::max(kStepToSlack * options_.step, 8.0 * std::numeric_limits<double>::epsilon() * std::abs(t_end));
+  if (!(h > 0.0) || !(h <= options_.step + slack))
+    throw std::invalid_argument("generalized-alpha: step_to(" + std::to_string(t_end) + ") from t = " +
+                                std::to_string(t_) + " s is not a step of at most " + std::to_string(options_.step) +
+                                " s forward");
+  advance(h, t_end);
+  t0_ = t_end;  // later steps: t0 + k h from here
+  steps_ = 0;
+}
+
+// The Newton iterate's start, the predictor q̈_{n+1} = q̈_n, through the Newmark update; in the stabilised form moved
+// by the last step's ν along the last Jacobian built.
+void GeneralizedAlpha::predict(const StepFrame& f) {
+  Iterate& w = work_;
+  const double h = f.h;
+  w.qdd = qdd_;
+  w.a = (alpha_f_ * qdd_ - alpha_m_ * a_ + (1.0 - alpha_f_) * w.qdd) / (1.0 - alpha_m_);
+  w.v = v_ + h * (1.0 - gamma_) * a_ + h * gamma_ * w.a;
+  w.q = q_ + h * v_ + h * h * (0.5 - beta_) * a_ + h * h * beta_ * w.a;
+  w.mu = lambda_ / f.beta_prime;  // the scaled multipliers
+  w.predicted = w.q;
+  if (f.stabilized) {
+    // ν changes slowly from step to step (it is the Newmark update's drift off Φ = 0 over one step): starting from
+    // the last step's ν leaves the first iteration a small Δν, whose effect on the dynamic rows is only seen at the
+    // next iteration (measured: a flexible pendulum needed 3.1-3.6 iterations per step from ν = 0).
+    const Eigen::Index m = lambda_.size();
+    if (nu_.size() != m) nu_ = Eigen::VectorXd::Zero(m);
+    w.nu = nu_;
+    if (w.jacobian.rows() == m)
+      position_correction(nu_, w.shift);
+    else
+      w.shift.setZero(q_.size());  // the first step: no Newton matrix yet, and ν = 0
+    w.q += w.shift;
+  }
+}
+
+void GeneralizedAlpha::advance(double h, double t1) {
+  const Eigen::Index n = q_.size(), m = lambda_.size();
+  // β' and γ' of the solver's matrix are those of the step it was built for; a step size changed beyond rounding
+  // rebuilds it (step_to), a kept one is a modified Newton matrix (GeneralizedAlphaOptions::reuse_newton_matrix).
+  if (std::abs(h - solver_step_) > kStepToSlack * solver_step_) build_solver(h);
+  const StepFrame f{h, t1, (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_)), gamma_ / (beta_ * h),
+                    options_.constraints == ConstraintForm::stabilized_index2 && m > 0};
+  // A Newton matrix kept from earlier iterations and steps (modified Newton) is refreshed when the corrections
+  // stop shrinking fast (ratio > 1/4); a step that does not converge with a kept matrix is retried with a fresh one.
+  bool fresh_this_step = false;
+  std::string failure;  // why the first attempt that failed did (iterate)
+  if (fresh_starts_ > 0) {
+    refresh_ = true;
+    --fresh_starts_;
+  }
+  const bool kept_at_start = !refresh_ && options_.reuse_newton_matrix;  // a trial of the kept matrix
+  for (int attempt = 0;; ++attempt) {
+    predict(f);
+    // The world's extent [m]: joints and springs compare positions of this size, so their residuals round at ε times
+    // it, wherever the body is (a pendulum pivoted 100 m from the origin).
+    double extent = ground_extent_;
+    for (int b = 0; b < system_.body_count(); ++b) extent = std::max(extent, q_.segment<3>(system_.offset(b)).norm());
+    if (iterate(f, extent, fresh_this_step, failure)) break;
+    // A step that failed is tried again from its predictor (in the stabilised form moved by the last step's ν along the
+    // last Jacobian built, which a fresh matrix then turns to its own): with a fresh matrix if its matrix was kept,
+    // then (stabilised form) with the coupled step; a failure of the last resort stops the run with the reason.
+    if (attempt == 0 && !fresh_this_step) {  // the kept matrix was too old: once more with a fresh one
+      refresh_ = true;
+      continue;
+    }
+    if (f.stabilized && !couple_) {  // (couple_, not coupled_: an attempt may fail before its matrix is built)
+      // A fresh matrix did not converge with the alternating step: once more with the coupled one, which then stays
+      // for the rest of the run (stabilized_coupling.hpp; slower to build, so not used before it is needed).
+      couple_ = refresh_ = true;
+      const std::string cost = sparse_core_ != nullptr
+                                   ? "one sparse factorization of n + 2m unknowns"
+                                   : "m solves";
+      warnings_.push_back("t = " + std::to_string(t1) + " s: Newton did not converge with the stabilised index-2 "
+                          "form's alternating step; the run continues with its coupled step, which costs " + cost +
+                          " per Newton matrix (n = " + std::to_string(n) + " coordinates, m = " + std::to_string(m) +
+                          " constraint rows)");
+      continue;
+    }
+    if (!failure.empty()) throw StepFailure(failure);
+    Eigen::Index worst = 0;
+    const Eigen::VectorXd now = system_.constraints(t1, work_.q);
+    if (m > 0) now.cwiseAbs().maxCoeff(&worst);
+    std::ostringstream why;
+    why << "t = " << t1 << " s: Newton did not converge in " << options_.max_iterations
+        << " iterations (largest constraint residual " << (m > 0 ? now.cwiseAbs().maxCoeff() : 0.0) << " in "
+        << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")" << last_state_diagnosis();
+    throw StepFailure(why.str());
+  }
+  accept(f);
+  // A kept matrix slowly goes stale as the bodies rotate away from where it was built: steps then need a third
+  // or fourth iteration. Once such extra iterations add up to about the cost of building a new matrix (a build is
+  // ~10 iterations' work: the elastic tangent and ~20 core products against 2-3 per iteration), rebuild it.
+  if (kept_at_start) {
+    fresh_start_backoff_ = fresh_this_step ? std::min(2 * fresh_start_backoff_ + 1, kLongestFreshStarts) : 0;
+    fresh_starts_ = fresh_start_backoff_;
+  }
+  if (!fresh_this_step) extra_iterations_ += std::max(0, iterations_ - 2);  // a fresh matrix is not stale
+  if (extra_iterations_ >= kExtraIterationsPerRebuild) refresh_ = true;
+  total_iterations_ += iterations_;
+}
+
+// The converged iterate becomes the state, after the checks of the model's validity.
+void GeneralizedAlpha::accept(const StepFrame& f) {
+  Iterate& w = work_;
+  if (!all_finite(w.q) || !all_finite(w.v) || !all_finite(w.qdd))
+    throw StepFailure("t = " + std::to_string(f.t1) + " s: non-finite state");
+  check_deformation(f.t1, w.q);
+  check_spin(f.t1, w.q, w.v);
+  w.a = (alpha_f_ * qdd_ - alpha_m_ * a_ + (1.0 - alpha_f_) * w.qdd) / (1.0 - alpha_m_);
+  q_ = w.q;
+  v_ = w.v;
+  qdd_ = w.qdd;
+  a_ = w.a;
+  lambda_ = f.beta_prime * w.mu;
+  if (f.stabilized) nu_ = w.nu;
+  t_ = f.t1;
+}
+
+}  // namespace flexbody::runtime

@@ -34,7 +34,7 @@ int prep_command(int argc, char** argv) {
   int order = 1, modes = 0;
   bool json = false, quiet = false, geometric_stiffness = false;
   app.add_option("INPUT", input, "STEP/STP, IGES/IGS, BREP, gmsh .geo, gmsh .msh with tetrahedra, or a body spec "
-                                 "(.yaml: see README; the flags below override it)")->required();
+                                 "(.yaml: see docs/fbprep.md; the flags below override it)")->required();
   app.add_option("-o,--output", output, "body file to write (default: INPUT's name with .fbh5, here)");
   app.add_option("--unit", unit_text, "unit of INPUT's coordinates: mm|cm|m|in; overrides the unit a STEP file "
                                       "declares (default: the declared one); required for BREP/.geo/.msh; refused "

@@ -44,7 +44,7 @@ inline constexpr long kCheckEvery = 9;
 /// energy, or whose angular momentum about the centre of mass grows by more than this fraction of its initial
 /// magnitude, gets a warning (on stderr when it happens, in RunSummary::warnings and fbsim --json). Generalized-α
 /// with ρ∞ < 1 only dissipates, and with ρ∞ = 1 its energy error oscillates at O((ω h)²), 1e-5 for the rigid
-/// pendulum at ω h = 4e-3 (README, evidence).
+/// pendulum at ω h = 4e-3 (docs/accuracy-and-speed.md).
 inline constexpr double kConservationTolerance = 1e-3;
 
 /// Runs the scene to its end time, writing into `directory` (created). Throws runtime::StepFailure (after

@@ -1,4 +1,4 @@
-# Installs flexbody into a scratch prefix, builds examples/pendulum against it with find_package(flexbody)
+# Installs flexbody into a scratch prefix, builds examples/05_cpp_runtime against it with find_package(flexbody)
 # (as a user's project would), and runs it on the sample bracket. Called by CTest with -DBUILD_DIR, -DSOURCE_DIR,
 # -DWORK_DIR and -DFBPREP.
 function(run)
@@ -12,7 +12,7 @@ endfunction()
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
 run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefix)
-run(${CMAKE_COMMAND} -S ${SOURCE_DIR}/examples/pendulum -B ${WORK_DIR}/example -DCMAKE_BUILD_TYPE=Release
+run(${CMAKE_COMMAND} -S ${SOURCE_DIR}/examples/05_cpp_runtime -B ${WORK_DIR}/example -DCMAKE_BUILD_TYPE=Release
     -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix)
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/example)
 run(${FBPREP} ${SOURCE_DIR}/meshes/bracket.yaml -o ${WORK_DIR}/bracket.fbh5 --modes 4 -q)

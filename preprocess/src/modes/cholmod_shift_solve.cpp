@@ -201,8 +201,8 @@ CholmodShiftSolve::CholmodShiftSolve(const SparseMatrix& stiffness_upper, const 
     throw std::runtime_error(fmt::format(
         "shift-invert: the factor of K - sigma M ({} rows, {:.3g} entries after ordering) would need about {:.3g} GB, "
         "more than the {:.3g} GB {}; use a coarser mesh (--mesh-size), linear elements (--order 1) if they are "
-        "quadratic, or MUMPS's out-of-core factor (--eigensolver slepc in a build with FLEXBODY_WITH_SLEPC; README: "
-        "\"On several processes\")",
+        "quadratic, or MUMPS's out-of-core factor (--eigensolver slepc in a build with FLEXBODY_WITH_SLEPC; "
+        "docs/eigensolvers.md: \"On Several Processes\")",
         n, impl_->common.lnz, bytes * 1e-9, static_cast<double>(*room) * 1e-9,
         memory_bytes ? "allowed" : "this process can still take"));
 }

@@ -62,7 +62,7 @@ struct PointTorque {
 /// A linear spring-damper between two markers (either may be on ground): the force F = k (ℓ − ℓ0) + c ℓ̇ pulls
 /// them together along the line between them. Its tangent enters the Newton matrix in full with the dense solve,
 /// and in its rigid-coordinate blocks with the constant core (whose ξξ block is the body's constant; see
-/// README "Known limits").
+/// docs/limits.md).
 struct SpringDamper {
   std::string name;
   Marker first, second;

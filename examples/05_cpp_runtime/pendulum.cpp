@@ -43,12 +43,12 @@ int main(int argc, char** argv) {
     options.rho_infinity = 0.9;
     options.step = 1e-3;
     fr::GeneralizedAlpha integrator(system, options);
-    std::printf("t [s], x [m], y [m], z [m] of %s\n", argv[3]);
+    std::printf("t [s],x [m],y [m],z [m]\n");  // the path of the watched interface, every 10 steps
     for (int step = 1; step <= 500; ++step) {
       integrator.step();
-      if (step % 100 == 0) {
+      if (step % 10 == 0) {
         const Eigen::Vector3d r = fr::marker_position(watched, system.body_coordinates(integrator.coordinates(), body));
-        std::printf("%.3f, %.6f, %.6f, %.6f\n", integrator.time(), r.x(), r.y(), r.z());
+        std::printf("%.3f,%.7f,%.7f,%.7f\n", integrator.time(), r.x(), r.y(), r.z());
       }
     }
     const fr::Energies e = system.energies(integrator.coordinates(), integrator.velocities());

@@ -2,6 +2,7 @@
 // scene.hpp: fbsim's scene file (YAML): bodies from body files, joints, forces, gravity, integrator settings and
 // outputs, read into a runtime System. Every error is one "<scene>:<line>: <problem>" line.
 
+#include "flexbody/format/yaml_reader.hpp"
 #include "flexbody/runtime/assembly.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/system.hpp"
@@ -79,6 +80,11 @@ inline constexpr double kMostSteps = 1e9;
 struct SceneOverrides {
   std::optional<double> end_time;  ///< --end [s]: the integrator's end time, checked as the scene's `end` is
 };
+
+/// The scene's `integrator` map (required) into scene.integrator, scene.end_time (or overrides.end_time) and
+/// scene.output_every, each value checked against the line it is on (scene_integrator.cpp).
+void read_integrator(const format::YamlReader& r, const YAML::Node& root, const SceneOverrides& overrides,
+                     Scene& scene);
 
 /// Reads and assembles a scene; body files are read relative to the scene's directory.
 [[nodiscard]] Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overrides = {});

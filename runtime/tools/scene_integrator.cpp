@@ -1,0 +1,106 @@
+// A scene's integrator settings (the `integrator` key, and --end): scene.hpp's read_integrator.
+#include "scene.hpp"
+
+#include "flexbody/format/yaml_reader.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+namespace flexbody::fbsim {
+
+void read_integrator(const format::YamlReader& r, const YAML::Node& root, const SceneOverrides& overrides,
+                     Scene& scene) {
+  const YAML::Node integrator = r.required(root, "integrator", "the scene");
+  r.expect_map(integrator, "integrator",
+               {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every", "deformation_limit",
+                "spin_warning", "spin_limit", "stiffened_spin_warning", "stiffened_spin_limit", "constraints",
+                "linear_solver", "coupled_step"});
+  if (const YAML::Node t = integrator["type"]; t && r.text(t, "integrator type") != "generalized-alpha")
+    r.fail(t, fmt::format("integrator type '{}' is unknown; use generalized-alpha", t.Scalar()));
+  if (const YAML::Node rho = integrator["rho_inf"]) {
+    scene.integrator.rho_infinity = r.number(rho, "integrator rho_inf");
+    if (scene.integrator.rho_infinity < 0.0 || scene.integrator.rho_infinity > 1.0)
+      r.fail(rho, fmt::format("integrator rho_inf must lie in [0, 1], got {}", scene.integrator.rho_infinity));
+  }
+  scene.integrator.step = r.positive(r.required(integrator, "step", "integrator"), "integrator step");
+  scene.end_time = r.positive(r.required(integrator, "end", "integrator"), "integrator end");
+  if (overrides.end_time) {
+    if (!(*overrides.end_time > 0.0) || !std::isfinite(*overrides.end_time))
+      throw std::invalid_argument(fmt::format("--end must be a positive time in seconds, got {}", *overrides.end_time));
+    if (scene.integrator.step > *overrides.end_time)
+      throw std::invalid_argument(fmt::format("--end {} s is shorter than the scene's integrator step {} s",
+                                              *overrides.end_time, scene.integrator.step));
+    scene.end_time = *overrides.end_time;
+  }
+  if (scene.integrator.step > scene.end_time)
+    r.fail(integrator["step"], fmt::format("integrator step {} s is larger than the end time {} s",
+                                           scene.integrator.step, scene.end_time));
+  if (const double steps = step_count(scene.end_time, scene.integrator.step); !(steps <= kMostSteps))
+    r.fail(integrator["step"], fmt::format("integrator step {} s would take {:.3g} steps to the end time {} s{}; at "
+                                           "most {:.0e} are allowed (is the step meant to be that small?)",
+                                           scene.integrator.step, steps, scene.end_time,
+                                           overrides.end_time ? " (--end)" : "", kMostSteps));
+  if (const YAML::Node tol = integrator["tolerance"]) {
+    scene.integrator.tolerance = r.positive(tol, "integrator tolerance");
+    if (scene.integrator.tolerance > runtime::kLargestTolerance)
+      r.fail(tol, fmt::format("integrator tolerance {} is above {}: it is relative to each step's predictor-corrector "
+                              "distance (the step's local error), and above that the iteration error exceeds it",
+                              scene.integrator.tolerance, runtime::kLargestTolerance));
+  }
+  const std::pair<const char*, double*> spin_levels[] = {
+      {"spin_warning", &scene.integrator.spin_warning},
+      {"spin_limit", &scene.integrator.spin_limit},
+      {"stiffened_spin_warning", &scene.integrator.stiffened_spin_warning},
+      {"stiffened_spin_limit", &scene.integrator.stiffened_spin_limit}};
+  for (const auto& [key, level] : spin_levels)
+    if (const YAML::Node ratio = integrator[key]) {
+      const double value = r.number(ratio, fmt::format("integrator {}", key));
+      if (value < 0.0) r.fail(ratio, fmt::format("integrator {} must be >= 0 (a multiple of the lowest elastic frequency; 0: "
+                                                 "no check), got {}", key, value));
+      *level = value;
+    }
+  if (const YAML::Node limit = integrator["deformation_limit"]) {
+    scene.integrator.deformation_limit = r.number(limit, "integrator deformation_limit");
+    if (scene.integrator.deformation_limit < 0.0)
+      r.fail(limit, "integrator deformation_limit must be >= 0 (0: no check)");
+  }
+  if (const YAML::Node form = integrator["constraints"]) {
+    const std::string f = r.text(form, "integrator constraints");
+    if (f == "stabilized-index2")
+      scene.integrator.constraints = runtime::ConstraintForm::stabilized_index2;
+    else if (f == "index3")
+      scene.integrator.constraints = runtime::ConstraintForm::index3;
+    else
+      r.fail(form, fmt::format("integrator constraints '{}' is unknown; use stabilized-index2 (positions and "
+                               "velocities, the default) or index3 (positions only)", f));
+  }
+  if (const YAML::Node solver = integrator["linear_solver"]) {
+    const std::string f = r.text(solver, "integrator linear_solver");
+    if (f == "auto")
+      scene.integrator.reduced_matrix = runtime::ReducedMatrix::automatic;
+    else if (f == "dense")
+      scene.integrator.reduced_matrix = runtime::ReducedMatrix::dense;
+    else if (f == "sparse")
+      scene.integrator.reduced_matrix = runtime::ReducedMatrix::sparse;
+    else
+      r.fail(solver, fmt::format("integrator linear_solver '{}' is unknown; use auto (the default: sparse from {} rows "
+                                 "of the reduced Newton matrix), dense or sparse", f, runtime::kSparseFromRows));
+  }
+  if (const YAML::Node coupled = integrator["coupled_step"]) {
+    const std::string f = r.text(coupled, "integrator coupled_step");
+    if (f != "on-failure" && f != "always")
+      r.fail(coupled, fmt::format("integrator coupled_step '{}' is unknown; use on-failure (the default: the stabilised "
+                                  "form's coupled Newton step after a step fails without it) or always", f));
+    scene.integrator.coupled_from_start = f == "always";
+  }
+  if (const YAML::Node it = integrator["max_iterations"]) scene.integrator.max_iterations = r.count(it, "integrator max_iterations");
+  if (const YAML::Node every = integrator["output_every"]) {
+    scene.output_every = r.count(every, "integrator output_every");
+    if (scene.output_every < 1) r.fail(every, "integrator output_every must be at least 1");
+  }
+}
+
+}  // namespace flexbody::fbsim

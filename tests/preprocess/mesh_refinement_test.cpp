@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <stdexcept>
 
@@ -164,4 +165,31 @@ TEST(MeshRefinement, TheDefaultMeshIsRefinedWhereTheEstimatePutsTheError) {
     EXPECT_TRUE(j["mesh_refinement"].is_null());
     EXPECT_NEAR(j["frequencies_hz"][0].get<double>(), first, 0.02 * first);
   }
+}
+
+// The library's own checks: an error target outside [0, 1) is refused before any work, and a plan that refines
+// nothing (a budget no larger than the first mesh: GmshImportOptions::volume_search_elements at 1) keeps the first
+// mesh instead of meshing the part again for nothing.
+TEST(MeshRefinement, ALibraryRunRefusesBadTargetsAndSkipsEmptyPlans) {
+  const auto dir = flexbody::test::scratch_dir();
+  flexbody::test::write_text(dir / "fin.geo", "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 0.04, 0.04, 0.01};\n"
+                                              "Box(2) = {0, 0.0195, 0.01, 0.04, 0.001, 0.01};\n"
+                                              "BooleanUnion{ Volume{1}; Delete; }{ Volume{2}; Delete; }\n");
+  fp::PrepOptions options;
+  options.input = dir / "fin.geo";
+  options.output = dir / "fin.fbh5";
+  options.mesh.unit = fp::LengthUnit::metre;
+  options.mesh.order = 1;
+  options.modes.modes = 2;
+  for (const double bad : {1.0, -0.1, std::nan("")}) {
+    options.error_target = bad;
+    EXPECT_THROW((void)fp::run_fbprep(options), std::invalid_argument) << bad;
+  }
+  EXPECT_FALSE(std::filesystem::exists(options.output));
+  options.error_target = fp::kDefaultErrorTarget;
+  options.mesh.volume_search_elements = 1.0;
+  const fp::PrepSummary kept = fp::run_fbprep(options);
+  EXPECT_FALSE(kept.refinement.has_value());
+  EXPECT_GT(kept.frequency_errors(0), 0.05);  // the first mesh's 13.9 %, kept and warned about
+  EXPECT_TRUE(std::filesystem::exists(options.output));
 }

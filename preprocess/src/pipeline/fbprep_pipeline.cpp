@@ -464,16 +464,29 @@ PrepSummary run_pass(const PrepOptions& options, std::shared_ptr<const MeshSizeF
 }  // namespace
 
 PrepSummary run_fbprep(const PrepOptions& options) {
-  if (!(options.error_target >= 0.0) || !std::isfinite(options.error_target))
-    throw std::invalid_argument(fmt::format("error target {} is not a relative error (0: no refinement)",
-                                            options.error_target));
+  if (!(options.error_target >= 0.0 && options.error_target < 1.0))
+    throw std::invalid_argument(fmt::format("error target {} is not a relative frequency error in [0, 1) (0: no "
+                                            "refinement)", options.error_target));
   const auto start = Clock::now();
   std::shared_ptr<const MeshSizeField> sizes;
   PrepSummary first = run_pass(options, detail::refinement_allowed(options) ? &sizes : nullptr);
   if (!sizes) return first;
   PrepOptions refined = options;
   refined.mesh.size_field = std::move(sizes);
-  PrepSummary summary = run_pass(refined, nullptr);
+  // The second mesh may fail where the first did not (memory, the volume check): say which mesh, and the way back.
+  const std::string second = fmt::format(" (on the mesh refined by the error estimate: the first mesh's frequency was "
+                                         "estimated {:.1f} % off; --error-target 0 keeps the first mesh)",
+                                         100.0 * first.refinement->first_estimate);
+  PrepSummary summary;
+  try {
+    summary = run_pass(refined, nullptr);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(e.what() + second);
+  } catch (const std::bad_alloc&) {
+    throw std::runtime_error(options.input.filename().string() + ": out of memory" + second);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(e.what() + second);
+  }
   summary.refinement = first.refinement;
   for (StageRecord& stage : first.stages) stage.name += " (first mesh)";
   summary.stages.insert(summary.stages.begin(), first.stages.begin(), first.stages.end());

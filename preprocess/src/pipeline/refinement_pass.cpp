@@ -31,9 +31,12 @@ std::shared_ptr<const MeshSizeField> refine_by_the_estimate(const PrepOptions& o
   request.max_elements = std::min(kRefinementGrowth * static_cast<double>(corners.element_count()),
                                   std::max(options.mesh.volume_search_elements,
                                            static_cast<double>(corners.element_count())));
+  const RefinementPlan plan = plan_refinement(element_sizes(corners), estimate.element_shares, request);
+  // A plan that refines nothing (the budget no larger than the mesh: at least volume_search_elements tetrahedra)
+  // would mesh the same part again for nothing.
+  if (!(plan.predicted_elements > 1.01 * static_cast<double>(corners.element_count()))) return nullptr;
   auto field = std::make_shared<MeshSizeField>();
   field->mesh = corners;
-  const RefinementPlan plan = plan_refinement(element_sizes(corners), estimate.element_shares, request);
   field->sizes = plan.sizes;
   PrepSummary::MeshRefinement& r = summary.refinement.emplace();
   r.error_target = options.error_target;

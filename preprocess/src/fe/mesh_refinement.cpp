@@ -54,7 +54,7 @@ Eigen::VectorXd element_sizes(const TetMesh& mesh) {
   for (Eigen::Index e = 0; e < mesh.element_count(); ++e) {
     Eigen::Matrix<double, 4, 3> corners;
     for (int a = 0; a < 4; ++a) corners.row(a) = mesh.nodes.row(mesh.tets(e, a));
-    sizes(e) = std::cbrt(8.5 * std::abs(format::tet4_geometry(corners).volume));
+    sizes(e) = std::cbrt(kTetrahedraPerCubedSize * std::abs(format::tet4_geometry(corners).volume));
   }
   return sizes;
 }

@@ -3,6 +3,7 @@
 // size, checked against the CAD volume; not installed).
 
 #include "flexbody/preprocess/gmsh_import.hpp"
+#include "flexbody/preprocess/mesh_refinement.hpp"
 
 #include <cstddef>
 #include <cstdint>
@@ -17,8 +18,10 @@ inline constexpr int kGmshTet4 = 4;    // gmsh element type of the 4-node tetrah
 inline constexpr int kGmshTet10 = 11;  // and of the 10-node one
 
 // Tetrahedra gmsh would make at element size h: its nearly regular tetrahedra of edge h have volume
-// h^3 / 8.5.
-inline double estimated_elements(double volume, double h) { return 8.5 * volume / (h * h * h); }
+// h^3 / kTetrahedraPerCubedSize (mesh_refinement.hpp).
+inline double estimated_elements(double volume, double h) {
+  return kTetrahedraPerCubedSize * volume / (h * h * h);
+}
 
 // Decides the unit of the geometry as gmsh delivers it, and the factor to metres.
 struct UnitDecision {

@@ -16,6 +16,10 @@
 
 namespace flexbody::preprocess {
 
+/// gmsh's nearly regular tetrahedra of edge h fill a volume V with about kTetrahedraPerCubedSize V / h³ of them (the
+/// import's estimate of a mesh before it is made, and element_sizes' inverse of it).
+inline constexpr double kTetrahedraPerCubedSize = 8.5;
+
 struct RefinementRequest {
   int order = 2;                  ///< the element order p of the mesh the shares come from
   double target_share = 0.0;      ///< the total relative eigenvalue error Σ_e η²_e s_e^(2p) to reach (dimensionless)

@@ -1,6 +1,7 @@
 #include "flexbody/runtime/assembly.hpp"
 
 #include "flexbody/runtime/ffrf_dynamics.hpp"
+#include "flexbody/runtime/ffrf_model.hpp"
 
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseLU>
@@ -8,11 +9,18 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <sstream>
 #include <stdexcept>
 
 namespace flexbody::runtime {
 namespace {
+
+// How much cheaper a rigid move is than a deformation of the same size, where the assembly may deform bodies: the
+// metric is M + K_e / (ε ω₁²), so a move along a body's first mode costs 1/ε times its kinetic-energy norm. The
+// misfit a closed loop's rigid moves cannot take is then taken by the least strain energy, and a part of order ε of
+// any other gap (5 µm x 1e-6: picometres).
+constexpr double kRigidPreference = 1e-6;
 
 // The rigid coordinates of body b: τ and a (12) of a GCMS body, τ and p (7) of a floating-frame one.
 Eigen::Index rigid_count(const BodyModel& model) { return model.floating() ? 7 : 12; }
@@ -25,6 +33,186 @@ Eigen::Matrix3d orientation_at(const BodyModel& model, const Eigen::VectorXd& q,
 double body_radius(const BodyModel& model) {
   if (model.nodes.rows() > 0) return model.nodes.rowwise().norm().maxCoeff();
   return 0.5 * body_size(model);
+}
+
+// The squared circular frequency [1/s²] that scales a body's stiffness in the assembly's metric, or 0 for a body
+// the assembly keeps rigid: rigid bodies, and the full-order reference (its K̄ and mesh are too large to enter a
+// dense metric, and it has no first frequency to scale it by).
+double deformation_scale(const BodyModel& model) {
+  if (model.floating()) {
+    const Eigen::VectorXd diagonal = model.floating_frame->modal_stiffness.diagonal();
+    return diagonal.size() > 0 ? diagonal.minCoeff() : 0.0;
+  }
+  if (model.rigid() || model.sparse) return 0.0;
+  const double f = model.lowest_frequency_hz > 0.0 ? model.lowest_frequency_hz
+                                                    : (model.frequencies_hz.size() > 0 ? model.frequencies_hz(0) : 0.0);
+  return std::pow(2.0 * M_PI * f, 2);
+}
+
+// Whether the joints close a loop (ground counts as one node): only a loop can ask a body to deform.
+bool has_closed_loop(const System& system) {
+  const int n_b = system.body_count();
+  std::vector<int> parent(static_cast<std::size_t>(n_b + 1));
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&](int i) {
+    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+    return i;
+  };
+  for (const Joint& j : system.joints()) {
+    if (j.rows() == 0) continue;
+    const int a = root(j.first.body == kGround ? n_b : j.first.body), b = root(j.second.body == kGround ? n_b : j.second.body);
+    if (a == b) return true;
+    parent[static_cast<std::size_t>(a)] = b;
+  }
+  return false;
+}
+
+// The unknowns of one Gauss-Newton solve: which coordinates move and which constraint rows hold them, and per body
+// the weight of its stiffness in the metric (0: it moves rigidly).
+struct Unknowns {
+  std::vector<Eigen::Index> column_of, row_of;
+  std::vector<bool> checked;  ///< rows whose residual decides convergence (the Tisserand rows are solved, not checked)
+  std::vector<double> stiffness_weight;
+  Eigen::Index columns = 0, rows = 0;
+  [[nodiscard]] bool deforms() const {
+    return std::any_of(stiffness_weight.begin(), stiffness_weight.end(), [](double w) { return w > 0.0; });
+  }
+};
+
+// Every body's rigid coordinates with its rigidity rows (6 orthogonality rows, or the Euler parameters'
+// normalisation), and every joint row; with `deformable`, also the deformation (ξ, η) of the bodies that have a
+// deformation_scale, with their Tisserand rows.
+Unknowns choose_unknowns(const System& system, bool deformable) {
+  Unknowns u;
+  const auto n = static_cast<std::size_t>(system.coordinate_count()), m = static_cast<std::size_t>(system.constraint_count());
+  u.column_of.assign(n, -1);
+  u.row_of.assign(m, -1);
+  u.checked.assign(m, false);
+  u.stiffness_weight.assign(static_cast<std::size_t>(system.body_count()), 0.0);
+  for (int b = 0; b < system.body_count(); ++b) {
+    const BodyModel& model = system.model(b);
+    const double scale = deformable ? deformation_scale(model) : 0.0;
+    if (scale > 0.0) u.stiffness_weight[static_cast<std::size_t>(b)] = 1.0 / (kRigidPreference * scale);
+    const Eigen::Index moving = scale > 0.0 ? model.coordinate_count() : rigid_count(model);
+    for (Eigen::Index i = 0; i < moving; ++i) u.column_of[static_cast<std::size_t>(system.offset(b) + i)] = u.columns++;
+    const Eigen::Index rigidity = model.floating() ? 1 : 6;
+    const Eigen::Index rows = scale > 0.0 ? (b + 1 < system.body_count() ? system.reference_row(b + 1) : system.joint_row(0)) - system.reference_row(b)
+                                          : rigidity;
+    for (Eigen::Index i = 0; i < rows; ++i) {
+      const auto k = static_cast<std::size_t>(system.reference_row(b) + i);
+      u.row_of[k] = u.rows++;
+      u.checked[k] = i < rigidity;
+    }
+  }
+  for (Eigen::Index k = system.joint_row(0); k < system.constraint_count(); ++k) {
+    u.row_of[static_cast<std::size_t>(k)] = u.rows++;
+    u.checked[static_cast<std::size_t>(k)] = true;
+  }
+  return u;
+}
+
+// The metric's entries over the unknowns: M(q), plus each deforming body's strain-energy Hessian ∂²U/∂ξ² = Â K̂ Âᵀ
+// (Eq. 96; GCMS) or K_ff (floating frame), times its weight.
+void add_metric(const System& system, const Unknowns& u, const Eigen::VectorXd& q, std::vector<Eigen::Triplet<double>>& entries) {
+  const Eigen::SparseMatrix<double> mass = system.sparse_mass_matrix(q);
+  for (Eigen::Index c = 0; c < mass.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(mass, c); it; ++it) {
+      const Eigen::Index r = u.column_of[static_cast<std::size_t>(it.row())], k = u.column_of[static_cast<std::size_t>(it.col())];
+      if (r >= 0 && k >= 0) entries.emplace_back(r, k, it.value());
+    }
+  for (int b = 0; b < system.body_count(); ++b) {
+    const double weight = u.stiffness_weight[static_cast<std::size_t>(b)];
+    if (weight == 0.0) continue;
+    const BodyModel& model = system.model(b);
+    const Eigen::Index o = system.offset(b);
+    Eigen::MatrixXd hessian;
+    Eigen::Index first = 0;
+    if (model.floating()) {
+      hessian = model.floating_frame->modal_stiffness;
+      first = 7;
+    } else {
+      const Eigen::VectorXd q_b = q.segment(o, model.coordinate_count());
+      hessian = body_elastic_tangent(model, orientation_at(model, q, o), q_b.tail(q_b.size() - 12), true).xi_xi;
+      first = 12;
+    }
+    const Eigen::Index start = u.column_of[static_cast<std::size_t>(o + first)];
+    for (Eigen::Index c = 0; c < hessian.cols(); ++c)
+      for (Eigen::Index r = 0; r < hessian.rows(); ++r)
+        if (hessian(r, c) != 0.0) entries.emplace_back(start + r, start + c, weight * hessian(r, c));
+  }
+}
+
+// The coefficients of Y = [1, X̄, Ῡ'] ((4 + n_f) x 3) of body b's deformation at q: ξ̄ = Âᵀ ξ in rows 4.. of a GCMS
+// body; Σ_m η_m W_m of a floating-frame one (whose rows 0..3 carry the interface frame's rigid part).
+Eigen::MatrixX3d deformation_coefficients(const System& system, int b, const Eigen::VectorXd& q) {
+  const BodyModel& model = system.model(b);
+  const Eigen::Index o = system.offset(b), n_f = model.field_count();
+  Eigen::MatrixX3d c = Eigen::MatrixX3d::Zero(4 + n_f, 3);
+  if (model.floating()) {
+    const FfrfModel& ff = *model.floating_frame;
+    for (Eigen::Index k = 0; k < ff.modes; ++k) c += q(o + 7 + k) * ff.shapes.middleCols<3>(3 * k);
+  } else {
+    const Eigen::Matrix3d a = orientation_at(model, q, o);
+    for (Eigen::Index f = 0; f < n_f; ++f) c.row(4 + f) = (a.transpose() * q.segment<3>(o + 12 + 3 * f)).transpose();
+  }
+  return c;
+}
+
+// The largest displacement of a node of body b by the change of deformation `change` (deformation_coefficients'
+// difference) [m]; for a body without a mesh, the root mean square over its mass.
+double largest_deformation(const BodyModel& model, const Eigen::MatrixX3d& change) {
+  if (model.nodes.rows() == 0 || model.fields.rows() != model.nodes.rows()) {
+    const Eigen::MatrixXd& g = model.mass_matrix;
+    return g.size() > 0 ? std::sqrt(std::max(0.0, (change.transpose() * g * change).trace() / model.mass)) : 0.0;
+  }
+  double largest = 0.0;
+  for (Eigen::Index i = 0; i < model.nodes.rows(); ++i) {
+    const Eigen::RowVector3d u = change.row(0) + model.nodes.row(i) * change.middleRows<3>(1) +
+                                 model.fields.row(i) * change.bottomRows(change.rows() - 4);
+    largest = std::max(largest, u.norm());
+  }
+  return largest;
+}
+
+enum class Outcome { converged, singular, not_converged };
+
+// Gauss-Newton on the linearised rows, each step the correction of least metric norm (assembly.hpp), until the
+// checked rows are at `converged` [m] (the rounding of the positions they compare).
+Outcome gauss_newton(const System& system, const Unknowns& u, const AssemblyOptions& options, double converged,
+                     Eigen::VectorXd& q, int& iterations) {
+  for (int iteration = 0; iteration <= options.max_iterations; ++iteration) {
+    const Eigen::VectorXd phi = system.constraints(0.0, q);
+    double largest = 0.0;
+    for (Eigen::Index k = 0; k < phi.size(); ++k)
+      if (u.checked[static_cast<std::size_t>(k)]) largest = std::max(largest, std::abs(phi(k)));
+    if (largest <= converged) return Outcome::converged;
+    if (iteration == options.max_iterations) break;
+    ++iterations;
+    Eigen::SparseMatrix<double> jacobian;
+    system.sparse_constraint_jacobian(0.0, q, jacobian);
+    std::vector<Eigen::Triplet<double>> entries;
+    add_metric(system, u, q, entries);
+    for (Eigen::Index c = 0; c < jacobian.outerSize(); ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(jacobian, c); it; ++it) {
+        const Eigen::Index r = u.row_of[static_cast<std::size_t>(it.row())], k = u.column_of[static_cast<std::size_t>(it.col())];
+        if (r >= 0 && k >= 0 && it.value() != 0.0) {
+          entries.emplace_back(u.columns + r, k, it.value());
+          entries.emplace_back(k, u.columns + r, it.value());
+        }
+      }
+    Eigen::SparseMatrix<double> kkt(u.columns + u.rows, u.columns + u.rows);
+    kkt.setFromTriplets(entries.begin(), entries.end());
+    kkt.makeCompressed();
+    Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu(kkt);
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(u.columns + u.rows);
+    for (Eigen::Index k = 0; k < phi.size(); ++k)
+      if (u.row_of[static_cast<std::size_t>(k)] >= 0) rhs(u.columns + u.row_of[static_cast<std::size_t>(k)]) = -phi(k);
+    const Eigen::VectorXd x = lu.info() == Eigen::Success ? Eigen::VectorXd(lu.solve(rhs)) : Eigen::VectorXd();
+    if (x.size() == 0 || !x.allFinite()) return Outcome::singular;
+    for (Eigen::Index i = 0; i < q.size(); ++i)
+      if (u.column_of[static_cast<std::size_t>(i)] >= 0) q(i) += x(u.column_of[static_cast<std::size_t>(i)]);
+  }
+  return Outcome::not_converged;
 }
 
 }  // namespace
@@ -47,16 +235,6 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
   const int n_b = system.body_count();
   const Eigen::VectorXd q0 = system.initial_coordinates();
   Eigen::VectorXd q = q0;
-  // The unknowns (every body's rigid coordinates) and the rows (the joints', and each body's rigidity: 6
-  // orthogonality rows, or the Euler parameters' normalisation); the Tisserand rows concern ξ, which stays.
-  std::vector<Eigen::Index> column_of(static_cast<std::size_t>(q.size()), -1), row_of(static_cast<std::size_t>(system.constraint_count()), -1);
-  Eigen::Index n_r = 0, m_r = 0;
-  for (int b = 0; b < n_b; ++b) {
-    const BodyModel& model = system.model(b);
-    for (Eigen::Index i = 0; i < rigid_count(model); ++i) column_of[static_cast<std::size_t>(system.offset(b) + i)] = n_r++;
-    for (Eigen::Index i = 0; i < (model.floating() ? 1 : 6); ++i) row_of[static_cast<std::size_t>(system.reference_row(b) + i)] = m_r++;
-  }
-  for (Eigen::Index k = system.joint_row(0); k < system.constraint_count(); ++k) row_of[static_cast<std::size_t>(k)] = m_r++;
   // Converged when the rows are at the rounding of the positions they compare.
   double extent = 1.0;
   for (int b = 0; b < n_b; ++b) extent = std::max(extent, q0.segment<3>(system.offset(b)).norm() + body_size(system.model(b)));
@@ -66,14 +244,14 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
   const double converged = 64.0 * std::numeric_limits<double>::epsilon() * extent;
   AssemblyReport report;
   report.moves.assign(static_cast<std::size_t>(n_b), 0.0);
+  report.deformations.assign(static_cast<std::size_t>(n_b), 0.0);
   const Eigen::VectorXd phi0 = system.constraints(0.0, q0);
   report.largest_gap = system.joints().empty() ? 0.0 : phi0.tail(system.constraint_count() - system.joint_row(0)).cwiseAbs().maxCoeff();
   // The joint whose gap is largest against its bodies' sizes: the one a refusal names.
   if (system.joints().empty()) {  // only the bodies' own rows: a body whose orientation is not a rotation
-    const Eigen::VectorXd phi = system.constraints(0.0, q0);
     Eigen::Index row = 0;
-    if (phi.size() > 0 && phi.cwiseAbs().maxCoeff(&row) > 1e-8)
-      throw std::invalid_argument("assembly: " + system.constraint_name(row) + " is violated by " + std::to_string(phi(row)));
+    if (phi0.size() > 0 && phi0.cwiseAbs().maxCoeff(&row) > 1e-8)
+      throw std::invalid_argument("assembly: " + system.constraint_name(row) + " is violated by " + std::to_string(phi0(row)));
     return report;
   }
   auto smaller_size = [&](const Joint& j) {  // of the joint's bodies [m]
@@ -93,83 +271,57 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
     }
     return worst;
   };
-  bool done = false;
-  for (int iteration = 0; iteration <= options.max_iterations; ++iteration) {
-    const Eigen::VectorXd phi = system.constraints(0.0, q);
-    double largest = 0.0;
-    for (Eigen::Index k = 0; k < phi.size(); ++k)
-      if (row_of[static_cast<std::size_t>(k)] >= 0) largest = std::max(largest, std::abs(phi(k)));
-    if (largest <= converged) {
-      done = true;
+  // A closed loop with a flexible body in the scene: its rows may be independent only through the body's
+  // deformation (the redundancy check, System::remove_redundant_constraints, counts it), so the assembly may deform
+  // the flexible bodies too.
+  const Unknowns unknowns = choose_unknowns(system, has_closed_loop(system));
+  switch (gauss_newton(system, unknowns, options, converged, q, report.iterations)) {
+    case Outcome::converged:
       break;
+    case Outcome::singular: {
+      const std::size_t k = worst_joint();
+      throw AssemblyError("assembly: joint '" + system.joints()[k].name + "' cannot be closed: the joints' rows are "
+                          "dependent where the bodies are (a redundant joint or a singular position)", k);
     }
-    if (iteration == options.max_iterations) break;
-    ++report.iterations;
-    Eigen::SparseMatrix<double> jacobian;
-    system.sparse_constraint_jacobian(0.0, q, jacobian);
-    const Eigen::SparseMatrix<double> mass = system.sparse_mass_matrix(q);
-    std::vector<Eigen::Triplet<double>> entries;
-    for (Eigen::Index c = 0; c < mass.outerSize(); ++c)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(mass, c); it; ++it) {
-        const Eigen::Index r = column_of[static_cast<std::size_t>(it.row())], k = column_of[static_cast<std::size_t>(it.col())];
-        if (r >= 0 && k >= 0) entries.emplace_back(r, k, it.value());
-      }
-    for (Eigen::Index c = 0; c < jacobian.outerSize(); ++c)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(jacobian, c); it; ++it) {
-        const Eigen::Index r = row_of[static_cast<std::size_t>(it.row())], k = column_of[static_cast<std::size_t>(it.col())];
-        if (r >= 0 && k >= 0 && it.value() != 0.0) {
-          entries.emplace_back(n_r + r, k, it.value());
-          entries.emplace_back(k, n_r + r, it.value());
-        }
-      }
-    Eigen::SparseMatrix<double> kkt(n_r + m_r, n_r + m_r);
-    kkt.setFromTriplets(entries.begin(), entries.end());
-    kkt.makeCompressed();
-    Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu(kkt);
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n_r + m_r);
-    for (Eigen::Index k = 0; k < phi.size(); ++k)
-      if (row_of[static_cast<std::size_t>(k)] >= 0) rhs(n_r + row_of[static_cast<std::size_t>(k)]) = -phi(k);
-    const Eigen::VectorXd x = lu.info() == Eigen::Success ? Eigen::VectorXd(lu.solve(rhs)) : Eigen::VectorXd();
-    if (!x.allFinite() || x.size() == 0) {
+    case Outcome::not_converged: {
       const std::size_t k = worst_joint();
       const Joint& j = system.joints()[k];
-      throw AssemblyError("assembly: joint '" + j.name + "' cannot be closed: the joints' rows are dependent "
-                                  "where the bodies are (a redundant joint or a singular position)", k);
+      std::ostringstream why;
+      why << "assembly: joint '" << j.name << "' cannot be closed in " << options.max_iterations << " steps: its markers "
+          << j.first.name << " and " << j.second.name << " are too far apart for the mechanism to reach";
+      throw AssemblyError(why.str(), k);
     }
-    for (Eigen::Index i = 0; i < q.size(); ++i)
-      if (column_of[static_cast<std::size_t>(i)] >= 0) q(i) += x(column_of[static_cast<std::size_t>(i)]);
   }
-  if (!done) {
-    const std::size_t k = worst_joint();
-    const Joint& j = system.joints()[k];
-    std::ostringstream why;
-    why << "assembly: joint '" << j.name << "' cannot be closed in " << options.max_iterations << " steps: its markers "
-        << j.first.name << " and " << j.second.name << " are too far apart for the mechanism to reach";
-    throw AssemblyError(why.str(), k);
-  }
-  for (int b = 0; b < n_b; ++b) {  // a GCMS body's ξ (global axes) turns with it, so that its deformation ξ̄ = Aᵀ ξ stays
+  for (int b = 0; b < n_b; ++b) {  // a rigidly moved GCMS body's ξ (global axes) turns with it: its ξ̄ = Aᵀ ξ stays
     const BodyModel& model = system.model(b);
-    if (model.floating() || model.rigid()) continue;
+    if (model.floating() || model.rigid() || unknowns.stiffness_weight[static_cast<std::size_t>(b)] > 0.0) continue;
     const Eigen::Index o = system.offset(b);
     const Eigen::Matrix3d turn = orientation_at(model, q, o) * orientation_at(model, q0, o).transpose();
     for (Eigen::Index f = 0; f < model.field_count(); ++f) q.segment<3>(o + 12 + 3 * f) = turn * q0.segment<3>(o + 12 + 3 * f);
   }
-  for (int b = 0; b < n_b; ++b) {  // the largest displacement of a point: |Δτ| + |ΔA| times the body's radius
+  for (int b = 0; b < n_b; ++b) {  // the largest displacement of a point: |Δτ| + |ΔA| times the body's radius, plus its deformation's
     const BodyModel& model = system.model(b);
     const Eigen::Index o = system.offset(b);
+    const auto i = static_cast<std::size_t>(b);
+    if (unknowns.stiffness_weight[i] > 0.0)
+      report.deformations[i] = largest_deformation(model, deformation_coefficients(system, b, q) - deformation_coefficients(system, b, q0));
     const double turn = (orientation_at(model, q, o) - orientation_at(model, q0, o)).norm();
-    report.moves[static_cast<std::size_t>(b)] = (q - q0).segment<3>(o).norm() + turn * body_radius(model);
-    if (report.moves[static_cast<std::size_t>(b)] > options.tolerance * body_size(model)) {
+    report.moves[i] = (q - q0).segment<3>(o).norm() + turn * body_radius(model) + report.deformations[i];
+    if (report.moves[i] > options.tolerance * body_size(model)) {
       const std::size_t k = worst_joint();
       const Joint& j = system.joints()[k];
       std::ostringstream why;
       why << "joint '" << j.name << "': its markers " << j.first.name << " and " << j.second.name << " are "
           << (j.rows() > 0 ? phi0.segment(system.joint_row(k), j.rows()).cwiseAbs().maxCoeff() : 0.0)
-          << " m apart; closing them moves body '" << system.body_name(b) << "' by " << report.moves[static_cast<std::size_t>(b)]
+          << " m apart; closing them moves body '" << system.body_name(b) << "' by " << report.moves[i]
           << " m, more than the assembly tolerance (" << 100.0 * options.tolerance << " % of its size, "
           << body_size(model) << " m): the scene must start nearly assembled";
       throw AssemblyError(why.str(), k);
     }
+  }
+  if (unknowns.deforms()) {
+    const Eigen::VectorXd rest = Eigen::VectorXd::Zero(q.size());
+    report.strain_energy = std::max(0.0, system.energies(q, rest).elastic - system.energies(q0, rest).elastic);
   }
   // Rows left out as redundant (System::remove_redundant_constraints) are not closed by the assembly: they hold
   // only if the loop closes. One off by more than the tolerance (a length against the smaller body's size, a

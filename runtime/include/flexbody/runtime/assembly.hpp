@@ -4,15 +4,29 @@
 // such gaps before the first step, and so does this.
 //
 // Among the rigid coordinates (τ and a = vec(A) of a GCMS body, τ and p of a floating-frame one; deformations stay as
-// they are in the body's frame: a GCMS body's ξ turns with A), at the time t = 0 of driven joints, the correction Δq of least kinetic-energy norm ½ Δqᵀ M_r Δq that satisfies every joint row and keeps
-// each body rigid (AᵀA = I, pᵀp = 1), found by Gauss-Newton steps on the linearised rows:
+// they are in the body's frame: a GCMS body's ξ turns with A), at the time t = 0 of driven joints, the correction Δq
+// of least kinetic-energy norm ½ Δqᵀ M_r Δq that satisfies every joint row and keeps each body rigid (AᵀA = I,
+// pᵀp = 1), found by Gauss-Newton steps on the linearised rows:
 //
-//   [M_r  J_rᵀ] [Δq]   [ 0 ]
-//   [J_r  0   ] [λ ] = [−Φ ],   J_r = ∂Φ/∂q_r,  M_r = G[0:4, 0:4] ⊗ I3 (or the floating frame's M_rr at η = 0).
+//   [W    J_rᵀ] [Δq]   [ 0 ]
+//   [J_r  0   ] [λ ] = [−Φ ],   J_r = ∂Φ/∂q_r,  W = M_r = G[0:4, 0:4] ⊗ I3 (or the floating frame's M_rr at η = 0).
 //
 // The mass metric moves a light part rather than a heavy one, and a part by translation rather than rotation where
 // either closes a gap. The joints' directions (revolute and prismatic axes, fixed frames) were fixed from the initial
 // state when the joints were made, so their rows hold already and stay held.
+//
+// A closed loop with a flexible body in it (a slider-crank whose rod is flexible, pinned at both ends) may not close
+// by rigid moves: its rows are independent only through the rod's deformation (a planar loop of revolute joints
+// repeats three rows among rigid coordinates, which System::remove_redundant_constraints keeps because the rod can
+// bend out of its plane). In a scene with a closed loop the flexible bodies' deformations (ξ with its Tisserand rows
+// (Eqs. 77-78), or η) are unknowns too, with the metric
+//
+//   W = M + K_e / (ε ω₁²),   K_e = ∂²U/∂ξ² = Â K̂ Âᵀ (Eq. 96) or K_ff,   ε = 1e-6,
+//
+// ω₁ the body's first elastic frequency: a move along the first mode costs 10⁶ times a rigid move of its size. A
+// misfit that rigid moves cannot take is then taken by the least strain energy (the body starts prestressed, as a
+// part forced into place does), and any other gap is closed rigidly but for a share of order ε. The full-order
+// reference body (full_order.hpp) moves rigidly only.
 
 #include "flexbody/runtime/system.hpp"
 
@@ -31,7 +45,11 @@ struct AssemblyOptions {
 };
 
 struct AssemblyReport {
-  std::vector<double> moves;  ///< per body: the largest displacement of a point of it [m]
+  std::vector<double> moves;  ///< per body: the largest displacement of a point of it [m], deformation included
+  /// per body: the largest displacement of a point by the deformation the assembly gave it [m] (zero but in a closed
+  /// loop whose rigid moves could not close it)
+  std::vector<double> deformations;
+  double strain_energy = 0.0;  ///< the elastic energy the assembly added to the bodies [J]
   int iterations = 0;         ///< Gauss-Newton steps taken (0: the scene was assembled)
   double largest_gap = 0.0;   ///< the largest joint position residual before [m]
   [[nodiscard]] int most_moved() const;  ///< the body with the largest move (−1 if none)

@@ -58,14 +58,14 @@ void append_scales(const BodyModel& model, Eigen::VectorXd& scales, Eigen::Index
     const FfrfModel& f = *model.floating_frame;
     scales.segment(offset + 3, 4).setConstant(0.5);
     const bool has_fields = model.fields.cols() == model.field_count() && model.fields.rows() == model.nodes.rows();
+    Eigen::MatrixXd u;  // every node's displacement in every mode (n_n x 3 n_m), Y W as two matrix products
+    if (has_fields && model.nodes.rows() > 0) {
+      u = model.fields * f.shapes.bottomRows(model.field_count());
+      u.noalias() += model.nodes * f.shapes.middleRows<3>(1);
+      u.rowwise() += f.shapes.row(0);
+    }
     for (Eigen::Index m = 0; m < f.modes; ++m) {
-      double largest = 0.0;
-      const auto w = f.shapes.middleCols<3>(3 * m);
-      for (Eigen::Index i = 0; has_fields && i < model.nodes.rows(); ++i) {
-        const Eigen::Vector3d u = w.row(0).transpose() + w.middleRows<3>(1).transpose() * model.nodes.row(i).transpose() +
-                                  w.bottomRows(model.field_count()).transpose() * model.fields.row(i).transpose();
-        largest = std::max(largest, u.norm());
-      }
+      const double largest = u.size() > 0 ? u.middleCols<3>(3 * m).rowwise().norm().maxCoeff() : 0.0;
       scales(offset + 7 + m) = largest > 0.0 ? r / largest : r * std::sqrt(model.mass / f.modal_mass(m, m));
     }
     return;

@@ -12,7 +12,8 @@ coincides with body k-1's bore_2 marker. Plus one closed-loop scene per kind, a 
 
 Per run: us_per_step and integrator_us_per_step from fbsim --json, and the peak RSS of that fbsim process alone
 (os.wait4's rusage of the child). The cost is capped: each run's step count is chosen so that it takes about
---budget seconds (at least 20 steps, at most --max-steps), predicted from the previous size's measured cost and the
+--budget seconds (at least 20 steps, at most --max-steps; with --steps S exactly S, the same simulated time for every
+N), predicted from the previous size's measured cost and the
 growth seen so far (local exponent, never below --min-exponent: the dense solver grows like N^3); a size whose
 predicted 20-step run exceeds --max-run seconds is skipped and recorded with that prediction. With --repeat R each
 chain runs R times and the fastest run is kept: this virtual machine's neighbours only ever add time, and a short
@@ -42,6 +43,7 @@ from scale_scenes import KINDS, Bracket, chain_scene, ladder_scene, vec  # the s
 
 REPO = Path(__file__).resolve().parent.parent
 MIN_STEPS = 20
+MAX_REPEATS = 40  # runs of one chain at most with --steps (fastest_run)
 STYLE = {"rigid": ("tab:gray", "o"), "gcms": ("tab:blue", "s"), "ffrf": ("tab:red", "^")}
 FIELDS = ["kind", "scene", "bodies", "joints", "steps", "us_per_step", "integrator_us_per_step", "peak_rss_mb",
           "status",
@@ -218,7 +220,7 @@ def ladder_runs(args, kind, body_file, bracket, history):
         probe, summary = one_run(args, kind, name, text_of, n, MIN_STEPS, 4 * args.max_run)
         done = [probe]
         if summary is not None:
-            steps = steps_for(summary["us_per_step"], float(probe["setup_s"]), args.budget, args.max_steps)
+            steps = args.steps or steps_for(summary["us_per_step"], float(probe["setup_s"]), args.budget, args.max_steps)
             if steps > MIN_STEPS:
                 predicted = float(probe["setup_s"]) + steps * summary["us_per_step"] * 1e-6
                 # Killed at 4 times its prediction (at least 2 budgets): Newton may fall back to a much costlier
@@ -242,10 +244,15 @@ def fastest_run(args, kind, name, text_of, n_bodies, steps, timeout):
         return summary.get("integrator_us_per_step", summary["us_per_step"])
 
     best = None
-    for _ in range(max(1, args.repeat)):
+    runs, timed = 0, 0.0
+    # With --steps a one-body run is a few milliseconds of stepping: it repeats until a second of it is timed (at most
+    # MAX_REPEATS runs), so that the fastest run is not one the machine's neighbours happened to spare.
+    while runs < max(1, args.repeat) or (args.steps and timed < 1.0 and runs < MAX_REPEATS):
         row, summary = one_run(args, kind, name, text_of, n_bodies, steps, timeout)
+        runs += 1
         if summary is None:
             return row, summary
+        timed += steps * cost(summary) * 1e-6
         if best is None or cost(summary) < cost(best[1]):
             best = (row, summary)
     return best
@@ -279,7 +286,7 @@ def measure(args):
                     rows.append(row)
                     print_row(row)
                     continue
-                steps = steps_for(cost, setup, args.budget, args.max_steps)
+                steps = args.steps or steps_for(cost, setup, args.budget, args.max_steps)
                 predicted = setup + steps * cost * 1e-6
             else:  # the smallest size: a 20-step probe for its cost, then the budgeted run
                 probe, summary = one_run(args, kind, name + "_probe", text_of, n, MIN_STEPS, args.max_run * 4)
@@ -289,7 +296,7 @@ def measure(args):
                     continue
                 cost = summary["us_per_step"]
                 setup = float(probe["setup_s"])
-                steps = steps_for(cost, setup, args.budget, args.max_steps)
+                steps = args.steps or steps_for(cost, setup, args.budget, args.max_steps)
                 predicted = setup + steps * cost * 1e-6
             row, summary = fastest_run(args, kind, name, text_of, n, steps, max(4 * args.max_run, 4 * predicted))
             row["predicted_s"] = f"{predicted:.1f}"
@@ -406,6 +413,9 @@ def main():
     parser.add_argument("--max-run", type=float, default=600.0,
                         help="skip a size whose predicted 20-step run takes longer [s]")
     parser.add_argument("--max-steps", type=int, default=10000, help="the most steps a run takes (small N)")
+    parser.add_argument("--steps", type=int, default=0,
+                        help="every run takes exactly this many steps (the same simulated time, steps x 1 ms, for "
+                             "every N; issue 27 measured 200) instead of as many as --budget allows")
     parser.add_argument("--min-exponent", type=float, default=3.0,
                         help="the least growth exponent the prediction assumes (the dense solver's N^3)")
     parser.add_argument("--ladder-links", type=int, default=33,

@@ -231,6 +231,12 @@ def scale_bench_threads2():
     return scale_table("scale_bench_threads2.csv", ladders=False)
 
 
+@table("scale_bench_steps200", "scale_bench_steps200.csv")
+def scale_bench_steps200():
+    """The same at equal simulated time: 200 steps (0.2 s) for every N, as issue 27 measured."""
+    return scale_table("scale_bench_steps200.csv")
+
+
 SOLVERS = [("klu", "KLU (COLAMD, no BTF)"), ("klu_amd_btf", "KLU default (BTF + AMD)"), ("klu_amd", "KLU, AMD alone"),
            ("sparselu", "Eigen SparseLU"), ("ldlt_quasidefinite", "SimplicialLDLT, quasi-definite"),
            ("klu_block_pattern_amd_btf", "KLU default on the blocks' dense pattern")]

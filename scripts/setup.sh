@@ -21,7 +21,9 @@ packages=(
   libssl-dev             # SHA-256 of the source file (provenance in the body file)
   libgtest-dev           # the test suite
   calculix-ccx           # independent FE code the tests compare against
-  python3-matplotlib python3-h5py   # benchmark plots (bench/ only)
+  pybind11-dev python3-dev python3-numpy   # the Python package flexbody (python/)
+  python3-pytest                    # its tests
+  python3-matplotlib python3-h5py   # benchmark plots (bench/ only), the Python examples
   freecad-common gmsh-doc           # public CAD parts for the corpus test and bench (FreeCAD's Idf models, gmsh's demos)
 )
 # --with-slepc: also what the optional slepc eigensolver backend needs (-DFLEXBODY_WITH_SLEPC=ON); the test

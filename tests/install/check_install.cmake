@@ -21,3 +21,14 @@ if(NOT last_output MATCHES "energy [-0-9.e]+ J after [0-9]+ Newton iterations")
   message(FATAL_ERROR "the example's output is not what it should be:\n${last_output}")
 endif()
 message(STATUS "${last_output}")
+
+# The Python package where cmake --install put it (<prefix>/lib/python3.X/dist-packages), as python3 would find it
+# under the default prefix /usr/local; it reads the same body file.
+if(PYTHON3 AND PYTHON_PACKAGE_DIR)
+  run(${CMAKE_COMMAND} -E env PYTHONPATH=${WORK_DIR}/prefix/${PYTHON_PACKAGE_DIR} PYTHONDONTWRITEBYTECODE=1
+      ${PYTHON3} ${SOURCE_DIR}/tests/install/check_python_package.py ${WORK_DIR}/bracket.fbh5)
+  if(NOT last_output MATCHES "^[0-9]+\\.[0-9]+\\.[0-9]+ 4")
+    message(FATAL_ERROR "the installed Python package printed:\n${last_output}")
+  endif()
+  message(STATUS "installed Python package: ${last_output}")
+endif()

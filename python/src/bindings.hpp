@@ -1,0 +1,10 @@
+#pragma once
+// bindings.hpp: the parts of the flexbody Python module, one function per source file.
+
+#include <pybind11/pybind11.h>
+
+namespace flexbody::python {
+
+void bind_body_file(pybind11::module_& m);  ///< read_body, Body, Interface, OutputRegion, BodyFileError
+
+}  // namespace flexbody::python

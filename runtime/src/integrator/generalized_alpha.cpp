@@ -58,14 +58,16 @@ void append_scales(const BodyModel& model, Eigen::VectorXd& scales, Eigen::Index
     const FfrfModel& f = *model.floating_frame;
     scales.segment(offset + 3, 4).setConstant(0.5);
     const bool has_fields = model.fields.cols() == model.field_count() && model.fields.rows() == model.nodes.rows();
-    Eigen::MatrixXd u;  // every node's displacement in every mode (n_n x 3 n_m), Y W as two matrix products
-    if (has_fields && model.nodes.rows() > 0) {
-      u = model.fields * f.shapes.bottomRows(model.field_count());
-      u.noalias() += model.nodes * f.shapes.middleRows<3>(1);
-      u.rowwise() += f.shapes.row(0);
-    }
+    Eigen::MatrixX3d u;  // every node's displacement in mode m (n_n x 3), Y W_m as two matrix products
     for (Eigen::Index m = 0; m < f.modes; ++m) {
-      const double largest = u.size() > 0 ? u.middleCols<3>(3 * m).rowwise().norm().maxCoeff() : 0.0;
+      double largest = 0.0;
+      if (has_fields && model.nodes.rows() > 0) {
+        const auto w = f.shapes.middleCols<3>(3 * m);
+        u.noalias() = model.fields * w.bottomRows(model.field_count());
+        u.noalias() += model.nodes * w.middleRows<3>(1);
+        u.rowwise() += w.row(0);
+        largest = u.rowwise().norm().maxCoeff();
+      }
       scales(offset + 7 + m) = largest > 0.0 ? r / largest : r * std::sqrt(model.mass / f.modal_mass(m, m));
     }
     return;

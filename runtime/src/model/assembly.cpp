@@ -9,9 +9,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 namespace flexbody::runtime {
 namespace {
@@ -35,36 +36,80 @@ double body_radius(const BodyModel& model) {
   return 0.5 * body_size(model);
 }
 
-// The squared circular frequency [1/s²] that scales a body's stiffness in the assembly's metric, or 0 for a body
-// the assembly keeps rigid: rigid bodies, and the full-order reference (its K̄ and mesh are too large to enter a
-// dense metric, and it has no first frequency to scale it by).
+// The squared circular frequency [1/s²] of the body's first mode, which scales its stiffness in the assembly's
+// metric, or 0 for a body the assembly keeps rigid: rigid bodies, and the full-order reference (its K̄ and mesh are
+// too large to enter a dense metric, and it has no first frequency to scale it by).
 double deformation_scale(const BodyModel& model) {
   if (model.floating()) {
     const Eigen::VectorXd diagonal = model.floating_frame->modal_stiffness.diagonal();
     return diagonal.size() > 0 ? diagonal.minCoeff() : 0.0;
   }
-  if (model.rigid() || model.sparse) return 0.0;
-  const double f = model.lowest_frequency_hz > 0.0 ? model.lowest_frequency_hz
-                                                    : (model.frequencies_hz.size() > 0 ? model.frequencies_hz(0) : 0.0);
-  return std::pow(2.0 * M_PI * f, 2);
+  if (model.rigid() || model.sparse || model.frequencies_hz.size() == 0) return 0.0;
+  return std::pow(2.0 * M_PI * model.frequencies_hz(0), 2);  // the basis's first mode, as K_ff's smallest entry
 }
 
-// Whether the joints close a loop (ground counts as one node): only a loop can ask a body to deform.
-bool has_closed_loop(const System& system) {
-  const int n_b = system.body_count();
-  std::vector<int> parent(static_cast<std::size_t>(n_b + 1));
-  std::iota(parent.begin(), parent.end(), 0);
-  auto root = [&](int i) {
-    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
-    return i;
+// The bodies that lie on a closed loop of joints (ground counts as one node): those joined by a joint that is not a
+// bridge of the body graph (Tarjan's low-link test, iterative so that a chain of thousands of links needs no deep
+// recursion; two joints between the same two bodies make a loop too). Only a loop can ask a body to deform.
+std::vector<bool> bodies_on_loops(const System& system) {
+  const int n_b = system.body_count(), nodes = n_b + 1;  // node n_b is ground
+  struct Edge {
+    int to;
+    std::size_t id;
   };
+  std::vector<std::vector<Edge>> adjacent(static_cast<std::size_t>(nodes));
+  std::vector<std::pair<int, int>> ends;
   for (const Joint& j : system.joints()) {
-    if (j.rows() == 0) continue;
-    const int a = root(j.first.body == kGround ? n_b : j.first.body), b = root(j.second.body == kGround ? n_b : j.second.body);
-    if (a == b) return true;
-    parent[static_cast<std::size_t>(a)] = b;
+    if (j.rows() == 0) continue;  // every row removed as redundant: it joins nothing
+    const int a = j.first.body == kGround ? n_b : j.first.body, b = j.second.body == kGround ? n_b : j.second.body;
+    if (a == b) continue;
+    adjacent[static_cast<std::size_t>(a)].push_back({b, ends.size()});
+    adjacent[static_cast<std::size_t>(b)].push_back({a, ends.size()});
+    ends.emplace_back(a, b);
   }
-  return false;
+  std::vector<int> order(static_cast<std::size_t>(nodes), -1), low(static_cast<std::size_t>(nodes), 0);
+  std::vector<bool> bridge(ends.size(), false);
+  struct Frame {
+    int node;
+    std::size_t via;  // the edge it was entered by (ends.size() for a root)
+    std::size_t next;
+  };
+  int counter = 0;
+  for (int root = 0; root < nodes; ++root) {
+    if (order[static_cast<std::size_t>(root)] >= 0) continue;
+    std::vector<Frame> stack{{root, ends.size(), 0}};
+    order[static_cast<std::size_t>(root)] = low[static_cast<std::size_t>(root)] = counter++;
+    while (!stack.empty()) {
+      Frame& f = stack.back();
+      const auto u = static_cast<std::size_t>(f.node);
+      if (f.next < adjacent[u].size()) {
+        const Edge e = adjacent[u][f.next++];
+        if (e.id == f.via) continue;  // the edge back to the parent (a parallel edge has another id)
+        const auto v = static_cast<std::size_t>(e.to);
+        if (order[v] < 0) {
+          order[v] = low[v] = counter++;
+          stack.push_back({e.to, e.id, 0});
+        } else {
+          low[u] = std::min(low[u], order[v]);
+        }
+      } else {
+        const Frame done = f;
+        stack.pop_back();
+        if (!stack.empty()) {
+          const auto parent = static_cast<std::size_t>(stack.back().node), child = static_cast<std::size_t>(done.node);
+          low[parent] = std::min(low[parent], low[child]);
+          if (low[child] > order[parent]) bridge[done.via] = true;
+        }
+      }
+    }
+  }
+  std::vector<bool> on_loop(static_cast<std::size_t>(n_b), false);
+  for (std::size_t k = 0; k < ends.size(); ++k) {
+    if (bridge[k]) continue;
+    for (const int node : {ends[k].first, ends[k].second})
+      if (node < n_b) on_loop[static_cast<std::size_t>(node)] = true;
+  }
+  return on_loop;
 }
 
 // The unknowns of one Gauss-Newton solve: which coordinates move and which constraint rows hold them, and per body
@@ -80,9 +125,9 @@ struct Unknowns {
 };
 
 // Every body's rigid coordinates with its rigidity rows (6 orthogonality rows, or the Euler parameters'
-// normalisation), and every joint row; with `deformable`, also the deformation (ξ, η) of the bodies that have a
+// normalisation), and every joint row; also the deformation (ξ, η) of the bodies marked `deformable` that have a
 // deformation_scale, with their Tisserand rows.
-Unknowns choose_unknowns(const System& system, bool deformable) {
+Unknowns choose_unknowns(const System& system, const std::vector<bool>& deformable) {
   Unknowns u;
   const auto n = static_cast<std::size_t>(system.coordinate_count()), m = static_cast<std::size_t>(system.constraint_count());
   u.column_of.assign(n, -1);
@@ -91,13 +136,12 @@ Unknowns choose_unknowns(const System& system, bool deformable) {
   u.stiffness_weight.assign(static_cast<std::size_t>(system.body_count()), 0.0);
   for (int b = 0; b < system.body_count(); ++b) {
     const BodyModel& model = system.model(b);
-    const double scale = deformable ? deformation_scale(model) : 0.0;
+    const double scale = deformable[static_cast<std::size_t>(b)] ? deformation_scale(model) : 0.0;
     if (scale > 0.0) u.stiffness_weight[static_cast<std::size_t>(b)] = 1.0 / (kRigidPreference * scale);
     const Eigen::Index moving = scale > 0.0 ? model.coordinate_count() : rigid_count(model);
     for (Eigen::Index i = 0; i < moving; ++i) u.column_of[static_cast<std::size_t>(system.offset(b) + i)] = u.columns++;
     const Eigen::Index rigidity = model.floating() ? 1 : 6;
-    const Eigen::Index rows = scale > 0.0 ? (b + 1 < system.body_count() ? system.reference_row(b + 1) : system.joint_row(0)) - system.reference_row(b)
-                                          : rigidity;
+    const Eigen::Index rows = scale > 0.0 ? system.reference_row(b + 1) - system.reference_row(b) : rigidity;
     for (Eigen::Index i = 0; i < rows; ++i) {
       const auto k = static_cast<std::size_t>(system.reference_row(b) + i);
       u.row_of[k] = u.rows++;
@@ -271,10 +315,10 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
     }
     return worst;
   };
-  // A closed loop with a flexible body in the scene: its rows may be independent only through the body's
-  // deformation (the redundancy check, System::remove_redundant_constraints, counts it), so the assembly may deform
-  // the flexible bodies too.
-  const Unknowns unknowns = choose_unknowns(system, has_closed_loop(system));
+  // A closed loop with a flexible body: its rows may be independent only through the body's deformation (the
+  // redundancy check, System::remove_redundant_constraints, counts it), so the assembly may deform the flexible
+  // bodies on loops too.
+  const Unknowns unknowns = choose_unknowns(system, bodies_on_loops(system));
   switch (gauss_newton(system, unknowns, options, converged, q, report.iterations)) {
     case Outcome::converged:
       break;

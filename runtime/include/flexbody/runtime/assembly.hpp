@@ -18,12 +18,12 @@
 // A closed loop with a flexible body in it (a slider-crank whose rod is flexible, pinned at both ends) may not close
 // by rigid moves: its rows are independent only through the rod's deformation (a planar loop of revolute joints
 // repeats three rows among rigid coordinates, which System::remove_redundant_constraints keeps because the rod can
-// bend out of its plane). In a scene with a closed loop the flexible bodies' deformations (ξ with its Tisserand rows
-// (Eqs. 77-78), or η) are unknowns too, with the metric
+// bend out of its plane). The deformations of the flexible bodies that lie on a closed loop (ξ with its Tisserand
+// rows (Eqs. 77-78), or η) are unknowns too, with the metric
 //
 //   W = M + K_e / (ε ω₁²),   K_e = ∂²U/∂ξ² = Â K̂ Âᵀ (Eq. 96) or K_ff,   ε = 1e-6,
 //
-// ω₁ the body's first elastic frequency: a move along the first mode costs 10⁶ times a rigid move of its size. A
+// ω₁ the frequency of the body's first mode: a move along it costs 10⁶ times a rigid move of its size. A
 // misfit that rigid moves cannot take is then taken by the least strain energy (the body starts prestressed, as a
 // part forced into place does), and any other gap is closed rigidly but for a share of order ε. The full-order
 // reference body (full_order.hpp) moves rigidly only.

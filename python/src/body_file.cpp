@@ -206,10 +206,7 @@ void bind_body_file(py::module_& m) {
         b->path = path;
         format::ReadOptions options;
         options.require_seal = require_seal;
-        {
-          py::gil_scoped_release released;  // reading and checking the seal of a large file
-          b->data = format::read_body_file(path, options);
-        }
+        b->data = format::read_body_file(path, options);  // with the GIL held: the reader is not made for threads
         return b;
       },
       py::arg("path"), py::arg("require_seal") = true,

@@ -90,11 +90,16 @@ def test_views_are_read_only_and_share_the_readers_storage(bracket_file):
     np.testing.assert_array_equal(shapes[2, :, 1], upsilon[:, 3 * 2 + 1])
     with pytest.raises(ValueError):
         body.nodes[0, 0] = 1.0
-    # An array keeps the body's storage alive after the Body is gone.
+    assert np.shares_memory(body.nodes, body.nodes)  # each access is a view of the one storage
+    # An array, or an interface, keeps the body's storage alive after the Body is gone.
     nodes, expected = body.nodes, body.nodes.copy()
+    bore = body.interfaces["bore_1"]
+    weights = bore.weights.copy()
     del body, shapes, upsilon
     gc.collect()
     np.testing.assert_array_equal(nodes, expected)
+    np.testing.assert_array_equal(bore.weights, weights)
+    assert bore.name == "bore_1"
 
 
 def test_a_damaged_file_raises_the_readers_message(bracket_file, build_dir, tmp_path):
@@ -113,3 +118,8 @@ def test_a_damaged_file_raises_the_readers_message(bracket_file, build_dir, tmp_
     assert str(caught.value) in cli.stderr  # the same one line as fbprep's
     with pytest.raises(flexbody.BodyFileError, match="missing.fbh5"):
         flexbody.read_body(tmp_path / "missing.fbh5")
+
+
+def test_require_seal_false_still_checks_the_seal_it_finds(bracket_file):
+    body = flexbody.read_body(bracket_file, require_seal=False)
+    assert body.sealed  # checked and matching

@@ -4,6 +4,7 @@
 //   pendulum BODY.fbh5 PIVOT_INTERFACE WATCHED_INTERFACE [MODES]
 #include <flexbody/format/body_file.hpp>
 #include <flexbody/runtime/generalized_alpha.hpp>
+#include <flexbody/runtime/scene_builder.hpp>
 #include <flexbody/runtime/system.hpp>
 
 #include <cstdio>
@@ -19,23 +20,19 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    // 1. The body: the file's first MODES modes (all by default), placed where its CAD puts it.
+    // 1. The body: the file's first MODES modes (all by default), placed where its CAD puts it (its input frame at
+    //    the origin).
     const flexbody::format::BodyData data = flexbody::format::read_body_file(argv[1]);
     std::optional<Eigen::Index> modes;
     if (argc > 4) modes = std::stoi(argv[4]);
-    fr::BodyState state;
-    state.position = data.mass.center_of_mass_input;
     fr::System system;
-    const int body = system.add_body("body", fr::make_body_model(data, modes, argv[1]), state);
+    fr::SceneBuilder scene(system);
+    scene.add_body("body", fr::make_body_model(data, modes, argv[1]), {}, data.mass.center_of_mass_input);
 
     // 2. A revolute joint about z at the pivot interface, to ground where that interface is now; gravity.
-    const fr::Marker pivot = fr::interface_marker(system.model(body), body, "body", argv[2]);
-    const fr::Marker watched = fr::interface_marker(system.model(body), body, "body", argv[3]);
-    const Eigen::VectorXd q0 = system.initial_coordinates();
-    const Eigen::VectorXd q_body = system.body_coordinates(q0, body);
-    system.add_joint(fr::make_joint("pivot", fr::JointType::revolute, pivot,
-                                    fr::ground_marker(fr::marker_position(pivot, q_body)), Eigen::Vector3d::UnitZ(),
-                                    q_body, Eigen::VectorXd()));
+    scene.add_joint("pivot", fr::JointType::revolute, scene.interface("body", argv[2]), {}, Eigen::Vector3d::UnitZ());
+    const fr::Marker watched = scene.interface("body", argv[3]);
+    const int body = scene.body("body");
     system.set_gravity(Eigen::Vector3d(0, -9.81, 0));
 
     // 3. Generalized-alpha, 1 ms steps for 0.5 s.

@@ -27,7 +27,8 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
                 "assembly"});
   Scene scene;
   const std::filesystem::path base = file.parent_path();
-  std::map<std::string, LoadedBody> bodies;
+  runtime::SceneBuilder builder(scene.system);
+  std::map<std::string, int> bodies;  // name -> index
 
   const YAML::Node body_map = r.required(root, "bodies", "the scene");
   if (!body_map.IsMap() || body_map.size() == 0) r.fail(body_map, "bodies must be a map of names to bodies");
@@ -195,17 +196,15 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
       const double angle = r.number(r.required(rot, "angle_deg", where + " rotation"), where + " rotation angle_deg");
       rotation = Eigen::AngleAxisd(angle * std::numbers::pi / 180.0, axis.normalized()).toRotationMatrix();
     }
-    const Eigen::Vector3d origin = b["position"] ? r.vector3(b["position"], where + " position") : Eigen::Vector3d::Zero();
-    runtime::BodyState state;
-    state.orientation = rotation;
-    state.position = origin + rotation * data.mass.center_of_mass_input;  // the input frame's origin goes to `position`
-    if (b["velocity"]) state.velocity = r.vector3(b["velocity"], where + " velocity");
-    if (b["angular_velocity"]) state.angular_velocity = r.vector3(b["angular_velocity"], where + " angular_velocity");
-    const int index = scene.system.add_body(name, std::move(model), state);
-    bodies[name] = {index, data.mass.center_of_mass_input};
+    runtime::Placement placement;  // the input frame's origin goes to `position`
+    placement.rotation = rotation;
+    if (b["position"]) placement.position = r.vector3(b["position"], where + " position");
+    if (b["velocity"]) placement.velocity = r.vector3(b["velocity"], where + " velocity");
+    if (b["angular_velocity"]) placement.angular_velocity = r.vector3(b["angular_velocity"], where + " angular_velocity");
+    bodies[name] = builder.add_body(name, std::move(model), placement, data.mass.center_of_mass_input);
   }
 
-  auto body_of = [&](const YAML::Node& node, const std::string& where) -> const LoadedBody& {
+  auto body_of = [&](const YAML::Node& node, const std::string& where) -> int {
     const std::string name = r.text(node, where + " body");
     const auto found = bodies.find(name);
     if (found == bodies.end()) r.fail(node, fmt::format("{}: no body '{}' in the scene", where, name));
@@ -222,17 +221,12 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
       const YAML::Node j = it->second;
       r.expect_map(j, where, {"type", "body", "interface", "point", "node", "to", "axis", "speed", "ramp"});
       const runtime::JointType type = joint_type(r, r.required(j, "type", where), where);
-      const LoadedBody& first = body_of(r.required(j, "body", where), where);
-      runtime::Marker m1 = read_marker(r, j, scene.system, first.index, first, where);
-      const Eigen::VectorXd q1 = scene.system.body_coordinates(q0, first.index);
-      runtime::Marker m2 = runtime::ground_marker(runtime::marker_position(m1, q1));
-      Eigen::VectorXd q2;
+      const runtime::Marker m1 = read_marker(r, j, builder, body_of(r.required(j, "body", where), where), where);
+      std::optional<runtime::Marker> m2;  // none: to ground, where the first marker is
       if (const YAML::Node to = j["to"]) {
         if (!(to.IsScalar() && to.Scalar() == "ground")) {
           r.expect_map(to, where + " to", {"body", "interface", "point", "node"});
-          const LoadedBody& second = body_of(r.required(to, "body", where + " to"), where + " to");
-          m2 = read_marker(r, to, scene.system, second.index, second, where + " to");
-          q2 = scene.system.body_coordinates(q0, second.index);
+          m2 = read_marker(r, to, builder, body_of(r.required(to, "body", where + " to"), where + " to"), where + " to");
         }
       }
       const bool has_axis = type == runtime::JointType::revolute || type == runtime::JointType::prismatic ||
@@ -240,17 +234,15 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
       Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
       if (has_axis) axis = r.vector3(r.required(j, "axis", where), where + " axis");
       else if (j["axis"]) r.fail(j["axis"], fmt::format("{}: a {} joint has no axis", where, r.text(j["type"], "type")));
-      std::function<double(double)> angle, angle_rate;
+      runtime::JointDrive drive;
       if (type == runtime::JointType::driven_revolute) {
-        const double speed = r.number(r.required(j, "speed", where), where + " speed");
-        const double ramp = j["ramp"] ? r.positive(j["ramp"], where + " ramp") : 0.0;
-        angle = ramped_angle(speed, ramp);
-        angle_rate = ramped_angle_rate(speed, ramp);
+        drive.speed = r.number(r.required(j, "speed", where), where + " speed");
+        drive.ramp = j["ramp"] ? r.positive(j["ramp"], where + " ramp") : 0.0;
       } else if (j["speed"] || j["ramp"]) {
         r.fail(j["speed"] ? j["speed"] : j["ramp"], fmt::format("{}: speed and ramp belong to driven-revolute joints", where));
       }
       try {
-        scene.system.add_joint(runtime::make_joint(name, type, m1, m2, axis, q1, q2, angle, angle_rate));
+        builder.add_joint(name, type, m1, m2, axis, drive);
       } catch (const std::invalid_argument& e) {
         r.fail(j, e.what());
       }
@@ -278,7 +270,7 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
       const std::string where = fmt::format("force '{}'", it->first.Scalar());
       const YAML::Node f = it->second;
       r.expect_map(f, where, {"body", "interface", "point", "node", "force", "torque", "ramp", "frequency"});
-      const LoadedBody& body = body_of(r.required(f, "body", where), where);
+      const int body = body_of(r.required(f, "body", where), where);
       if (!f["force"] && !f["torque"]) r.fail(f, fmt::format("{} needs force or torque (or both)", where));
       // Time shape: a linear ramp from 0 over `ramp` seconds, times sin(2π f t) with `frequency` f.
       const double ramp = f["ramp"] ? r.positive(f["ramp"], where + " ramp") : 0.0;
@@ -287,7 +279,7 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
         const double rise = ramp > 0.0 ? std::min(1.0, t / ramp) : 1.0;
         return frequency > 0.0 ? rise * std::sin(2.0 * std::numbers::pi * frequency * t) : rise;
       };
-      const runtime::Marker marker = read_marker(r, f, scene.system, body.index, body, where);
+      const runtime::Marker marker = read_marker(r, f, builder, body, where);
       if (const YAML::Node force = f["force"]) {
         const Eigen::Vector3d value = r.vector3(force, where + " force");
         scene.system.add_force({marker, [value, shape](double t) { return Eigen::Vector3d(shape(t) * value); }});
@@ -313,8 +305,7 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
           return runtime::ground_marker(r.vector3(e["ground"], end + " ground"));
         }
         r.expect_map(e, end, {"body", "interface", "point", "node"});
-        const LoadedBody& body = body_of(r.required(e, "body", end), end);
-        return read_marker(r, e, scene.system, body.index, body, end);
+        return read_marker(r, e, builder, body_of(r.required(e, "body", end), end), end);
       };
       runtime::SpringDamper spring;
       spring.name = it->first.Scalar();
@@ -366,33 +357,33 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
         s.joint = k;
         allowed = {"reaction_force", "reaction_moment"};
       } else {
-        const LoadedBody& body = body_of(r.required(o, "body", where), where);
-        s.body = body.index;
+        const int body = body_of(r.required(o, "body", where), where);
+        s.body = body;
         if (const YAML::Node region = o["region"]) {
           s.kind = Sensor::Kind::region;
           const std::string name = r.text(region, where + " region");
-          const auto& regions = scene.system.model(body.index).recovery;
+          const auto& regions = scene.system.model(body).recovery;
           std::string known;
           for (const auto& g : regions) known += (known.empty() ? "" : ", ") + g.name;
           while (s.region < regions.size() && regions[s.region].name != name) ++s.region;
-          if (scene.system.model(body.index).sparse)
+          if (scene.system.model(body).sparse)
             r.fail(region, fmt::format("{}: body '{}' is modes: full, which has no output regions (their stresses are "
                                        "recovered from the body file's modes); follow its nodes with node markers",
-                                       where, scene.system.body_name(body.index)));
+                                       where, scene.system.body_name(body)));
           if (s.region == regions.size())
             r.fail(region, fmt::format("{}: the body file has no output region '{}' (regions: {})", where, name,
                                        known.empty() ? "none; name output_regions in its body spec" : known));
           allowed = {"displacement", "stress"};
         } else if (o["interface"] || o["point"] || o["node"]) {
           s.kind = Sensor::Kind::marker;
-          s.marker = read_marker(r, o, scene.system, body.index, body, where);
+          s.marker = read_marker(r, o, builder, body, where);
           allowed = {"position", "velocity", "orientation"};
         } else {
           s.kind = Sensor::Kind::modal;
           allowed = {"modal_coordinates"};
-          if (scene.system.model(body.index).sparse)
+          if (scene.system.model(body).sparse)
             r.fail(o, fmt::format("{}: body '{}' is modes: full, which has no modal coordinates; follow its nodes with "
-                                  "node markers", where, scene.system.body_name(body.index)));
+                                  "node markers", where, scene.system.body_name(body)));
         }
       }
       for (std::size_t k = 0; k < quantities.size(); ++k) {
@@ -413,7 +404,7 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
     std::vector<std::pair<int, YAML::Node>> chosen;
     if (const YAML::Node list = paraview["bodies"]) {
       if (!list.IsSequence() || list.size() == 0) r.fail(list, "paraview bodies must be a list of body names");
-      for (std::size_t k = 0; k < list.size(); ++k) chosen.emplace_back(body_of(list[k], "paraview").index, list[k]);
+      for (std::size_t k = 0; k < list.size(); ++k) chosen.emplace_back(body_of(list[k], "paraview"), list[k]);
     } else {
       for (int b = 0; b < scene.system.body_count(); ++b) chosen.emplace_back(b, paraview);
     }

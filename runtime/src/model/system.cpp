@@ -162,16 +162,25 @@ Eigen::Index System::constraint_count() const { return reference_total_ + joint_
 
 Eigen::VectorXd System::initial_coordinates() const {
   Eigen::VectorXd q(coordinates_);
-  for (const Body& b : bodies_) {
-    q.segment<3>(b.offset) = b.initial.position;
-    if (b.model.floating()) {
-      q.segment<4>(b.offset + 3) = euler_parameters(b.initial.orientation);
-      q.segment(b.offset + 7, b.model.modes) = b.initial.eta;
-      continue;
-    }
-    q.segment<9>(b.offset + 3) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(b.initial.orientation.data());
-    q.segment(b.offset + 12, b.initial.xi.size()) = b.initial.xi;
+  for (int k = 0; k < body_count(); ++k) {
+    const Body& b = bodies_[static_cast<std::size_t>(k)];
+    q.segment(b.offset, b.model.coordinate_count()) = initial_body_coordinates(k);
   }
+  return q;
+}
+
+Eigen::VectorXd System::initial_body_coordinates(int body) const {
+  if (body == kGround) return {};
+  const Body& b = bodies_.at(static_cast<std::size_t>(body));
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(b.model.coordinate_count());
+  q.head<3>() = b.initial.position;
+  if (b.model.floating()) {
+    q.segment<4>(3) = euler_parameters(b.initial.orientation);
+    q.segment(7, b.initial.eta.size()) = b.initial.eta;
+    return q;
+  }
+  q.segment<9>(3) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(b.initial.orientation.data());
+  q.segment(12, b.initial.xi.size()) = b.initial.xi;
   return q;
 }
 

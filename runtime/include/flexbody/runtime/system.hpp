@@ -128,6 +128,8 @@ class System {
   [[nodiscard]] Eigen::Index coordinate_count() const { return coordinates_; }
   [[nodiscard]] Eigen::Index constraint_count() const;
   [[nodiscard]] Eigen::VectorXd initial_coordinates() const;
+  /// One body's slice of initial_coordinates() (empty for kGround), without forming the whole vector.
+  [[nodiscard]] Eigen::VectorXd initial_body_coordinates(int body) const;
   /// Replaces every body's initial position, orientation and deformation by those of q (assembly.hpp); the initial
   /// velocities stay. Throws std::invalid_argument for an orientation that is not a rotation to 1e-9.
   void set_initial_coordinates(const Eigen::VectorXd& q);

@@ -1,0 +1,85 @@
+#pragma once
+// flexbody/runtime/scene_builder.hpp: a scene in code, named as a scene file names it. A body is placed by its input
+// (CAD) frame, a marker is named by its body and an interface, a point or a node, and a joint by its type, its
+// markers and its axis; the builder finds the bodies' indices and initial coordinates that System and make_joint
+// take. fbsim's scene loader builds through it.
+//
+// \code
+//   flexbody::runtime::System system;
+//   flexbody::runtime::SceneBuilder scene(system);
+//   const auto data = flexbody::format::read_body_file("bracket.fbh5");
+//   scene.add_body("arm", flexbody::runtime::make_body_model(data, 6, "bracket.fbh5"), {}, data.mass.center_of_mass_input);
+//   scene.add_joint("pivot", flexbody::runtime::JointType::revolute, scene.interface("arm", "bore_1"), {},
+//                   Eigen::Vector3d::UnitZ());   // to ground, where bore_1 is now
+// \endcode
+
+#include "flexbody/runtime/joint.hpp"
+#include "flexbody/runtime/marker.hpp"
+#include "flexbody/runtime/system.hpp"
+
+#include <Eigen/Core>
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace flexbody::runtime {
+
+/// Where a body starts: its input (CAD) frame's origin and orientation, and its rigid velocities.
+struct Placement {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();          ///< the input frame's origin [m]
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();      ///< the body's orientation
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();          ///< of the centre of mass [m/s]
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< [rad/s], global
+};
+
+/// A driven revolute joint's angle: the speed Ω reached smoothly over `ramp` seconds, φ̇ = Ω (1 − cos πt/T) / 2 for
+/// t < T, then Ω (no jerk at the start: a step in speed would be an impulse).
+struct JointDrive {
+  double speed = 0.0;  ///< Ω [rad/s]
+  double ramp = 0.0;   ///< T [s]; 0: at speed from the start
+};
+/// φ(t) [rad] and φ̇(t) [rad/s] of a drive (make_joint's angle and angle_rate).
+[[nodiscard]] std::function<double(double)> drive_angle(const JointDrive& drive);
+[[nodiscard]] std::function<double(double)> drive_angle_rate(const JointDrive& drive);
+
+class SceneBuilder {
+ public:
+  /// Builds into `system`, which must outlive the builder (bodies already in it are not known by name here).
+  explicit SceneBuilder(System& system) : system_(system) {}
+
+  /// Adds a body whose input frame is placed as `placement` says; `input_center_of_mass` is its centre of mass in
+  /// its input frame (a body file's mass.center_of_mass_input; zero for a model built about its centre of mass).
+  /// Returns its index in the System. Throws std::invalid_argument for a name already used.
+  int add_body(const std::string& name, BodyModel model, const Placement& placement = {},
+               const Eigen::Vector3d& input_center_of_mass = Eigen::Vector3d::Zero());
+  /// The index of body `name`; throws std::invalid_argument "no body 'name' in the scene".
+  [[nodiscard]] int body(const std::string& name) const;
+
+  /// A body file's interface of body `body` (the error names the interfaces there are).
+  [[nodiscard]] Marker interface(const std::string& body, const std::string& name) const;
+  /// A point fixed in the body, in its input frame [m] (the CAD coordinates the body file was made from).
+  [[nodiscard]] Marker point(const std::string& body, const Eigen::Vector3d& input_point) const;
+  /// A node of its mesh (0-based): it follows the node's deformation.
+  [[nodiscard]] Marker node(const std::string& body, Eigen::Index node) const;
+  /// A fixed point in space [m].
+  [[nodiscard]] static Marker ground(const Eigen::Vector3d& point) { return ground_marker(point); }
+
+  /// Joins `first` to `second`, or to ground where `first` is at the start when `second` is empty, with the joint
+  /// rows of `type` (joint.hpp); `axis` (global) for revolute, prismatic and driven-revolute joints, `drive` for a
+  /// driven-revolute one. Returns the joint's index in System::joints(). Throws std::invalid_argument as make_joint
+  /// does (a zero axis, markers apart for a spherical joint, ...).
+  std::size_t add_joint(const std::string& name, JointType type, const Marker& first,
+                        const std::optional<Marker>& second = std::nullopt,
+                        const Eigen::Vector3d& axis = Eigen::Vector3d::UnitZ(), const JointDrive& drive = {});
+
+  [[nodiscard]] System& system() { return system_; }
+  [[nodiscard]] const System& system() const { return system_; }
+
+ private:
+  System& system_;
+  std::vector<Eigen::Vector3d> input_center_of_mass_;  ///< per body of this builder, by System index
+};
+
+}  // namespace flexbody::runtime

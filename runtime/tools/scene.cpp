@@ -231,13 +231,13 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
       }
       const bool has_axis = type == runtime::JointType::revolute || type == runtime::JointType::prismatic ||
                             type == runtime::JointType::driven_revolute;
-      Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+      std::optional<Eigen::Vector3d> axis;
       if (has_axis) axis = r.vector3(r.required(j, "axis", where), where + " axis");
       else if (j["axis"]) r.fail(j["axis"], fmt::format("{}: a {} joint has no axis", where, r.text(j["type"], "type")));
-      runtime::JointDrive drive;
+      std::optional<runtime::JointDrive> drive;
       if (type == runtime::JointType::driven_revolute) {
-        drive.speed = r.number(r.required(j, "speed", where), where + " speed");
-        drive.ramp = j["ramp"] ? r.positive(j["ramp"], where + " ramp") : 0.0;
+        drive = runtime::JointDrive{r.number(r.required(j, "speed", where), where + " speed"),
+                                    j["ramp"] ? r.positive(j["ramp"], where + " ramp") : 0.0};
       } else if (j["speed"] || j["ramp"]) {
         r.fail(j["speed"] ? j["speed"] : j["ramp"], fmt::format("{}: speed and ramp belong to driven-revolute joints", where));
       }

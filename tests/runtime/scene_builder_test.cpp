@@ -36,7 +36,10 @@ TEST(SceneBuilder, BuildsWhatMakeJointBuilds) {
   second.position = placement.position + turn * Eigen::Vector3d(0.4, 0.0, 0.0);
   second.rotation = turn;
   scene.add_body("b", bar(), second, com);
-  scene.add_joint("pin", fr::JointType::revolute, scene.point("a", Eigen::Vector3d::Zero()), {}, Eigen::Vector3d::UnitZ());
+  const fr::Marker origin = scene.point("a", Eigen::Vector3d::Zero());
+  // The input frame's origin is where the placement put it.
+  EXPECT_LT((fr::marker_position(origin, built.initial_body_coordinates(0)) - placement.position).norm(), 1e-15);
+  scene.add_joint("pin", fr::JointType::revolute, origin, {}, Eigen::Vector3d::UnitZ());
   scene.add_joint("link", fr::JointType::spherical, scene.point("b", Eigen::Vector3d::Zero()),
                   scene.point("a", Eigen::Vector3d(0.4, 0.0, 0.0)));
   // By hand: the centres of mass placed, markers about them, the joints' coordinates passed in.
@@ -63,8 +66,25 @@ TEST(SceneBuilder, BuildsWhatMakeJointBuilds) {
   EXPECT_EQ(built.constraints(0.0, q0), by_hand.constraints(0.0, q0));
   EXPECT_EQ(built.constraints(0.0, q), by_hand.constraints(0.0, q));
   EXPECT_EQ(built.constraint_jacobian(0.0, q), by_hand.constraint_jacobian(0.0, q));
-  EXPECT_LT(built.constraints(0.0, q0).cwiseAbs().maxCoeff(), 1e-15);  // assembled as placed
-  for (int k = 0; k < 2; ++k) EXPECT_EQ(built.initial_body_coordinates(k), built.body_coordinates(q0, k));
+  EXPECT_LT(built.constraints(0.0, q0).cwiseAbs().maxCoeff(), 1e-14);  // assembled as placed (coordinates near 2 m)
+  // A body's initial coordinates as the layout says: [τ; vec(A)] for a GCMS rigid body (system.hpp).
+  Eigen::VectorXd literal(12);
+  literal << a.position, Eigen::Map<const Eigen::Matrix<double, 9, 1>>(turn.data());
+  EXPECT_EQ(built.initial_body_coordinates(0), literal);
+}
+
+TEST(SceneBuilder, ADrivenJointTurnsAsItsDrive) {
+  fr::System system;
+  fr::SceneBuilder scene(system);
+  scene.add_body("wheel", bar());
+  scene.add_joint("motor", fr::JointType::driven_revolute, scene.point("wheel", Eigen::Vector3d::Zero()), {},
+                  Eigen::Vector3d::UnitZ(), fr::JointDrive{2.0, 0.5});
+  // Its angle row holds the body turned by φ(t) about z: at t = 1 s (past the ramp) φ = Ω (t − T/2) = 1.5 rad.
+  Eigen::VectorXd q = system.initial_coordinates();
+  const Eigen::Matrix3d turned = Eigen::AngleAxisd(1.5, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  q.segment<9>(3) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(turned.data());
+  EXPECT_LT(system.constraints(1.0, q).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_GT(system.constraints(0.9, q).cwiseAbs().maxCoeff(), 0.1);  // 0.2 rad behind at 0.9 s
 }
 
 TEST(SceneBuilder, NamesWhatItCannotFind) {
@@ -79,6 +99,19 @@ TEST(SceneBuilder, NamesWhatItCannotFind) {
   }
   EXPECT_THROW(scene.add_body("a", bar()), std::invalid_argument);  // twice
   EXPECT_THROW((void)scene.interface("a", "bore"), std::invalid_argument);  // a rigid model has no interfaces
+  // A revolute joint without an axis, a spherical one with one, a drive on a revolute joint, a negative ramp.
+  const fr::Marker m = scene.point("a", Eigen::Vector3d::Zero());
+  EXPECT_THROW(scene.add_joint("j", fr::JointType::revolute, m), std::invalid_argument);
+  EXPECT_THROW(scene.add_joint("j", fr::JointType::spherical, m, {}, Eigen::Vector3d::UnitZ()), std::invalid_argument);
+  EXPECT_THROW(scene.add_joint("j", fr::JointType::revolute, m, {}, Eigen::Vector3d::UnitZ(), fr::JointDrive{1.0, 0.0}),
+               std::invalid_argument);
+  EXPECT_THROW(scene.add_joint("j", fr::JointType::driven_revolute, m, {}, Eigen::Vector3d::UnitZ(), fr::JointDrive{1.0, -1.0}),
+               std::invalid_argument);
+  // A body added to the system directly: found by name, but without an input frame for points.
+  system.add_body("direct", bar(), fr::BodyState{});
+  EXPECT_EQ(scene.body("direct"), 1);
+  EXPECT_THROW((void)scene.point("direct", Eigen::Vector3d::Zero()), std::invalid_argument);
+  EXPECT_TRUE(system.joints().empty());
 }
 
 // φ̇ rises as Ω (1 − cos πt/T)/2 and φ is its integral: continuous with its rate at T, exact against a quadrature.
@@ -93,8 +126,9 @@ TEST(SceneBuilder, ADrivesRampIsSmooth) {
   // At the end of the ramp the angle is Ω T / 2 from both sides.
   EXPECT_NEAR(angle(0.2 - 1e-12), 1.0, 1e-10);
   EXPECT_NEAR(angle(0.2), 1.0, 1e-15);
-  // Simpson's rule on the rate (a smooth integrand: error of order h⁴ f'''' ≈ 1e-12 at 200 intervals).
-  const int n = 200;
+  // Simpson's rule on the rate: error (b − a) h⁴ max|f⁗| / 180 = 0.15 x (3.75e-4)⁴ x (Ω/2) (π/T)⁴ / 180 ≈ 5e-12 at
+  // 400 intervals.
+  const int n = 400;
   double integral = 0.0;
   for (int k = 0; k <= n; ++k) {
     const double t = 0.15 * k / n, w = (k == 0 || k == n) ? 1.0 : (k % 2 ? 4.0 : 2.0);

@@ -25,18 +25,20 @@ int SceneBuilder::add_body(const std::string& name, BodyModel model, const Place
                            const Eigen::Vector3d& input_center_of_mass) {
   BodyState state;
   state.orientation = placement.rotation;
-  state.position = placement.position + placement.rotation * input_center_of_mass;  // the input frame's origin
+  state.position = placement.position + placement.rotation * input_center_of_mass;  // the centre of mass's place
   state.velocity = placement.velocity;
   state.angular_velocity = placement.angular_velocity;
   const int index = system_.add_body(name, std::move(model), state);
-  if (static_cast<std::size_t>(index) >= input_center_of_mass_.size())
-    input_center_of_mass_.resize(static_cast<std::size_t>(index) + 1, Eigen::Vector3d::Zero());
-  input_center_of_mass_[static_cast<std::size_t>(index)] = input_center_of_mass;
+  const auto k = static_cast<std::size_t>(index);
+  if (k >= input_center_of_mass_.size()) input_center_of_mass_.resize(k + 1);
+  input_center_of_mass_[k] = input_center_of_mass;
+  index_[name] = index;
   return index;
 }
 
 int SceneBuilder::body(const std::string& name) const {
-  for (int b = 0; b < system_.body_count(); ++b)
+  if (const auto found = index_.find(name); found != index_.end()) return found->second;
+  for (int b = 0; b < system_.body_count(); ++b)  // one added to the system directly
     if (system_.body_name(b) == name) return b;
   throw std::invalid_argument("no body '" + name + "' in the scene");
 }
@@ -48,10 +50,11 @@ Marker SceneBuilder::interface(const std::string& body_name, const std::string& 
 
 Marker SceneBuilder::point(const std::string& body_name, const Eigen::Vector3d& input_point) const {
   const int b = body(body_name);
-  const Eigen::Vector3d com = static_cast<std::size_t>(b) < input_center_of_mass_.size()
-                                  ? input_center_of_mass_[static_cast<std::size_t>(b)]
-                                  : Eigen::Vector3d::Zero();
-  return point_marker(system_.model(b), b, body_name, input_point - com);
+  const auto k = static_cast<std::size_t>(b);
+  if (k >= input_center_of_mass_.size() || !input_center_of_mass_[k])
+    throw std::invalid_argument("body '" + body_name + "' was added to the system directly, so its input frame is "
+                                "unknown here: use a point marker about its centre of mass (point_marker)");
+  return point_marker(system_.model(b), b, body_name, input_point - *input_center_of_mass_[k]);
 }
 
 Marker SceneBuilder::node(const std::string& body_name, Eigen::Index index) const {
@@ -60,17 +63,30 @@ Marker SceneBuilder::node(const std::string& body_name, Eigen::Index index) cons
 }
 
 std::size_t SceneBuilder::add_joint(const std::string& name, JointType type, const Marker& first,
-                                    const std::optional<Marker>& second, const Eigen::Vector3d& axis,
-                                    const JointDrive& drive) {
+                                    const std::optional<Marker>& second, const std::optional<Eigen::Vector3d>& axis,
+                                    const std::optional<JointDrive>& drive) {
+  const std::string where = "joint '" + name + "': ";
+  const bool has_axis = type == JointType::revolute || type == JointType::prismatic || type == JointType::driven_revolute;
+  if (has_axis && !axis) throw std::invalid_argument(where + "a revolute, prismatic or driven-revolute joint needs an axis");
+  if (!has_axis && axis) throw std::invalid_argument(where + "a spherical or fixed joint has no axis");
+  const bool driven = type == JointType::driven_revolute;
+  if (driven && !drive) throw std::invalid_argument(where + "a driven-revolute joint needs a drive (speed and ramp)");
+  if (!driven && drive) throw std::invalid_argument(where + "only a driven-revolute joint has a drive");
+  if (drive && !(std::isfinite(drive->speed) && drive->ramp >= 0.0 && std::isfinite(drive->ramp)))
+    throw std::invalid_argument(where + "the drive's speed must be finite and its ramp >= 0");
+  for (const Marker* m : {&first, second ? &*second : nullptr})
+    if (m && m->body != kGround && !(m->body >= 0 && m->body < system_.body_count()))
+      throw std::invalid_argument(where + "marker " + m->name + " is on no body of this system");
   const Eigen::VectorXd q1 = system_.initial_body_coordinates(first.body);
   const Marker other = second ? *second : ground_marker(marker_position(first, q1));
   const Eigen::VectorXd q2 = system_.initial_body_coordinates(other.body);
   std::function<double(double)> angle, angle_rate;
-  if (type == JointType::driven_revolute) {
-    angle = drive_angle(drive);
-    angle_rate = drive_angle_rate(drive);
+  if (drive) {
+    angle = drive_angle(*drive);
+    angle_rate = drive_angle_rate(*drive);
   }
-  system_.add_joint(make_joint(name, type, first, other, axis, q1, q2, std::move(angle), std::move(angle_rate)));
+  system_.add_joint(make_joint(name, type, first, other, axis.value_or(Eigen::Vector3d::UnitZ()), q1, q2,
+                               std::move(angle), std::move(angle_rate)));
   return system_.joints().size() - 1;
 }
 

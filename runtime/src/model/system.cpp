@@ -171,7 +171,9 @@ Eigen::VectorXd System::initial_coordinates() const {
 
 Eigen::VectorXd System::initial_body_coordinates(int body) const {
   if (body == kGround) return {};
-  const Body& b = bodies_.at(static_cast<std::size_t>(body));
+  if (body < 0 || body >= body_count())
+    throw std::invalid_argument("initial_body_coordinates: no body " + std::to_string(body) + " in the system");
+  const Body& b = bodies_[static_cast<std::size_t>(body)];
   Eigen::VectorXd q = Eigen::VectorXd::Zero(b.model.coordinate_count());
   q.head<3>() = b.initial.position;
   if (b.model.floating()) {

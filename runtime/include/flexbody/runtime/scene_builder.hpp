@@ -22,6 +22,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace flexbody::runtime {
@@ -46,7 +47,8 @@ struct JointDrive {
 
 class SceneBuilder {
  public:
-  /// Builds into `system`, which must outlive the builder (bodies already in it are not known by name here).
+  /// Builds into `system`, which must outlive the builder. Bodies added to the system directly are found by name
+  /// for interfaces, nodes and joints, but have no input frame here, so point() refuses them.
   explicit SceneBuilder(System& system) : system_(system) {}
 
   /// Adds a body whose input frame is placed as `placement` says; `input_center_of_mass` is its centre of mass in
@@ -59,7 +61,8 @@ class SceneBuilder {
 
   /// A body file's interface of body `body` (the error names the interfaces there are).
   [[nodiscard]] Marker interface(const std::string& body, const std::string& name) const;
-  /// A point fixed in the body, in its input frame [m] (the CAD coordinates the body file was made from).
+  /// A point fixed in the body, in its input frame [m] (the CAD coordinates the body file was made from). Throws
+  /// std::invalid_argument for a body this builder did not add.
   [[nodiscard]] Marker point(const std::string& body, const Eigen::Vector3d& input_point) const;
   /// A node of its mesh (0-based): it follows the node's deformation.
   [[nodiscard]] Marker node(const std::string& body, Eigen::Index node) const;
@@ -67,19 +70,22 @@ class SceneBuilder {
   [[nodiscard]] static Marker ground(const Eigen::Vector3d& point) { return ground_marker(point); }
 
   /// Joins `first` to `second`, or to ground where `first` is at the start when `second` is empty, with the joint
-  /// rows of `type` (joint.hpp); `axis` (global) for revolute, prismatic and driven-revolute joints, `drive` for a
-  /// driven-revolute one. Returns the joint's index in System::joints(). Throws std::invalid_argument as make_joint
-  /// does (a zero axis, markers apart for a spherical joint, ...).
+  /// rows of `type` (joint.hpp). `axis` (global) is required for revolute, prismatic and driven-revolute joints and
+  /// refused for the others; `drive` is required for a driven-revolute joint and refused for the others. Returns the
+  /// joint's index in System::joints(). Throws std::invalid_argument naming the joint for those, a negative ramp, a
+  /// marker on no body of the system, and as make_joint does (a zero axis, ...).
   std::size_t add_joint(const std::string& name, JointType type, const Marker& first,
                         const std::optional<Marker>& second = std::nullopt,
-                        const Eigen::Vector3d& axis = Eigen::Vector3d::UnitZ(), const JointDrive& drive = {});
+                        const std::optional<Eigen::Vector3d>& axis = std::nullopt,
+                        const std::optional<JointDrive>& drive = std::nullopt);
 
   [[nodiscard]] System& system() { return system_; }
   [[nodiscard]] const System& system() const { return system_; }
 
  private:
   System& system_;
-  std::vector<Eigen::Vector3d> input_center_of_mass_;  ///< per body of this builder, by System index
+  std::vector<std::optional<Eigen::Vector3d>> input_center_of_mass_;  ///< by System index: set for this builder's bodies
+  std::unordered_map<std::string, int> index_;                         ///< this builder's bodies by name
 };
 
 }  // namespace flexbody::runtime

@@ -273,21 +273,12 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
       const int body = body_of(r.required(f, "body", where), where);
       if (!f["force"] && !f["torque"]) r.fail(f, fmt::format("{} needs force or torque (or both)", where));
       // Time shape: a linear ramp from 0 over `ramp` seconds, times sin(2π f t) with `frequency` f.
-      const double ramp = f["ramp"] ? r.positive(f["ramp"], where + " ramp") : 0.0;
-      const double frequency = f["frequency"] ? r.positive(f["frequency"], where + " frequency") : 0.0;
-      auto shape = [ramp, frequency](double t) {
-        const double rise = ramp > 0.0 ? std::min(1.0, t / ramp) : 1.0;
-        return frequency > 0.0 ? rise * std::sin(2.0 * std::numbers::pi * frequency * t) : rise;
-      };
+      runtime::LoadShape shape;
+      if (f["ramp"]) shape.ramp = r.positive(f["ramp"], where + " ramp");
+      if (f["frequency"]) shape.frequency = r.positive(f["frequency"], where + " frequency");
       const runtime::Marker marker = read_marker(r, f, builder, body, where);
-      if (const YAML::Node force = f["force"]) {
-        const Eigen::Vector3d value = r.vector3(force, where + " force");
-        scene.system.add_force({marker, [value, shape](double t) { return Eigen::Vector3d(shape(t) * value); }});
-      }
-      if (const YAML::Node torque = f["torque"]) {
-        const Eigen::Vector3d value = r.vector3(torque, where + " torque");
-        scene.system.add_torque({marker, [value, shape](double t) { return Eigen::Vector3d(shape(t) * value); }});
-      }
+      if (const YAML::Node force = f["force"]) builder.add_force(marker, r.vector3(force, where + " force"), shape);
+      if (const YAML::Node torque = f["torque"]) builder.add_torque(marker, r.vector3(torque, where + " torque"), shape);
     }
   }
 
@@ -307,22 +298,15 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
         r.expect_map(e, end, {"body", "interface", "point", "node"});
         return read_marker(r, e, builder, body_of(r.required(e, "body", end), end), end);
       };
-      runtime::SpringDamper spring;
-      spring.name = it->first.Scalar();
-      spring.first = endpoint("from");
-      spring.second = endpoint("to");
-      spring.stiffness = r.number(r.required(sp, "stiffness", where), where + " stiffness");
-      if (sp["damping"]) spring.damping = r.number(sp["damping"], where + " damping");
-      if (sp["length"]) {
-        spring.rest_length = r.number(sp["length"], where + " length");
-      } else {  // default: the initial distance (no preload)
-        spring.rest_length = (runtime::marker_position(spring.second, scene.system.body_coordinates(q0, spring.second.body)) -
-                              runtime::marker_position(spring.first, scene.system.body_coordinates(q0, spring.first.body))).norm();
-      }
-      damped_springs = damped_springs || spring.damping != 0.0;
-      springs_to_ground = springs_to_ground || spring.first.body == runtime::kGround || spring.second.body == runtime::kGround;
+      const runtime::Marker from = endpoint("from"), to = endpoint("to");
+      const double stiffness = r.number(r.required(sp, "stiffness", where), where + " stiffness");
+      const double damping = sp["damping"] ? r.number(sp["damping"], where + " damping") : 0.0;
+      std::optional<double> length;  // default: the initial distance (no preload)
+      if (sp["length"]) length = r.number(sp["length"], where + " length");
+      damped_springs = damped_springs || damping != 0.0;
+      springs_to_ground = springs_to_ground || from.body == runtime::kGround || to.body == runtime::kGround;
       try {
-        scene.system.add_spring(std::move(spring));
+        builder.add_spring(it->first.Scalar(), from, to, stiffness, damping, length);
       } catch (const std::invalid_argument& e) {
         r.fail(sp, e.what());
       }

@@ -139,3 +139,24 @@ TEST(SceneBuilder, ADrivesRampIsSmooth) {
   const auto at_speed = fr::drive_angle(fr::JointDrive{3.0, 0.0});
   EXPECT_EQ(at_speed(2.0), 6.0);
 }
+
+// A spring's rest length defaults to its markers' initial distance (no preload); loads follow their time shape.
+TEST(SceneBuilder, SpringsAndLoads) {
+  fr::System system;
+  fr::SceneBuilder scene(system);
+  fr::Placement at;
+  at.position = Eigen::Vector3d(0.0, -0.3, 0.0);
+  scene.add_body("a", bar(), at);
+  scene.add_spring("hang", fr::SceneBuilder::ground(Eigen::Vector3d(0.0, 0.1, 0.0)), scene.point("a", Eigen::Vector3d::Zero()), 100.0);
+  scene.add_spring("preloaded", fr::SceneBuilder::ground(Eigen::Vector3d::Zero()), scene.point("a", Eigen::Vector3d::Zero()),
+                   100.0, 1.0, 0.25);
+  scene.add_force(scene.point("a", Eigen::Vector3d::Zero()), Eigen::Vector3d(0.0, 0.0, 2.0), fr::LoadShape{0.5, 0.0});
+  const Eigen::VectorXd q = system.initial_coordinates(), v = Eigen::VectorXd::Zero(q.size());
+  // Only the preloaded spring pulls (0.05 m stretched x 100 N/m = 5 N up); the force is at half its ramp at 0.25 s.
+  const Eigen::VectorXd f = system.forces(0.25, q, v);
+  EXPECT_NEAR(f(1), 5.0, 1e-12);
+  EXPECT_NEAR(f(2), 1.0, 1e-15);
+  EXPECT_NEAR(system.energies(q, v).springs, 0.5 * 100.0 * 0.05 * 0.05, 1e-15);
+  const auto wave = fr::load_factor(fr::LoadShape{0.0, 2.0});
+  EXPECT_NEAR(wave(0.125), 1.0, 1e-15);  // sin(2π 2 0.125) = sin(π/2)
+}

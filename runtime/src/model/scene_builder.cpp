@@ -1,5 +1,6 @@
 #include "flexbody/runtime/scene_builder.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -18,6 +19,13 @@ std::function<double(double)> drive_angle_rate(const JointDrive& drive) {
   return [speed = drive.speed, ramp = drive.ramp](double t) {
     if (ramp <= 0.0 || t >= ramp) return speed;
     return 0.5 * speed * (1.0 - std::cos(std::numbers::pi * t / ramp));
+  };
+}
+
+std::function<double(double)> load_factor(const LoadShape& shape) {
+  return [ramp = shape.ramp, frequency = shape.frequency](double t) {
+    const double rise = ramp > 0.0 ? std::min(1.0, t / ramp) : 1.0;
+    return frequency > 0.0 ? rise * std::sin(2.0 * std::numbers::pi * frequency * t) : rise;
   };
 }
 
@@ -88,6 +96,36 @@ std::size_t SceneBuilder::add_joint(const std::string& name, JointType type, con
   system_.add_joint(make_joint(name, type, first, other, axis.value_or(Eigen::Vector3d::UnitZ()), q1, q2,
                                std::move(angle), std::move(angle_rate)));
   return system_.joints().size() - 1;
+}
+
+void SceneBuilder::add_force(const Marker& at, const Eigen::Vector3d& force, const LoadShape& shape) {
+  add_force(at, [force, factor = load_factor(shape)](double t) { return Eigen::Vector3d(factor(t) * force); });
+}
+
+void SceneBuilder::add_force(const Marker& at, std::function<Eigen::Vector3d(double)> force) {
+  system_.add_force({at, std::move(force)});
+}
+
+void SceneBuilder::add_torque(const Marker& at, const Eigen::Vector3d& torque, const LoadShape& shape) {
+  add_torque(at, [torque, factor = load_factor(shape)](double t) { return Eigen::Vector3d(factor(t) * torque); });
+}
+
+void SceneBuilder::add_torque(const Marker& at, std::function<Eigen::Vector3d(double)> torque) {
+  system_.add_torque({at, std::move(torque)});
+}
+
+void SceneBuilder::add_spring(const std::string& name, const Marker& first, const Marker& second, double stiffness,
+                              double damping, const std::optional<double>& rest_length) {
+  SpringDamper spring;
+  spring.name = name;
+  spring.first = first;
+  spring.second = second;
+  spring.stiffness = stiffness;
+  spring.damping = damping;
+  spring.rest_length = rest_length ? *rest_length
+                                   : (marker_position(second, system_.initial_body_coordinates(second.body)) -
+                                      marker_position(first, system_.initial_body_coordinates(first.body))).norm();
+  system_.add_spring(std::move(spring));
 }
 
 }  // namespace flexbody::runtime

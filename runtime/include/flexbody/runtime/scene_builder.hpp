@@ -45,6 +45,15 @@ struct JointDrive {
 [[nodiscard]] std::function<double(double)> drive_angle(const JointDrive& drive);
 [[nodiscard]] std::function<double(double)> drive_angle_rate(const JointDrive& drive);
 
+/// The time shape of an applied force or torque: a linear rise from 0 over `ramp` seconds, times sin(2π f t) when a
+/// frequency f is given (fbsim's forces: ramp, frequency).
+struct LoadShape {
+  double ramp = 0.0;       ///< [s]; 0: the full load from the start
+  double frequency = 0.0;  ///< f [Hz]; 0: constant after the ramp
+};
+/// Its factor at time t [1].
+[[nodiscard]] std::function<double(double)> load_factor(const LoadShape& shape);
+
 class SceneBuilder {
  public:
   /// Builds into `system`, which must outlive the builder. Bodies added to the system directly are found by name
@@ -78,6 +87,18 @@ class SceneBuilder {
                         const std::optional<Marker>& second = std::nullopt,
                         const std::optional<Eigen::Vector3d>& axis = std::nullopt,
                         const std::optional<JointDrive>& drive = std::nullopt);
+
+  /// A force [N] (global axes) at a marker, times the shape's factor; or any function of time.
+  void add_force(const Marker& at, const Eigen::Vector3d& force, const LoadShape& shape = {});
+  void add_force(const Marker& at, std::function<Eigen::Vector3d(double)> force);
+  /// A torque [N m] (global axes) at a marker, times the shape's factor; or any function of time.
+  void add_torque(const Marker& at, const Eigen::Vector3d& torque, const LoadShape& shape = {});
+  void add_torque(const Marker& at, std::function<Eigen::Vector3d(double)> torque);
+  /// A linear spring-damper between two markers (system.hpp: SpringDamper): stiffness [N/m], damping [N s/m], rest
+  /// length [m], by default the markers' initial distance (no preload). Throws std::invalid_argument as
+  /// System::add_spring does.
+  void add_spring(const std::string& name, const Marker& first, const Marker& second, double stiffness,
+                  double damping = 0.0, const std::optional<double>& rest_length = std::nullopt);
 
   [[nodiscard]] System& system() { return system_; }
   [[nodiscard]] const System& system() const { return system_; }

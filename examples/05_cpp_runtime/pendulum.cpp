@@ -2,13 +2,11 @@
 // interfaces on a revolute joint about z, let gravity swing it, and print where another interface goes.
 //
 //   pendulum BODY.fbh5 PIVOT_INTERFACE WATCHED_INTERFACE [MODES]
-#include <flexbody/format/body_file.hpp>
 #include <flexbody/runtime/generalized_alpha.hpp>
 #include <flexbody/runtime/scene_builder.hpp>
 #include <flexbody/runtime/system.hpp>
 
 #include <cstdio>
-#include <optional>
 #include <exception>
 #include <string>
 
@@ -22,12 +20,12 @@ int main(int argc, char** argv) {
   try {
     // 1. The body: the file's first MODES modes (all by default), placed where its CAD puts it (its input frame at
     //    the origin).
-    const flexbody::format::BodyData data = flexbody::format::read_body_file(argv[1]);
-    std::optional<Eigen::Index> modes;
-    if (argc > 4) modes = std::stoi(argv[4]);
+    fr::BodySpec spec;  // the body file's keys of a scene file's body (body_spec.hpp)
+    spec.file = argv[1];
+    if (argc > 4) spec.modes = std::stoi(argv[4]);
     fr::System system;
     fr::SceneBuilder scene(system);
-    scene.add_body("body", fr::make_body_model(data, modes, argv[1]), {}, data.mass.center_of_mass_input);
+    scene.add_body("body", spec);
 
     // 2. A revolute joint about z at the pivot interface, to ground where that interface is now; gravity.
     scene.add_joint("pivot", fr::JointType::revolute, scene.interface("body", argv[2]), {}, Eigen::Vector3d::UnitZ());

@@ -1,11 +1,7 @@
 #include "scene.hpp"
 #include "scene_parts.hpp"
 
-#include "flexbody/format/body_file.hpp"
 #include "flexbody/format/yaml_reader.hpp"
-#include "flexbody/runtime/damping.hpp"
-#include "flexbody/runtime/ffrf_model.hpp"
-#include "flexbody/runtime/full_order.hpp"
 #include "flexbody/runtime/paraview_series.hpp"
 
 #include <Eigen/Geometry>
@@ -32,7 +28,6 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
 
   const YAML::Node body_map = r.required(root, "bodies", "the scene");
   if (!body_map.IsMap() || body_map.size() == 0) r.fail(body_map, "bodies must be a map of names to bodies");
-  std::map<std::string, format::BodyData> files;  // by canonical path
   // A scene keeps only what its outputs use: a body's stress modes (most of a body file: 6.8 of the bracket's 7.9 MB)
   // only where an output names one of its regions or a ParaView series shows its stresses, so that a chain of a
   // thousand copies of a part does not hold a thousand copies of them.
@@ -60,132 +55,61 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
     const YAML::Node b = it->second;
     r.expect_map(b, where, {"file", "modes", "formulation", "frame", "position", "rotation", "velocity", "angular_velocity",
                             "damping", "geometric_stiffness"});
+    runtime::BodySpec spec;
     const std::string path_text = r.text(r.required(b, "file", where), where + " file");
-    const std::filesystem::path path =
-        std::filesystem::path(path_text).is_absolute() ? std::filesystem::path(path_text) : base / path_text;
-    // Each file is read (and its seal checked) once: a chain of 1024 copies of one part would otherwise spend
-    // 60 ms per copy of the bracket on its SHA-256.
-    const std::string key = std::filesystem::weakly_canonical(path).string();
-    if (!files.count(key)) {
-      try {
-        files.emplace(key, format::read_body_file(path));
-      } catch (const std::exception& e) {
-        r.fail(b["file"], e.what());
-      }
-    }
-    const format::BodyData& data = files.at(key);
+    spec.file = std::filesystem::path(path_text).is_absolute() ? std::filesystem::path(path_text) : base / path_text;
+    spec.stresses = stresses_used.count(name) > 0;
     // modes: all (default) | rigid | a count | full (the unreduced improved ACF of the file's mesh: the reference).
-    std::optional<Eigen::Index> modes;
-    bool full = false;
     if (const YAML::Node m = b["modes"]) {
       const std::string text = r.text(m, where + " modes");
-      if (text == "rigid") modes = 0;
-      else if (text == "full") full = true;
-      else if (text != "all") modes = r.count(m, where + " modes");
+      if (text == "rigid") spec.modes = 0;
+      else if (text == "full") spec.full = true;
+      else if (text != "all") spec.modes = r.count(m, where + " modes");
     }
-    runtime::BodyModel model;
-    try {
-      model = full ? runtime::full_order_model(data, path.filename().string())
-                   : runtime::make_body_model(data, modes, path.filename().string(), stresses_used.count(name) > 0);
-    } catch (const std::invalid_argument& e) {
-      r.fail(b["modes"], e.what());
-    }
-    if (!stresses_used.count(name)) model.recovery.clear();
     // geometric_stiffness: on (true) whenever the body file holds it (fbprep --geometric-stiffness); false turns it off.
-    if (const YAML::Node g = b["geometric_stiffness"]) {
-      if (!r.truth(g, where + " geometric_stiffness")) {
-        model.prestress.reset();
-      } else if (full) {
-        r.fail(g, fmt::format("{} geometric_stiffness: the body file stores it projected on the modes, so modes: full "
-                              "(the unreduced model) has none", where));
-      } else if (model.rigid()) {
-        r.fail(g, fmt::format("{} geometric_stiffness: a rigid body has no deformation to stiffen", where));
-      } else if (!model.prestress) {
-        r.fail(g, fmt::format("{} geometric_stiffness: {} holds none (fbprep --geometric-stiffness, or "
-                              "geometric_stiffness: true in its body spec, writes it)", where, path.filename().string()));
-      }
-    }
-    if (full && b["formulation"] && r.text(b["formulation"], where + " formulation") == "ffrf")
-      r.fail(b["formulation"], fmt::format("{}: formulation ffrf moves modes in a floating frame; modes: full is the unreduced "
-                                           "improved ACF (use a number of modes, or formulation gcms)", where));
-    if (full && b["damping"]) {  // D̂ = β K̄ keeps the full-order body's Newton core sparse (full_order.hpp)
-      const YAML::Node damping = b["damping"];
-      const YAML::Node rayleigh = damping.IsMap() ? damping["rayleigh"] : YAML::Node();
-      const bool no_alpha = rayleigh && rayleigh.IsMap() &&
-                            (!rayleigh["alpha"] || (rayleigh["alpha"].IsScalar() && r.number(rayleigh["alpha"], where + " damping alpha") == 0.0));
-      if (!rayleigh || damping.size() != 1 || !rayleigh.IsMap() || !rayleigh["beta"] || !no_alpha ||
-          rayleigh.size() != (rayleigh["alpha"] ? 2u : 1u))
-        r.fail(damping, fmt::format("{} damping: modes: full takes stiffness-proportional damping only, "
-                                    "{{rayleigh: {{beta: β}}}} (β in s), which keeps its Newton matrix sparse", where));
-      try {
-        model = runtime::damp_full_order(std::move(model), r.number(r.required(rayleigh, "beta", where + " damping rayleigh"),
-                                                                    where + " damping beta"));
-      } catch (const std::invalid_argument& e) {
-        r.fail(rayleigh, fmt::format("{} damping: {}", where, e.what()));
-      }
-    } else if (const YAML::Node damping = b["damping"]) {  // modal: ζ (all modes) or [ζ_1, ...]; rayleigh: {alpha, beta}
+    if (const YAML::Node g = b["geometric_stiffness"]) spec.geometric_stiffness = r.truth(g, where + " geometric_stiffness");
+    // damping: modal: ζ (all modes) or [ζ_1, ...]; rayleigh: {alpha, beta}
+    if (const YAML::Node damping = b["damping"]) {
       r.expect_map(damping, where + " damping", {"modal", "rayleigh"});
-      std::optional<Eigen::VectorXd> ratios;
+      runtime::BodyDamping& d = spec.damping.emplace();
       if (const YAML::Node modal = damping["modal"]) {
-        ratios = Eigen::VectorXd(model.modes);
         if (modal.IsSequence()) {
-          if (static_cast<Eigen::Index>(modal.size()) != model.modes)
-            r.fail(modal, fmt::format("{} damping modal lists {} ratios for {} modes", where, modal.size(), model.modes));
+          d.modal_ratios = Eigen::VectorXd(static_cast<Eigen::Index>(modal.size()));
           for (std::size_t k = 0; k < modal.size(); ++k)
-            (*ratios)(static_cast<Eigen::Index>(k)) = r.number(modal[k], where + " damping modal");
+            (*d.modal_ratios)(static_cast<Eigen::Index>(k)) = r.number(modal[k], where + " damping modal");
         } else {
-          ratios->setConstant(r.number(modal, where + " damping modal"));
+          d.modal = r.number(modal, where + " damping modal");
         }
       }
-      double alpha = 0.0, beta = 0.0;
       if (const YAML::Node rayleigh = damping["rayleigh"]) {
         r.expect_map(rayleigh, where + " damping rayleigh", {"alpha", "beta"});
-        if (rayleigh["alpha"]) alpha = r.number(rayleigh["alpha"], where + " damping alpha");
-        if (rayleigh["beta"]) beta = r.number(rayleigh["beta"], where + " damping beta");
-      }
-      try {
-        model.damping = runtime::rayleigh_damping(model, alpha, beta);
-        if (ratios) model.damping += runtime::modal_damping(model, *ratios);
-      } catch (const std::invalid_argument& e) {  // a ratio outside [0, 1], a negative alpha or beta
-        r.fail(damping, fmt::format("{} damping: {}", where, e.what()));
+        if (rayleigh["alpha"]) d.alpha = r.number(rayleigh["alpha"], where + " damping alpha");
+        if (rayleigh["beta"]) d.beta = r.number(rayleigh["beta"], where + " damping beta");
       }
     }
-    // formulation: gcms (default for elastic bodies) | ffrf; frame (formulation: ffrf only): mean-axis (default) | {interface: NAME}. A rigid body
-    // (modes: rigid) moves in the floating frame's 7 coordinates, position and Euler parameters, with one
-    // normalisation row, unless the scene asks for the GCMS's 12 (τ and A) with 6 orthogonality rows: the same
-    // motion with 18 unknowns per body instead of 8 (a 1024-link chain 30 % faster per step, bench/README.md).
-    bool floating = modes && *modes == 0 && !b["formulation"];
-    bool asked_ffrf = false;  // a frame belongs to a body the scene puts in the floating frame itself
+    // formulation: gcms (default for elastic bodies) | ffrf; frame (formulation: ffrf only): mean-axis (default) |
+    // {interface: NAME}. A rigid body (modes: rigid) moves in the floating frame's 7 coordinates, position and Euler
+    // parameters, with one normalisation row, unless the scene asks for the GCMS's 12 (τ and A) with 6 orthogonality
+    // rows: the same motion with 18 unknowns per body instead of 8 (a 1024-link chain 30 % faster per step,
+    // bench/README.md).
     if (const YAML::Node f = b["formulation"]) {
       const std::string text = r.text(f, where + " formulation");
       if (text != "gcms" && text != "ffrf")
         r.fail(f, fmt::format("{} formulation '{}' is unknown; use gcms (the improved GCMS, the default for elastic "
                               "bodies) or ffrf (the floating frame of reference formulation with the same modes)", where, text));
-      floating = asked_ffrf = text == "ffrf";
+      spec.formulation = text == "ffrf" ? runtime::BodySpec::Formulation::ffrf : runtime::BodySpec::Formulation::gcms;
     }
     if (const YAML::Node frame = b["frame"]) {
-      if (!asked_ffrf) r.fail(frame, fmt::format("{}: frame belongs to formulation ffrf (the improved GCMS's frame is always "
-                                               "the mean-axis one)", where));
-      runtime::FloatingFrame kind = runtime::FloatingFrame::mean_axis;
-      std::string interface;
       if (frame.IsMap()) {
         r.expect_map(frame, where + " frame", {"interface"});
-        kind = runtime::FloatingFrame::interface;
-        interface = r.text(r.required(frame, "interface", where + " frame"), where + " frame interface");
-      } else if (const std::string text = r.text(frame, where + " frame"); text != "mean-axis") {
+        spec.frame = runtime::FloatingFrame::interface;
+        spec.frame_interface = r.text(r.required(frame, "interface", where + " frame"), where + " frame interface");
+      } else if (const std::string text = r.text(frame, where + " frame"); text == "mean-axis") {
+        spec.frame = runtime::FloatingFrame::mean_axis;
+      } else if (spec.formulation == runtime::BodySpec::Formulation::ffrf) {
         r.fail(frame, fmt::format("{} frame '{}' is unknown; use mean-axis or {{interface: NAME}}", where, text));
-      }
-      try {
-        model.floating_frame = std::make_shared<const runtime::FfrfModel>(runtime::make_ffrf_model(model, kind, interface));
-      } catch (const std::invalid_argument& e) {
-        r.fail(frame, fmt::format("{} frame: {}", where, e.what()));
-      }
-    } else if (floating) {
-      try {
-        model.floating_frame =
-            std::make_shared<const runtime::FfrfModel>(runtime::make_ffrf_model(model, runtime::FloatingFrame::mean_axis));
-      } catch (const std::invalid_argument& e) {
-        r.fail(b["formulation"], fmt::format("{} formulation: {}", where, e.what()));
+      } else {
+        spec.frame = runtime::FloatingFrame::mean_axis;  // refused below: a frame belongs to formulation ffrf
       }
     }
     Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
@@ -201,7 +125,11 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
     if (b["position"]) placement.position = r.vector3(b["position"], where + " position");
     if (b["velocity"]) placement.velocity = r.vector3(b["velocity"], where + " velocity");
     if (b["angular_velocity"]) placement.angular_velocity = r.vector3(b["angular_velocity"], where + " angular_velocity");
-    bodies[name] = builder.add_body(name, std::move(model), placement, data.mass.center_of_mass_input);
+    try {
+      bodies[name] = builder.add_body(name, spec, placement);
+    } catch (const runtime::SceneError& e) {  // at the key's line (the body's when the key is not written)
+      r.fail(b[e.key()] ? b[e.key()] : b, e.what());
+    }
   }
 
   auto body_of = [&](const YAML::Node& node, const std::string& where) -> int {

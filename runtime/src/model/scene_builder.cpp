@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <numbers>
 #include <stdexcept>
 #include <utility>
@@ -42,6 +43,23 @@ int SceneBuilder::add_body(const std::string& name, BodyModel model, const Place
   input_center_of_mass_[k] = input_center_of_mass;
   index_[name] = index;
   return index;
+}
+
+int SceneBuilder::add_body(const std::string& name, const BodySpec& spec, const Placement& placement) {
+  if (index_.count(name)) throw std::invalid_argument("body '" + name + "' is defined twice");
+  // Each file is read (and its seal checked) once: a chain of 1024 copies of one part would otherwise spend 60 ms
+  // per copy of the bracket on its SHA-256.
+  const std::string key = std::filesystem::weakly_canonical(spec.file).string();
+  auto found = files_.find(key);
+  if (found == files_.end()) {
+    try {
+      found = files_.emplace(key, std::make_shared<const format::BodyData>(format::read_body_file(spec.file))).first;
+    } catch (const std::exception& e) {
+      throw SceneError("file", e.what());
+    }
+  }
+  const format::BodyData& data = *found->second;
+  return add_body(name, make_body_model(name, spec, data), placement, data.mass.center_of_mass_input);
 }
 
 int SceneBuilder::body(const std::string& name) const {

@@ -7,12 +7,15 @@
 // \code
 //   flexbody::runtime::System system;
 //   flexbody::runtime::SceneBuilder scene(system);
-//   const auto data = flexbody::format::read_body_file("bracket.fbh5");
-//   scene.add_body("arm", flexbody::runtime::make_body_model(data, 6, "bracket.fbh5"), {}, data.mass.center_of_mass_input);
+//   flexbody::runtime::BodySpec arm;
+//   arm.file = "bracket.fbh5";
+//   arm.modes = 6;
+//   scene.add_body("arm", arm);   // its input frame where the global one is
 //   scene.add_joint("pivot", flexbody::runtime::JointType::revolute, scene.interface("arm", "bore_1"), {},
 //                   Eigen::Vector3d::UnitZ());   // to ground, where bore_1 is now
 // \endcode
 
+#include "flexbody/runtime/body_spec.hpp"
 #include "flexbody/runtime/joint.hpp"
 #include "flexbody/runtime/marker.hpp"
 #include "flexbody/runtime/system.hpp"
@@ -20,6 +23,8 @@
 #include <Eigen/Core>
 
 #include <functional>
+#include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -65,6 +70,10 @@ class SceneBuilder {
   /// Returns its index in the System. Throws std::invalid_argument for a name already used.
   int add_body(const std::string& name, BodyModel model, const Placement& placement = {},
                const Eigen::Vector3d& input_center_of_mass = Eigen::Vector3d::Zero());
+  /// Adds body `name` as `spec` says (body_spec.hpp), from its body file: each file is read and its seal checked
+  /// once per builder, however many bodies share it. Throws SceneError (key "file" for a file that cannot be read,
+  /// and as make_body_model(name, spec, data) does), std::invalid_argument for a name already used.
+  int add_body(const std::string& name, const BodySpec& spec, const Placement& placement = {});
   /// The index of body `name`; throws std::invalid_argument "no body 'name' in the scene".
   [[nodiscard]] int body(const std::string& name) const;
 
@@ -107,6 +116,7 @@ class SceneBuilder {
   System& system_;
   std::vector<std::optional<Eigen::Vector3d>> input_center_of_mass_;  ///< by System index: set for this builder's bodies
   std::unordered_map<std::string, int> index_;                         ///< this builder's bodies by name
+  std::map<std::string, std::shared_ptr<const format::BodyData>> files_;  ///< read by add_body, by canonical path
 };
 
 }  // namespace flexbody::runtime

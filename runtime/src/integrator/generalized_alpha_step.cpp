@@ -134,6 +134,35 @@ void GeneralizedAlpha::step() {
   ++steps_;
 }
 
+IntegratorState GeneralizedAlpha::state() const { return {t_, q_, v_, qdd_, a_, lambda_, nu_}; }
+
+void GeneralizedAlpha::set_state(const IntegratorState& s) {
+  const Eigen::Index n = q_.size(), m = lambda_.size();
+  auto check = [](const char* name, const Eigen::VectorXd& x, Eigen::Index size) {
+    if (x.size() != size)
+      throw std::invalid_argument(std::string("generalized-alpha state: ") + name + " has " + std::to_string(x.size()) +
+                                  " entries, the system " + std::to_string(size));
+    if (!x.allFinite()) throw std::invalid_argument(std::string("generalized-alpha state: ") + name + " is not finite");
+  };
+  check("q", s.q, n);
+  check("v", s.v, n);
+  check("qdd", s.qdd, n);
+  check("a", s.a, n);
+  check("lambda", s.lambda, m);
+  if (s.nu.size() > 0) check("nu", s.nu, m);
+  if (!std::isfinite(s.time)) throw std::invalid_argument("generalized-alpha state: the time is not finite");
+  q_ = s.q;
+  v_ = s.v;
+  qdd_ = s.qdd;
+  a_ = s.a;
+  lambda_ = s.lambda;
+  nu_ = s.nu;
+  t_ = t0_ = s.time;
+  steps_ = 0;
+  refresh_ = true;  // the kept Newton matrix belongs to another state
+  fresh_starts_ = fresh_start_backoff_ = 0;
+}
+
 void GeneralizedAlpha::step_to(double t_end) {
   const double h = t_end - t_;
   // t_ after many steps carries the rounding of t0 + k h, about ε |t_end|: beyond 1e7 steps that exceeds 1e-9 h.
@@ -174,6 +203,17 @@ void GeneralizedAlpha::predict(const StepFrame& f) {
 }
 
 void GeneralizedAlpha::advance(double h, double t1) {
+  try {
+    attempt_step(h, t1);
+  } catch (...) {
+    // The state is the last good step's (accept() is the only writer); a Newton matrix the failure may have left
+    // half built is not used again.
+    refresh_ = true;
+    throw;
+  }
+}
+
+void GeneralizedAlpha::attempt_step(double h, double t1) {
   const Eigen::Index n = q_.size(), m = lambda_.size();
   // β' and γ' of the solver's matrix are those of the step it was built for; a step size changed beyond rounding
   // rebuilds it (step_to), a kept one is a modified Newton matrix (GeneralizedAlphaOptions::reuse_newton_matrix).

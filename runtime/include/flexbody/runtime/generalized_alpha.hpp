@@ -123,6 +123,16 @@ struct GeneralizedAlphaOptions {
   double stiffened_spin_limit = 3.0;    ///< Ω/ω₁: where the GCMS's in-plane error was first measured (10 %)
 };
 
+/// The integrator's state between steps: what a restart or a user's controller reads and sets.
+struct IntegratorState {
+  double time = 0.0;       ///< t [s]
+  Eigen::VectorXd q, v;    ///< coordinates and velocities (System's layout)
+  Eigen::VectorXd qdd;     ///< q̈, the accelerations
+  Eigen::VectorXd a;       ///< generalized-α's acceleration-like variable (Chung & Hulbert's a)
+  Eigen::VectorXd lambda;  ///< the multipliers λ [N, N m, ...]
+  Eigen::VectorXd nu;      ///< the stabilised index-2 form's ν of the last step (empty: none yet)
+};
+
 /// A step whose Newton iteration did not converge, or that produced a non-finite value. what() says which body
 /// or constraint and why.
 class StepFailure : public std::runtime_error {
@@ -150,7 +160,8 @@ class GeneralizedAlpha {
   GeneralizedAlpha(const System& system, const GeneralizedAlphaOptions& options, double t0 = 0.0);
   GeneralizedAlpha(System&&, const GeneralizedAlphaOptions&, double = 0.0) = delete;  // borrows: would dangle
 
-  /// Advances one step of size h. Throws StepFailure (and leaves the state at the last good step).
+  /// Advances one step of size h. Throws StepFailure (and leaves the state at the last good step); an exception from
+  /// the scene's own functions (a force's) leaves it there too, and passes through.
   void step();
   /// Advances one step that ends exactly at `t_end`, for a run that must end on its end time when that is not a
   /// whole number of steps: 0 < t_end − time() ≤ h + max(kStepToSlack h, 8 ε |t_end|) (the second: the rounding of
@@ -164,6 +175,13 @@ class GeneralizedAlpha {
   /// The relative difference of step sizes that step_to() treats as rounding.
   static constexpr double kStepToSlack = 1e-9;
 
+  /// The state after the last step (or the start).
+  [[nodiscard]] IntegratorState state() const;
+  /// Continues from `state` (one of state()'s, possibly changed: a restart, a controller's correction) with a fresh
+  /// Newton matrix; the next step() goes to state.time + h. Does not check that q and v meet the constraints (a
+  /// changed state that does not is pulled onto them by the next step's Newton iteration, as an impulse would).
+  /// Throws std::invalid_argument naming the entry for a size that is not the system's or a non-finite value.
+  void set_state(const IntegratorState& state);
   [[nodiscard]] double time() const { return t_; }
   [[nodiscard]] const Eigen::VectorXd& coordinates() const { return q_; }
   [[nodiscard]] const Eigen::VectorXd& velocities() const { return v_; }
@@ -186,6 +204,7 @@ class GeneralizedAlpha {
     bool stabilized = false;
   };
   void advance(double h, double t1);  ///< one step of size h to time t1 (step, step_to)
+  void attempt_step(double h, double t1);  ///< advance's work, which it guards
   void predict(const StepFrame& f);   ///< the Newton iterate's start (generalized_alpha_step.cpp)
   void accept(const StepFrame& f);    ///< the converged iterate, checked, becomes the state
   /// One attempt's Newton iterations from the predictor (generalized_alpha_newton.cpp): true when they converged;

@@ -2,17 +2,17 @@
 //
 //   fbsim scene.yaml [-o DIR] [--json] [-q]
 #include "flexbody/format/body_file.hpp"
-#include "run.hpp"
-#include "scene.hpp"
+#include "flexbody/scene/scene.hpp"
+#include "flexbody/scene/simulation.hpp"
 
 #include "flexbody/runtime/threads.hpp"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <iostream>
+#include <memory>
 #include <system_error>
 #include <unistd.h>
 
@@ -63,25 +63,28 @@ int main(int argc, char** argv) {
     return fail(fmt::format("{}: is an existing file, not a directory; choose another output directory with -o", origin),
                 kBadInput);
   }
-  flexbody::fbsim::Scene scene;
+  flexbody::scene::Scene read;
   try {
-    scene = flexbody::fbsim::read_scene(scene_path, {end_time});
+    read = flexbody::scene::read_scene(scene_path, {end_time});
   } catch (const std::invalid_argument& e) {
     return fail(e.what(), kBadInput);
   } catch (const std::exception& e) {
     return fail(e.what(), kFailed);
   }
+  const double end = read.end_time;
   const bool terminal = !quiet && !json && ::isatty(STDERR_FILENO);
   auto progress = [&](double t) {
-    if (terminal) std::cerr << fmt::format("\r  t = {:.4g} / {:.4g} s", t, scene.end_time) << std::flush;
+    if (terminal) std::cerr << fmt::format("\r  t = {:.4g} / {:.4g} s", t, end) << std::flush;
   };
-  flexbody::fbsim::RunSummary summary;
+  std::unique_ptr<flexbody::scene::Simulation> simulation;
   try {
-    auto warn = [&](const std::string& line) {  // even with -q: a broken conservation law is not progress
+    auto warn = [terminal](const std::string& line) {  // even with -q: a broken conservation law is not progress
       if (terminal) std::cerr << '\n';
       std::cerr << "fbsim: warning: " << line << '\n';
     };
-    summary = flexbody::fbsim::run_scene(scene, directory, progress, warn);
+    simulation = std::make_unique<flexbody::scene::Simulation>(std::move(read), flexbody::scene::OutputSinks{directory, false},
+                                                               warn);
+    simulation->run(end, progress);
   } catch (const flexbody::runtime::StepFailure& e) {
     if (terminal) std::cerr << '\n';
     return fail(fmt::format("{}: {} (outputs up to the last completed step are in {})", scene_path.string(), e.what(),
@@ -92,62 +95,10 @@ int main(int argc, char** argv) {
     return fail(fmt::format("{}: {}", scene_path.string(), e.what()), kFailed);
   }
   if (terminal) std::cerr << '\n';
+  const flexbody::scene::Scene& scene = simulation->scene();
+  const flexbody::scene::RunSummary summary = simulation->summary();
   if (json) {
-    nlohmann::ordered_json j;
-    j["scene"] = scene_path.string();
-    j["steps"] = summary.steps;
-    j["newton_iterations"] = summary.newton_iterations;
-    j["newton_matrices"] = summary.newton_matrices;
-    j["linear_solver"] = summary.sparse ? "sparse" : "dense";
-    {
-      const flexbody::runtime::AssemblyReport& a = scene.assembly;
-      nlohmann::ordered_json assembly;
-      assembly["iterations"] = a.iterations;
-      assembly["largest_gap_m"] = a.largest_gap;
-      const int moved = a.most_moved();
-      assembly["largest_move_m"] = moved >= 0 ? a.moves[static_cast<std::size_t>(moved)] : 0.0;
-      assembly["most_moved_body"] = moved >= 0 ? scene.system.body_name(moved) : std::string();
-      assembly["moves_m"] = a.moves;
-      assembly["deformations_m"] = a.deformations;
-      assembly["strain_energy_j"] = a.strain_energy;
-      j["assembly"] = assembly;
-    }
-    {
-      nlohmann::ordered_json removed = nlohmann::ordered_json::array();
-      for (const flexbody::runtime::RemovedConstraint& c : scene.removed)
-        removed.push_back({{"joint", c.name}, {"row", c.row + 1}, {"meaning", c.meaning}, {"gap", c.gap}});
-      j["removed_constraints"] = removed;
-    }
-    {
-      nlohmann::ordered_json stiffened = nlohmann::ordered_json::array();
-      for (int b = 0; b < scene.system.body_count(); ++b)
-        if (const auto& prestress = scene.system.model(b).prestress) {
-          const std::string gap = scene.system.prestress_gap(b);
-          stiffened.push_back({{"body", scene.system.body_name(b)}, {"cases", prestress->cases.size()},
-                               {"covers_all_loads", gap.empty()}, {"gap", gap}});
-        }
-      j["geometric_stiffening"] = stiffened;
-    }
-    j["cpu_s"] = summary.cpu_seconds;
-    j["energy_initial_j"] = summary.energy_initial;
-    j["energy_final_j"] = summary.energy_final;
-    j["energy_drift"] = summary.energy_drift;
-    j["max_constraint_residual"] = summary.max_constraint_residual;
-    const double steps = std::max(1.0, static_cast<double>(summary.steps));
-    j["wall_s"] = summary.wall_seconds;
-    j["us_per_step"] = 1e6 * summary.wall_seconds / steps;
-    j["integrator_us_per_step"] = 1e6 * summary.integrator_wall_seconds / steps;
-    j["conserves_energy"] = scene.conserves.energy;
-    j["conserves_angular_momentum"] = scene.conserves.angular_momentum;
-    j["energy_growth"] = summary.energy_growth;
-    j["angular_momentum_growth"] = summary.angular_momentum_growth;
-    j["conservation_warnings"] = summary.conservation_warnings;
-    j["validity_warnings"] = summary.validity_warnings;
-    j["warnings"] = summary.warnings;
-    std::vector<std::string> files;
-    for (const auto& f : summary.files) files.push_back(f.string());
-    j["outputs"] = files;
-    std::cout << j.dump() << '\n';
+    std::cout << flexbody::scene::summary_json(*simulation, scene_path.string()) << '\n';
   } else if (!quiet) {
     std::cout << fmt::format("fbsim: {} steps, {} Newton iterations ({:.2f} per step), {:.3f} s CPU\n", summary.steps,
                              summary.newton_iterations,

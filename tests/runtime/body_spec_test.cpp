@@ -55,7 +55,7 @@ std::pair<std::string, std::string> refusal(const fr::BodySpec& spec) {
 
 }  // namespace
 
-TEST(BodySpec, MakesTheModelTheLowerLevelCallsMake) {
+TEST(SceneBodySpec, MakesTheModelTheLowerLevelCallsMake) {
   const flexbody::format::BodyData data = flexbody::format::read_body_file(bar_file());
   fr::System system;
   fr::SceneBuilder scene(system);
@@ -91,7 +91,7 @@ TEST(BodySpec, MakesTheModelTheLowerLevelCallsMake) {
   EXPECT_EQ(system.model(ffrf).modes, 3);
 }
 
-TEST(BodySpec, EachFileIsReadOncePerBuilder) {
+TEST(SceneBodySpec, EachFileIsReadOncePerBuilder) {
   const std::filesystem::path copy = bar_file().parent_path() / "read_once.fbh5";
   std::filesystem::copy_file(bar_file(), copy, std::filesystem::copy_options::overwrite_existing);
   fr::System system;
@@ -105,7 +105,7 @@ TEST(BodySpec, EachFileIsReadOncePerBuilder) {
   EXPECT_THROW(fresh.add_body("first", spec_of(std::nullopt, [&](fr::BodySpec& s) { s.file = copy; })), fr::SceneError);
 }
 
-TEST(BodySpec, EveryRefusalNamesItsKey) {
+TEST(SceneBodySpec, EveryRefusalNamesItsKey) {
   using F = fr::BodySpec::Formulation;
   EXPECT_EQ(refusal(spec_of(std::nullopt, [](fr::BodySpec& s) { s.file = s.file.parent_path() / "none.fbh5"; })).first, "file");
   EXPECT_EQ(refusal(spec_of(11)).first, "modes");  // the file holds 10

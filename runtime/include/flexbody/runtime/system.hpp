@@ -124,6 +124,9 @@ class System {
   [[nodiscard]] int body_index(const std::string& name) const;  ///< throws std::invalid_argument if unknown
   [[nodiscard]] Eigen::Index offset(int body) const { return bodies_.at(static_cast<std::size_t>(body)).offset; }
   [[nodiscard]] const std::vector<Joint>& joints() const { return joints_; }
+  [[nodiscard]] const std::vector<PointForce>& forces() const { return forces_; }
+  [[nodiscard]] const std::vector<PointTorque>& torques() const { return torques_; }
+  [[nodiscard]] const std::vector<SpringDamper>& springs() const { return springs_; }
 
   [[nodiscard]] Eigen::Index coordinate_count() const { return coordinates_; }
   [[nodiscard]] Eigen::Index constraint_count() const;

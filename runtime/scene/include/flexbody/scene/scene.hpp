@@ -1,5 +1,5 @@
 #pragma once
-// scene.hpp: fbsim's scene file (YAML): bodies from body files, joints, forces, gravity, integrator settings and
+// flexbody/scene/scene.hpp: fbsim's scene file (YAML): bodies from body files, joints, forces, gravity, integrator settings and
 // outputs, read into a runtime System. Every error is one "<scene>:<line>: <problem>" line.
 
 #include "flexbody/format/yaml_reader.hpp"
@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace flexbody::fbsim {
+namespace flexbody::scene {
 
 /// One output file: a marker's position, velocity or orientation, a joint's reaction force and moment, a body's modal
 /// coordinates, or an output region's elastic displacements and stresses.
@@ -86,7 +86,13 @@ struct SceneOverrides {
 void read_integrator(const format::YamlReader& r, const YAML::Node& root, const SceneOverrides& overrides,
                      Scene& scene);
 
+/// What a scene needs once its bodies, joints, forces and springs are in: the joint rows that repeat others left
+/// out (Scene::removed, System::remove_redundant_constraints), the conservation laws its motion must obey
+/// (Scene::conserves), and the initial assembly (Scene::assembly, runtime::assemble). Throws runtime::AssemblyError
+/// naming the joint whose gap is too large, std::invalid_argument for a degenerate body.
+void finish_scene(Scene& scene, const runtime::AssemblyOptions& assembly = {});
+
 /// Reads and assembles a scene; body files are read relative to the scene's directory.
 [[nodiscard]] Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overrides = {});
 
-}  // namespace flexbody::fbsim
+}  // namespace flexbody::scene

@@ -1,5 +1,5 @@
 // A scene's integrator settings (the `integrator` key, and --end): scene.hpp's read_integrator.
-#include "scene.hpp"
+#include "flexbody/scene/scene.hpp"
 
 #include "flexbody/format/yaml_reader.hpp"
 
@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace flexbody::fbsim {
+namespace flexbody::scene {
 
 void read_integrator(const format::YamlReader& r, const YAML::Node& root, const SceneOverrides& overrides,
                      Scene& scene) {
@@ -103,4 +103,4 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
   }
 }
 
-}  // namespace flexbody::fbsim
+}  // namespace flexbody::scene

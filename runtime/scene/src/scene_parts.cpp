@@ -4,7 +4,7 @@
 
 #include <stdexcept>
 
-namespace flexbody::fbsim {
+namespace flexbody::scene {
 
 // A marker on `body` from exactly one of interface (name), point (input-frame coordinates [m]), node (index).
 runtime::Marker read_marker(const Reader& r, const YAML::Node& map, const runtime::SceneBuilder& builder, int body,
@@ -34,4 +34,4 @@ runtime::JointType joint_type(const Reader& r, const YAML::Node& node, const std
   r.fail(node, fmt::format("{}: type '{}' is unknown; use spherical, fixed, revolute, prismatic or driven-revolute", where, t));
 }
 
-}  // namespace flexbody::fbsim
+}  // namespace flexbody::scene

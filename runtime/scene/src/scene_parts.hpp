@@ -1,6 +1,6 @@
 #pragma once
-// The pieces of a scene that several of its keys share: a marker read from its map and a joint's type (scene.cpp;
-// fbsim's own, not installed).
+// The pieces of a scene that several of its keys share: a marker read from its map and a joint's type (scene_file.cpp;
+// flexbody::scene's own, not installed).
 
 #include "flexbody/format/yaml_reader.hpp"
 #include "flexbody/runtime/joint.hpp"
@@ -9,7 +9,7 @@
 
 #include <string>
 
-namespace flexbody::fbsim {
+namespace flexbody::scene {
 
 using Reader = format::YamlReader;
 
@@ -21,4 +21,4 @@ using Reader = format::YamlReader;
 /// spherical, fixed, revolute, prismatic or driven-revolute; anything else fails on its line.
 [[nodiscard]] runtime::JointType joint_type(const Reader& r, const YAML::Node& node, const std::string& where);
 
-}  // namespace flexbody::fbsim
+}  // namespace flexbody::scene

@@ -1,4 +1,4 @@
-#include "scene.hpp"
+#include "flexbody/scene/scene.hpp"
 #include "scene_parts.hpp"
 
 #include "flexbody/format/yaml_reader.hpp"
@@ -12,7 +12,7 @@
 #include <numbers>
 #include <set>
 
-namespace flexbody::fbsim {
+namespace flexbody::scene {
 
 Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overrides) {
   const Reader r(file.string());
@@ -139,7 +139,6 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
     return found->second;
   };
 
-  const Eigen::VectorXd q0 = scene.system.initial_coordinates();
   std::vector<YAML::Node> joint_nodes;  // each joint's scene entry, in System::joints() order
   if (const YAML::Node joints = root["joints"]) {
     if (!joints.IsMap()) r.fail(joints, "joints must be a map of names to joints");
@@ -178,22 +177,9 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
     }
   }
 
-  // Rows that repeat earlier ones would make the DAE singular: they are left out, as Adams does, and the summary says
-  // which (a planar four-bar of revolute joints repeats three). Found before the assembly, whose Newton matrix they
-  // would make singular too, and again after it (rows dependent only once the gaps are closed).
-  auto remove_redundant = [&](const Eigen::VectorXd& q) {
-    try {
-      for (runtime::RemovedConstraint& c : scene.system.remove_redundant_constraints(0.0, q)) scene.removed.push_back(std::move(c));
-    } catch (const std::invalid_argument& e) {
-      r.fail(root["bodies"], e.what());  // a degenerate body file
-    }
-  };
-  remove_redundant(q0);
 
-  bool applied_loads = false, damped_springs = false, springs_to_ground = false;
   if (const YAML::Node forces = root["forces"]) {
     if (!forces.IsMap()) r.fail(forces, "forces must be a map of names to forces");
-    applied_loads = forces.size() > 0;
     for (auto it = forces.begin(); it != forces.end(); ++it) {
       const std::string where = fmt::format("force '{}'", it->first.Scalar());
       const YAML::Node f = it->second;
@@ -231,8 +217,6 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
       const double damping = sp["damping"] ? r.number(sp["damping"], where + " damping") : 0.0;
       std::optional<double> length;  // default: the initial distance (no preload)
       if (sp["length"]) length = r.number(sp["length"], where + " length");
-      damped_springs = damped_springs || damping != 0.0;
-      springs_to_ground = springs_to_ground || from.body == runtime::kGround || to.body == runtime::kGround;
       try {
         builder.add_spring(it->first.Scalar(), from, to, stiffness, damping, length);
       } catch (const std::invalid_argument& e) {
@@ -344,15 +328,6 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
       if (scene.paraview_every < 1) r.fail(every, "paraview every must be at least 1");
     }
   }
-  bool damped_bodies = false, driven = false, joints_to_ground = false;
-  for (int b = 0; b < scene.system.body_count(); ++b) damped_bodies = damped_bodies || scene.system.model(b).damping.size() > 0;
-  for (const runtime::Joint& j : scene.system.joints()) {
-    driven = driven || j.type == runtime::JointType::driven_revolute;
-    joints_to_ground = joints_to_ground || j.first.body == runtime::kGround || j.second.body == runtime::kGround;
-  }
-  scene.conserves.energy = !applied_loads && !damped_springs && !damped_bodies && !driven;
-  scene.conserves.angular_momentum = scene.conserves.energy && !joints_to_ground && !springs_to_ground;
-
   // assembly: {tolerance: fraction of a body's size}: close the joints' gaps (an interface's point comes from a mesh,
   // micrometres off the CAD's nominal position) by the least mass-weighted move of the bodies (runtime/assembly.hpp).
   runtime::AssemblyOptions assembly;
@@ -366,20 +341,13 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
     }
   }
   try {
-    scene.assembly = runtime::assemble(scene.system, assembly);
+    finish_scene(scene, assembly);
   } catch (const runtime::AssemblyError& e) {
     r.fail(e.joint < joint_nodes.size() ? joint_nodes[e.joint] : root, e.what());
-  }
-  if (scene.assembly.iterations > 0) {
-    const Eigen::VectorXd q = scene.system.initial_coordinates();
-    for (runtime::RemovedConstraint& c : scene.removed) {  // the rows removed before: their gaps once assembled
-      const runtime::Joint& j = scene.system.joints()[c.joint];
-      c.gap = std::abs(runtime::joint_type_residuals(j, 0.0, scene.system.body_coordinates(q, j.first.body),
-                                                     scene.system.body_coordinates(q, j.second.body))(c.row));
-    }
-    remove_redundant(q);
+  } catch (const std::invalid_argument& e) {
+    r.fail(root["bodies"], e.what());  // a degenerate body file
   }
   return scene;
 }
 
-}  // namespace flexbody::fbsim
+}  // namespace flexbody::scene

@@ -1,0 +1,298 @@
+#include "flexbody/scene/simulation.hpp"
+
+#include "output_values.hpp"
+
+#include "flexbody/runtime/gcms_elastic.hpp"
+#include "flexbody/runtime/paraview_series.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <fstream>
+#include <stdexcept>
+#include <system_error>
+#include <utility>
+
+namespace flexbody::scene {
+namespace {
+
+// One CSV file per output; values with 17 significant digits (round-trip exact).
+class CsvFile {
+ public:
+  CsvFile(const std::filesystem::path& path, const std::vector<std::string>& columns) : out_(path) {
+    if (!out_) throw std::runtime_error(path.string() + ": cannot write");
+    out_ << "t [s]";
+    for (const std::string& c : columns) out_ << ',' << c;
+    out_ << '\n';
+  }
+  void row(double t, const Eigen::VectorXd& values) {
+    out_ << fmt::format("{:.17g}", t);
+    for (Eigen::Index k = 0; k < values.size(); ++k) out_ << fmt::format(",{:.17g}", values(k));
+    out_ << '\n';
+  }
+  void flush() { out_.flush(); }
+
+ private:
+  std::ofstream out_;
+};
+
+// The scales that E(t) − E_0 and |L(t)| − |L_0| round relative to are at least this fraction of the magnitudes of
+// the terms summed in them, so that round-off never warns.
+constexpr double kRoundOffScale = 1e-9;
+
+// CPU seconds since `start`.
+double cpu_since(std::clock_t start) { return static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC; }
+
+}  // namespace
+
+struct Simulation::Run {
+  Scene scene;
+  std::unique_ptr<runtime::GeneralizedAlpha> integrator;
+  std::function<void(const std::string&)> warn;
+  std::vector<std::unique_ptr<CsvFile>> files;  // per output (empty without a directory), then monitors.csv
+  std::unique_ptr<CsvFile> monitors;
+  std::vector<runtime::ParaViewSeries> series;
+  std::vector<OutputTable> tables;  // OutputSinks::in_memory: per output, then the monitors
+  bool in_memory = false;
+  RunSummary summary;
+  long count = 0;               // steps since the start: output_every and paraview_every count them
+  bool written = true, drawn = true;  // the last completed step is recorded, drawn
+  std::chrono::steady_clock::duration wall{}, in_integrator{};
+  // The drift's scale: the largest kinetic + elastic + spring energy of the run (independent of where the gravity
+  // potential is zero); and the magnitudes of the terms summed in E and L (the gravity potential depends on where
+  // its zero is; |L_0| may be round-off of a body that only translates).
+  double exchanged = 0.0, largest_change = 0.0, energy_terms = 0.0;
+  double momentum_initial = 0.0, momentum_terms = 0.0;
+  bool energy_warned = false, momentum_warned = false;
+
+  void record();
+  void draw();
+  void check();
+  void advance(bool to_end, double end, bool last);
+  void recover();  // after a failed step: the last completed step recorded and drawn
+  void flush() {
+    for (auto& f : files) f->flush();
+    if (monitors) monitors->flush();
+  }
+  void warning(std::string line) {
+    summary.warnings.push_back(std::move(line));
+    if (warn) warn(summary.warnings.back());
+  }
+};
+
+void Simulation::Run::record() {
+  const double t = integrator->time();
+  for (std::size_t k = 0; k < scene.sensors.size(); ++k) {
+    const Eigen::VectorXd values = values_of(scene, scene.sensors[k], *integrator);
+    if (!files.empty()) files[k]->row(t, values);
+    if (in_memory) {
+      tables[k].times.push_back(t);
+      tables[k].values.insert(tables[k].values.end(), values.data(), values.data() + values.size());
+    }
+  }
+  if (scene.monitors) {
+    const Eigen::VectorXd values = monitor_values(scene, *integrator);
+    if (monitors) monitors->row(t, values);
+    if (in_memory) {
+      tables.back().times.push_back(t);
+      tables.back().values.insert(tables.back().values.end(), values.data(), values.data() + values.size());
+    }
+  }
+}
+
+void Simulation::Run::draw() {  // each series once per time, also when called again after one of them failed
+  for (std::size_t k = 0; k < series.size(); ++k)
+    if (series[k].last_time() != integrator->time())
+      series[k].write(integrator->time(),
+                      runtime::gcms_coordinates(scene.system.model(scene.paraview[k].body),
+                                                scene.system.body_coordinates(integrator->coordinates(), scene.paraview[k].body)));
+}
+
+// Energies, residuals and momenta at a checked step; a conservation law broken beyond kConservationTolerance is
+// reported once, when it first happens.
+void Simulation::Run::check() {
+  const runtime::System& system = scene.system;
+  const Eigen::VectorXd& q = integrator->coordinates();
+  const Eigen::VectorXd& v = integrator->velocities();
+  const double t = integrator->time();
+  summary.max_constraint_residual =
+      std::max(summary.max_constraint_residual, system.constraints(t, q).cwiseAbs().maxCoeff());
+  const runtime::Energies e = system.energies(q, v);
+  exchanged = std::max(exchanged, e.kinetic + e.elastic + e.springs);
+  largest_change = std::max(largest_change, std::abs(e.total() - summary.energy_initial));
+  summary.energy_final = e.total();
+  if (scene.conserves.energy) {
+    energy_terms = std::max(energy_terms, std::abs(e.gravity) + e.kinetic + e.elastic + e.springs);
+    const double growth =
+        (e.total() - summary.energy_initial) / std::max({exchanged, kRoundOffScale * energy_terms, 1e-300});
+    summary.energy_growth = std::max(summary.energy_growth, growth);  // the largest ratio tested, as warned
+    if (!energy_warned && growth > kConservationTolerance) {
+      energy_warned = true;
+      ++summary.conservation_warnings;
+      warning(fmt::format(
+          "t = {:.6g} s: the energy of this conservative scene (no damping, no driven joint, no applied load) grew by "
+          "{:.3g} % of its largest kinetic + elastic + spring energy (warning above {:.3g} %); generalized-alpha only "
+          "dissipates, so the motion is not to be trusted: try a smaller step or a smaller rho_inf",
+          t, 100.0 * growth, 100.0 * kConservationTolerance));
+    }
+  }
+  if (scene.conserves.angular_momentum) {
+    const AngularMomentum l = angular_momentum(system, q, v);
+    momentum_terms = std::max(momentum_terms, l.terms);
+    const double growth =
+        (l.value.norm() - momentum_initial) / std::max({momentum_initial, kRoundOffScale * momentum_terms, 1e-300});
+    summary.angular_momentum_growth = std::max(summary.angular_momentum_growth, growth);
+    if (!momentum_warned && growth > kConservationTolerance) {
+      momentum_warned = true;
+      ++summary.conservation_warnings;
+      warning(fmt::format(
+          "t = {:.6g} s: the angular momentum about the centre of mass of this free, torque-free scene grew by "
+          "{:.3g} % of its initial {:.6g} kg m^2/s (warning above {:.3g} %): the motion is not to be trusted; try a "
+          "smaller step or a smaller rho_inf", t, 100.0 * growth, momentum_initial, 100.0 * kConservationTolerance));
+    }
+  }
+}
+
+// One step (to `end` exactly when `to_end`); `last`: the last of a run, recorded and checked whatever the counts say.
+void Simulation::Run::advance(bool to_end, double end, bool last) {
+  const auto start = std::chrono::steady_clock::now();
+  if (to_end) integrator->step_to(end);
+  else integrator->step();
+  const auto stepped = std::chrono::steady_clock::now();
+  in_integrator += stepped - start;
+  for (std::size_t w = summary.validity_warnings; w < integrator->warnings().size(); ++w) {  // the model's validity
+    ++summary.validity_warnings;
+    warning(integrator->warnings()[w]);
+  }
+  written = drawn = false;
+  ++count;
+  ++summary.steps;
+  summary.newton_iterations += integrator->last_iterations();
+  if (count % kCheckEvery == 0 || last) check();
+  if (count % scene.output_every == 0 || last) {
+    record();
+    written = true;
+  }
+  if (count % scene.paraview_every == 0 || last) {
+    draw();
+    drawn = true;
+  }
+  wall += std::chrono::steady_clock::now() - start;
+}
+
+// The last completed step, whatever output_every says; a failure to write it must not hide why the run stopped
+// (the exception being handled), so it is dropped here.
+void Simulation::Run::recover() {
+  try {
+    if (!written) record();
+    written = true;
+  } catch (const std::exception&) {
+  }
+  try {
+    if (!drawn) draw();
+    drawn = true;
+  } catch (const std::exception&) {
+  }
+  flush();
+}
+
+Simulation::Simulation(Scene scene, const OutputSinks& sinks, std::function<void(const std::string&)> warn)
+    : run_(std::make_unique<Run>()) {
+  const std::clock_t cpu_start = std::clock();
+  Run& r = *run_;
+  r.scene = std::move(scene);
+  r.warn = std::move(warn);
+  // The integrator first: a scene whose initial state or constraints are inconsistent fails before any file.
+  r.integrator = std::make_unique<runtime::GeneralizedAlpha>(r.scene.system, r.scene.integrator);
+  r.summary.sparse = r.integrator->sparse();
+  r.in_memory = sinks.in_memory;
+  if (r.in_memory) {
+    for (const Sensor& s : r.scene.sensors) r.tables.push_back({s.name, columns_of(r.scene, s), {}, {}});
+    if (r.scene.monitors) r.tables.push_back({"monitors", monitor_columns(), {}, {}});
+  }
+  if (sinks.directory) {
+    const std::filesystem::path& directory = *sinks.directory;
+    if (std::error_code error; !std::filesystem::create_directories(directory, error) && error)
+      throw std::runtime_error(fmt::format("{}: cannot create the output directory: {}", directory.string(), error.message()));
+    for (const Sensor& s : r.scene.sensors) {
+      r.summary.files.push_back(directory / (s.name + ".csv"));
+      r.files.push_back(std::make_unique<CsvFile>(r.summary.files.back(), columns_of(r.scene, s)));
+    }
+    if (r.scene.monitors) {
+      r.summary.files.push_back(directory / "monitors.csv");
+      r.monitors = std::make_unique<CsvFile>(r.summary.files.back(), monitor_columns());
+    }
+    for (const SurfaceSeries& s : r.scene.paraview) {
+      r.series.emplace_back(directory, r.scene.system.body_name(s.body), r.scene.system.model(s.body), s.stresses);
+      r.summary.files.push_back(r.series.back().collection());
+    }
+  }
+  const runtime::System& system = r.scene.system;
+  const runtime::Energies e0 = system.energies(r.integrator->coordinates(), r.integrator->velocities());
+  r.summary.energy_initial = r.summary.energy_final = e0.total();
+  r.exchanged = e0.kinetic + e0.elastic + e0.springs;
+  r.energy_terms = std::abs(e0.gravity) + e0.kinetic + e0.elastic + e0.springs;
+  if (r.scene.conserves.angular_momentum) {
+    const AngularMomentum l0 = angular_momentum(system, r.integrator->coordinates(), r.integrator->velocities());
+    r.momentum_initial = l0.value.norm();
+    r.momentum_terms = l0.terms;
+  }
+  r.record();
+  r.draw();
+  r.summary.cpu_seconds += cpu_since(cpu_start);
+}
+
+Simulation::~Simulation() = default;
+
+void Simulation::step() {
+  const std::clock_t cpu_start = std::clock();
+  try {
+    run_->advance(false, 0.0, false);
+  } catch (...) {
+    run_->recover();
+    run_->summary.cpu_seconds += cpu_since(cpu_start);
+    throw;
+  }
+  run_->summary.cpu_seconds += cpu_since(cpu_start);
+}
+
+void Simulation::run(double end, const std::function<void(double)>& progress) {
+  Run& r = *run_;
+  const double now = r.integrator->time();
+  if (!(end > now) || !std::isfinite(end))
+    throw std::invalid_argument(fmt::format("run to t = {} s: the simulation is at t = {} s already", end, now));
+  const std::clock_t cpu_start = std::clock();
+  // Whole steps, the last one shortened to end on `end` exactly (step_count; at most kMostSteps, scene.cpp).
+  const long steps = static_cast<long>(step_count(end - now, r.scene.integrator.step));
+  try {
+    for (long k = 1; k <= steps; ++k) {
+      r.advance(k == steps, end, k == steps);
+      if (progress && k % 100 == 0) progress(r.integrator->time());
+    }
+  } catch (...) {
+    r.recover();
+    r.summary.cpu_seconds += cpu_since(cpu_start);
+    throw;
+  }
+  r.flush();
+  r.summary.cpu_seconds += cpu_since(cpu_start);
+}
+
+const Scene& Simulation::scene() const { return run_->scene; }
+const runtime::GeneralizedAlpha& Simulation::integrator() const { return *run_->integrator; }
+runtime::IntegratorState Simulation::state() const { return run_->integrator->state(); }
+void Simulation::set_state(const runtime::IntegratorState& state) { run_->integrator->set_state(state); }
+const std::vector<OutputTable>& Simulation::tables() const { return run_->tables; }
+
+RunSummary Simulation::summary() const {
+  RunSummary s = run_->summary;
+  s.newton_matrices = run_->integrator->factorizations();
+  s.wall_seconds = std::chrono::duration<double>(run_->wall).count();
+  s.integrator_wall_seconds = std::chrono::duration<double>(run_->in_integrator).count();
+  s.energy_drift = run_->largest_change / std::max(run_->exchanged, 1e-300);
+  return s;
+}
+
+}  // namespace flexbody::scene

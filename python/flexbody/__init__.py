@@ -3,6 +3,8 @@
     import flexbody
     body = flexbody.read_body("bracket.fbh5")
     body.frequencies_hz          # read-only NumPy views of the file's datasets, SI units
+    sim = flexbody.load_scene("scene.yaml")
+    tip = sim.run()["tip"]       # the output's rows: tip.time, tip["x"], ...
 
 See docs/python.md.
 """
@@ -15,5 +17,15 @@ from ._flexbody import (  # noqa: F401  (the package's public names)
     __version__,
     read_body,
 )
+from .scene import (  # noqa: F401
+    Output,
+    Scene,
+    SceneError,
+    Simulation,
+    SimulationWarning,
+    StepFailure,
+    load_scene,
+)
 
-__all__ = ["Body", "BodyFileDamaged", "BodyFileError", "Interface", "OutputRegion", "__version__", "read_body"]
+__all__ = ["Body", "BodyFileDamaged", "BodyFileError", "Interface", "Output", "OutputRegion", "Scene", "SceneError",
+           "Simulation", "SimulationWarning", "StepFailure", "__version__", "load_scene", "read_body"]

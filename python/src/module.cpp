@@ -6,4 +6,5 @@ PYBIND11_MODULE(_flexbody, m) {
   m.doc() = "flexbody: flexible multibody bodies from CAD and their simulation (compiled part)";
   m.attr("__version__") = FLEXBODY_PACKAGE_VERSION;
   flexbody::python::bind_body_file(m);
+  flexbody::python::bind_simulation(m);
 }

@@ -23,11 +23,11 @@ endif()
 message(STATUS "${last_output}")
 
 # The Python package where cmake --install put it (<prefix>/lib/python3.X/dist-packages), as python3 would find it
-# under the default prefix /usr/local; it reads the same body file.
+# under the default prefix /usr/local; it reads the same body file and runs a scene of it.
 if(PYTHON3 AND PYTHON_PACKAGE_DIR)
   run(${CMAKE_COMMAND} -E env PYTHONPATH=${WORK_DIR}/prefix/${PYTHON_PACKAGE_DIR} PYTHONDONTWRITEBYTECODE=1
       ${PYTHON3} ${SOURCE_DIR}/tests/install/check_python_package.py ${WORK_DIR}/bracket.fbh5)
-  if(NOT last_output MATCHES "^[0-9]+\\.[0-9]+\\.[0-9]+ 4")
+  if(NOT last_output MATCHES "^[0-9]+\\.[0-9]+\\.[0-9]+ 4 10")
     message(FATAL_ERROR "the installed Python package printed:\n${last_output}")
   endif()
   message(STATUS "installed Python package: ${last_output}")

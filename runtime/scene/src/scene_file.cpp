@@ -15,14 +15,16 @@
 namespace flexbody::scene {
 
 Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overrides) {
-  const Reader r(file.string());
-  const YAML::Node loaded_root = r.load("scene");
-  const YAML::Node& root = loaded_root;
+  return read_scene(Reader(file.string()).load("scene"), file.string(), file.parent_path(), overrides);
+}
+
+Scene read_scene(const YAML::Node& root, const std::string& source, const std::filesystem::path& base,
+                 const SceneOverrides& overrides, const SceneExtras& extras) {
+  const Reader r(source);
   r.expect_map(root, "the scene",
                {"bodies", "joints", "forces", "springs", "gravity", "integrator", "outputs", "monitors", "paraview",
                 "assembly"});
   Scene scene;
-  const std::filesystem::path base = file.parent_path();
   runtime::SceneBuilder builder(scene.system);
   std::map<std::string, int> bodies;  // name -> index
 
@@ -224,6 +226,8 @@ Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overri
       }
     }
   }
+
+  if (extras) extras(builder);
 
   if (const YAML::Node g = root["gravity"]) scene.system.set_gravity(r.vector3(g, "gravity"));
 

@@ -5,11 +5,13 @@
 #include "flexbody/format/yaml_reader.hpp"
 #include "flexbody/runtime/assembly.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
+#include "flexbody/runtime/scene_builder.hpp"
 #include "flexbody/runtime/system.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <limits>
 #include <string>
@@ -94,5 +96,14 @@ void finish_scene(Scene& scene, const runtime::AssemblyOptions& assembly = {});
 
 /// Reads and assembles a scene; body files are read relative to the scene's directory.
 [[nodiscard]] Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overrides = {});
+
+/// What a scene's document cannot say, added by its builder once the document's bodies, joints, forces and springs
+/// are in and before the scene is finished (the Python package's forces that are functions of Python).
+using SceneExtras = std::function<void(runtime::SceneBuilder& builder)>;
+
+/// Reads and assembles a scene from its document `root` (a scene file's, or one built in code, whose nodes carry no
+/// lines): errors begin with `source`, body files are read relative to `base`.
+[[nodiscard]] Scene read_scene(const YAML::Node& root, const std::string& source, const std::filesystem::path& base,
+                               const SceneOverrides& overrides = {}, const SceneExtras& extras = {});
 
 }  // namespace flexbody::scene

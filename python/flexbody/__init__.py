@@ -3,6 +3,7 @@
     import flexbody
     body = flexbody.read_body("bracket.fbh5")
     body.frequencies_hz          # read-only NumPy views of the file's datasets, SI units
+    report = flexbody.prep("part.yaml", "part.fbh5")   # fbprep's pipeline; its --json report
     sim = flexbody.load_scene("scene.yaml")
     tip = sim.run()["tip"]       # the output's rows: tip.time, tip["x"], ...
 
@@ -17,6 +18,7 @@ from ._flexbody import (  # noqa: F401  (the package's public names)
     __version__,
     read_body,
 )
+from .prep import PrepWarning, SpecError, prep  # noqa: F401
 from .scene import (  # noqa: F401
     Output,
     Scene,
@@ -27,5 +29,6 @@ from .scene import (  # noqa: F401
     load_scene,
 )
 
-__all__ = ["Body", "BodyFileDamaged", "BodyFileError", "Interface", "Output", "OutputRegion", "Scene", "SceneError",
-           "Simulation", "SimulationWarning", "StepFailure", "__version__", "load_scene", "read_body"]
+__all__ = ["Body", "BodyFileDamaged", "BodyFileError", "Interface", "Output", "OutputRegion", "PrepWarning", "Scene",
+           "SceneError", "Simulation", "SimulationWarning", "SpecError", "StepFailure", "__version__", "load_scene",
+           "prep", "read_body"]

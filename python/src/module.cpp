@@ -7,4 +7,7 @@ PYBIND11_MODULE(_flexbody, m) {
   m.attr("__version__") = FLEXBODY_PACKAGE_VERSION;
   flexbody::python::bind_body_file(m);
   flexbody::python::bind_simulation(m);
+#ifdef FLEXBODY_PYTHON_PREP
+  flexbody::python::bind_prep(m);
+#endif
 }

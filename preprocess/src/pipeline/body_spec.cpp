@@ -69,7 +69,6 @@ bool is_body_spec(const std::filesystem::path& path) {
 
 PrepOptions read_body_spec(const std::filesystem::path& spec) {
   const std::string file = spec.string();
-  const Reader r(file);
   if (std::error_code error; std::filesystem::is_directory(spec, error) || !std::ifstream(spec))
     throw std::invalid_argument(fmt::format("{}: cannot open the body spec: {}", file, Reader::why_unreadable(file)));
   YAML::Node loaded;
@@ -78,13 +77,18 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
   } catch (const YAML::Exception& e) {
     throw std::invalid_argument(fmt::format("{}:{}: {}", file, e.mark.line + 1, e.msg));
   }
+  PrepOptions options = read_body_spec(loaded, file, spec.parent_path());
+  options.spec = spec;
+  return options;
+}
+
+PrepOptions read_body_spec(const YAML::Node& loaded, const std::string& file, const std::filesystem::path& base) {
+  const Reader r(file);
   const YAML::Node& root = loaded;  // const: operator[] never adds keys
   r.expect_map(root, "the body spec",
                {"input", "unit", "material", "mesh", "reduction", "interfaces", "load_points", "output_regions",
                 "geometric_stiffness"});
   PrepOptions options;
-  options.spec = spec;
-  const std::filesystem::path base = spec.parent_path();
   auto& recorded = options.recorded_options;
   recorded.emplace_back("spec", file);
 
@@ -278,6 +282,25 @@ PrepOptions read_body_spec(const std::filesystem::path& spec) {
     options.output_regions = std::move(requests);
   }
   return options;
+}
+
+void record_option(PrepOptions& options, const std::string& name, const std::string& value) {
+  for (auto& [key, old] : options.recorded_options)
+    if (key == name) {
+      old = value;
+      return;
+    }
+  options.recorded_options.emplace_back(name, value);
+}
+
+void record_resolved_options(PrepOptions& options) {
+  record_option(options, "output", options.output.string());
+  record_option(options, "volume_tolerance", fmt::format("{}", options.mesh.volume_tolerance));
+  record_option(options, "element_order", options.mesh.order ? std::to_string(*options.mesh.order) : std::string("default"));
+  record_option(options, "mesher", std::string(to_string(options.mesh.algorithm)));
+  record_option(options, "modes", std::to_string(options.modes.modes));
+  record_option(options, "fmax", fmt::format("{}", options.modes.fmax_hz));
+  record_option(options, "geometric_stiffness", options.geometric_stiffness ? "true" : "false");
 }
 
 }  // namespace flexbody::preprocess

@@ -23,6 +23,11 @@
 #include "flexbody/preprocess/fbprep_pipeline.hpp"
 
 #include <filesystem>
+#include <string>
+
+namespace YAML {
+class Node;
+}
 
 namespace flexbody::preprocess {
 
@@ -35,5 +40,17 @@ namespace flexbody::preprocess {
 /// file, YAML syntax errors, unknown or repeated keys or names, wrong types, non-finite numbers and values
 /// out of range, each naming its line.
 [[nodiscard]] PrepOptions read_body_spec(const std::filesystem::path& spec);
+
+/// The same from a body spec's document `root` (one built in code: the Python package's prep), whose errors begin
+/// with `source`; its relative input path is relative to `base`.
+[[nodiscard]] PrepOptions read_body_spec(const YAML::Node& root, const std::string& source,
+                                         const std::filesystem::path& base);
+
+/// Sets option `name`'s recorded value (PrepOptions::recorded_options, the body file's provenance), in its place if
+/// recorded before, else at the end.
+void record_option(PrepOptions& options, const std::string& name, const std::string& value);
+/// Records what a run uses that a spec need not say: the output, volume tolerance, element order, mesher, modes,
+/// fmax and geometric stiffness (fbprep records them for every run, from a spec or from flags).
+void record_resolved_options(PrepOptions& options);
 
 }  // namespace flexbody::preprocess

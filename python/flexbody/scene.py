@@ -96,7 +96,8 @@ class Simulation:
         self._native.step()
 
     def run(self, end=None, progress=None):
-        """Steps to `end` [s] (default: the scene's end) and returns the outputs (see `outputs`).
+        """Steps to `end` [s] (default: the scene's end) and returns the outputs (see `outputs`: copies of all the
+        rows, so a controller that advances in small pieces calls step() and reads state()).
 
         The last step is shortened to end on `end`, and its state recorded. `progress(t)` is called every 100 steps;
         without it, a terminal on stderr shows the time. Ctrl-C stops the run at the last completed step
@@ -128,7 +129,9 @@ class Simulation:
 
     def set_state(self, state):
         """Goes on from `state` (a dict from state(), possibly changed; entries left out keep their values), with a
-        fresh Newton matrix. A changed q or v that breaks a joint is pulled back onto it by the next step."""
+        fresh Newton matrix. A changed q or v that breaks a joint is pulled back onto it by the next step. The
+        outputs keep their rows and go on from the state's time (earlier than their last row's when the run is set
+        back); the summary's energies and the conservation checks measure from the state set."""
         self._native.set_state(dict(state))
 
     def summary(self):
@@ -150,6 +153,11 @@ def load_scene(path, end=None, output_dir=None):
     native = _flexbody._load_scene(path, None if end is None else float(end),
                                    None if output_dir is None else os.fspath(output_dir), _warn)
     return Simulation(native, path)
+
+
+def _given(keys):
+    """The keys given a value: None stands for a key left out (the scene file's default)."""
+    return {k: v for k, v in keys.items() if v is not None}
 
 
 def _marker(keys):
@@ -175,16 +183,17 @@ class Scene:
     def add_body(self, name, file, **keys):
         """A body from a body file: modes ("all", "rigid", "full" or a count), formulation, frame, position,
         rotation ({"axis": [...], "angle_deg": ...}), velocity, angular_velocity, damping, geometric_stiffness."""
-        self._section("bodies")[name] = {"file": os.fspath(file), **keys}
+        self._section("bodies")[name] = {"file": os.fspath(file), **_given(keys)}
 
     def add_joint(self, name, type, body, **keys):
         """A joint: type, body and its marker (interface, point or node), to ("ground", the default, or a dict of
         body and marker), axis (revolute, prismatic, driven-revolute), speed and ramp (driven-revolute)."""
-        self._section("joints")[name] = {"type": type, "body": body, **keys}
+        self._section("joints")[name] = {"type": type, "body": body, **_given(keys)}
 
     def add_force(self, name, body, force=None, torque=None, **keys):
         """A force [N] and/or torque [N m] at a marker (interface, point or node), constant with the scene file's
-        ramp and frequency, or a Python function of t [s]."""
+        ramp and frequency, or a Python function of t [s]. A function must not step its own simulation."""
+        keys = _given(keys)
         if callable(force) or callable(torque):
             if "ramp" in keys or "frequency" in keys:
                 raise SceneError(f"force '{name}': a function of t carries its own time shape; ramp and frequency "
@@ -209,7 +218,7 @@ class Scene:
     def add_spring(self, name, from_, to, stiffness, **keys):
         """A spring-damper between two ends (each a dict of body and marker, or {"ground": [x, y, z]}): stiffness
         [N/m], damping [N s/m], length [m] (default: the ends' initial distance)."""
-        self._section("springs")[name] = {"from": from_, "to": to, "stiffness": stiffness, **keys}
+        self._section("springs")[name] = {"from": from_, "to": to, "stiffness": stiffness, **_given(keys)}
 
     @property
     def gravity(self):
@@ -223,12 +232,14 @@ class Scene:
     def set_integrator(self, **keys):
         """step [s] and end [s] (required), rho_inf, tolerance, max_iterations, output_every, deformation_limit, the
         spin levels, constraints, linear_solver, coupled_step: the scene file's `integrator` keys."""
-        self._document["integrator"] = dict(keys)
+        self._document["integrator"] = _given(keys)
 
     def add_output(self, name, quantities, **keys):
         """An output: a marker's position, velocity, orientation; a joint's reaction_force, reaction_moment; a
         body's modal_coordinates; an output region's displacement, stress."""
-        self._section("outputs")[name] = {**keys, "quantities": list(quantities)}
+        if isinstance(quantities, str):
+            quantities = [quantities]
+        self._section("outputs")[name] = {**_given(keys), "quantities": list(quantities)}
 
     def set_monitors(self, on=True):
         """The monitors table: energies, orthogonality, constraint residuals, Newton iterations per recorded row."""
@@ -236,11 +247,11 @@ class Scene:
 
     def set_paraview(self, **keys):
         """ParaView series of the bodies' surfaces (written with output_dir only): bodies, every, stresses."""
-        self._document["paraview"] = dict(keys)
+        self._document["paraview"] = _given(keys)
 
     def set_assembly(self, **keys):
         """The initial assembly's tolerance, a fraction of a body's size."""
-        self._document["assembly"] = dict(keys)
+        self._document["assembly"] = _given(keys)
 
     def to_dict(self):
         """The scene file this scene is (without its functions of t), as a dict: yaml.safe_dump writes it."""

@@ -82,26 +82,32 @@ class PythonSimulation {
  public:
   PythonSimulation(scene::Scene scene, std::shared_ptr<PythonCallables> callables,
                    const std::optional<std::filesystem::path>& directory, py::object warn)
-      : callables_(std::move(callables)), source_(std::move(warn)) {
+      : callables_(std::move(callables)) {
     const std::size_t warn_index = callables_->functions.size();
-    callables_->functions.push_back(source_);
+    callables_->functions.push_back(std::move(warn));
     auto warning = [callables = callables_, warn_index](const std::string& line) {
       if (!callables->cleared && !callables->functions[warn_index].is_none()) callables->functions[warn_index](line);
     };
     simulation_ = std::make_unique<scene::Simulation>(std::move(scene), scene::OutputSinks{directory, true}, warning);
   }
 
-  void step() { simulation_->step(); }
+  void step() {
+    const Busy busy(*this);
+    simulation_->step();
+  }
 
   // To `end`, calling `progress(t)` every 100 steps; Ctrl-C stops the run there (KeyboardInterrupt), at the last
   // completed step.
   void run(double end, const py::object& progress) {
-    if (!(end > simulation_->time()))
-      throw py::value_error(fmt::format("run to t = {} s: the simulation is at t = {} s already", end, simulation_->time()));
-    simulation_->run(end, [&progress](double t) {
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-      if (!progress.is_none()) progress(t);
-    });
+    const Busy busy(*this);
+    try {
+      simulation_->run(end, [&progress](double t) {
+        if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+        if (!progress.is_none()) progress(t);
+      });
+    } catch (const std::invalid_argument& e) {  // an end before the time, or too many steps ahead
+      throw py::value_error(e.what());
+    }
   }
 
   [[nodiscard]] double time() const { return simulation_->time(); }
@@ -126,6 +132,7 @@ class PythonSimulation {
   }
 
   void set_state(const py::dict& d) {
+    const Busy busy(*this);
     try {
       set_entries(d);
     } catch (const std::invalid_argument& e) {  // a size that is not the system's, a non-finite value
@@ -178,14 +185,31 @@ class PythonSimulation {
   }
   void clear() {
     callables_->cleared = true;
-    callables_->functions.clear();
-    source_ = py::none();
+    std::vector<py::object> released;
+    released.swap(callables_->functions);  // released here, after the simulation no longer refers to them
   }
 
  private:
+  // A step, a run or a set_state in progress: a force's function that calls one of them would step the integrator
+  // inside its own step.
+  class Busy {
+   public:
+    explicit Busy(PythonSimulation& s) : s_(s) {
+      if (s_.busy_) throw std::runtime_error("step, run and set_state cannot be called from a force's function while "
+                                             "its simulation is stepping");
+      s_.busy_ = true;
+    }
+    ~Busy() { s_.busy_ = false; }
+    Busy(const Busy&) = delete;
+    Busy& operator=(const Busy&) = delete;
+
+   private:
+    PythonSimulation& s_;
+  };
+
   std::shared_ptr<PythonCallables> callables_;
-  py::object source_;  // the warning callback (also in callables_)
   std::unique_ptr<scene::Simulation> simulation_;
+  bool busy_ = false;
 };
 
 // A scene from its file, or from the document a flexbody.Scene built (`loads`: (name, body, marker dict, force
@@ -236,6 +260,14 @@ void bind_simulation(py::module_& m) {
                                    auto* instance = reinterpret_cast<py::detail::instance*>(self);
                                    if (!instance->get_value_and_holder().holder_constructed()) return 0;
                                    return py::cast<const PythonSimulation&>(py::handle(self)).traverse(visit, arg);
+                                 };
+                                 // pybind11 2.10 deallocates without untracking the object from the
+                                 // collector (2.11 does, pybind11 PR 4461): a collection that a released
+                                 // function's finaliser starts must not traverse a half-destroyed simulation.
+                                 // (The type inherits pybind11's dealloc at PyType_Ready, after this.)
+                                 type->tp_dealloc = [](PyObject* self) {
+                                   PyObject_GC_UnTrack(self);
+                                   py::detail::pybind11_object_dealloc(self);
                                  };
                                  type->tp_clear = [](PyObject* self) {
                                    auto* instance = reinterpret_cast<py::detail::instance*>(self);

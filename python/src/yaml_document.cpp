@@ -9,6 +9,11 @@ namespace flexbody::python {
 namespace py = pybind11;
 
 YAML::Node yaml_document(py::handle value) {
+  // A list or dict that holds itself would recurse without end.
+  if (Py_EnterRecursiveCall(" while reading a scene or body spec given in Python") != 0) throw py::error_already_set();
+  struct Leave {
+    ~Leave() { Py_LeaveRecursiveCall(); }
+  } leave;
   if (value.is_none()) return YAML::Node(YAML::NodeType::Null);
   if (py::isinstance<py::bool_>(value)) return YAML::Node(value.cast<bool>() ? "true" : "false");
   if (py::isinstance<py::str>(value)) return YAML::Node(value.cast<std::string>());

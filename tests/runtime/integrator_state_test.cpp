@@ -40,10 +40,12 @@ TEST(IntegratorState, ARefusedStateNamesItsEntry) {
   } catch (const std::invalid_argument& e) {
     EXPECT_STREQ(e.what(), "generalized-alpha state: v has 11 entries, the system 12");
   }
-  s = integrator.state();
+  const fr::IntegratorState before = integrator.state();
+  s = before;
+  s.q(0) += 1.0;
   s.lambda(0) = std::nan("");
   EXPECT_THROW(integrator.set_state(s), std::invalid_argument);
-  EXPECT_TRUE(integrator.state().q.allFinite());
+  EXPECT_TRUE(integrator.state().q == before.q);  // a refused state changes nothing
 }
 
 TEST(IntegratorState, AThrowingForcePassesThroughAndLeavesTheLastStep) {
@@ -67,6 +69,12 @@ TEST(IntegratorState, AThrowingForcePassesThroughAndLeavesTheLastStep) {
       EXPECT_EQ(after.time, before.time);
       EXPECT_TRUE(after.q == before.q && after.v == before.v && after.lambda == before.lambda);
       armed = false;
+      // The Newton matrix the failed step was using is not trusted: the next step builds one.
+      const long built = integrator.factorizations();
+      integrator.step();
+      EXPECT_EQ(integrator.factorizations(), built + 1);
+      for (int k = 0; k < 29; ++k) integrator.step();
+      return integrator.coordinates();
     }
     for (int k = 0; k < 30; ++k) integrator.step();
     return integrator.coordinates();

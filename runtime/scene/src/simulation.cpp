@@ -11,6 +11,7 @@
 #include <chrono>
 #include <ctime>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
 #include <system_error>
 #include <utility>
@@ -70,6 +71,7 @@ struct Simulation::Run {
   void record();
   void draw();
   void check();
+  void baseline();
   void advance(bool to_end, double end, bool last);
   void recover();  // after a failed step: the last completed step recorded and drawn
   void flush() {
@@ -160,17 +162,11 @@ void Simulation::Run::advance(bool to_end, double end, bool last) {
   const auto start = std::chrono::steady_clock::now();
   if (to_end) integrator->step_to(end);
   else integrator->step();
-  const auto stepped = std::chrono::steady_clock::now();
-  in_integrator += stepped - start;
-  for (std::size_t w = summary.validity_warnings; w < integrator->warnings().size(); ++w) {  // the model's validity
-    ++summary.validity_warnings;
-    warning(integrator->warnings()[w]);
-  }
+  in_integrator += std::chrono::steady_clock::now() - start;
   written = drawn = false;
   ++count;
   ++summary.steps;
   summary.newton_iterations += integrator->last_iterations();
-  if (count % kCheckEvery == 0 || last) check();
   if (count % scene.output_every == 0 || last) {
     record();
     written = true;
@@ -179,7 +175,30 @@ void Simulation::Run::advance(bool to_end, double end, bool last) {
     draw();
     drawn = true;
   }
+  // The warnings last: a warn callback that throws (Python's warnings as errors) stops the run after the step is
+  // counted and recorded.
+  for (std::size_t w = summary.validity_warnings; w < integrator->warnings().size(); ++w) {  // the model's validity
+    ++summary.validity_warnings;
+    warning(integrator->warnings()[w]);
+  }
+  if (count % kCheckEvery == 0 || last) check();
   wall += std::chrono::steady_clock::now() - start;
+}
+
+// The scales the conservation checks measure against, from the integrator's state (the start, or a state set).
+void Simulation::Run::baseline() {
+  const runtime::System& system = scene.system;
+  const runtime::Energies e0 = system.energies(integrator->coordinates(), integrator->velocities());
+  summary.energy_initial = summary.energy_final = e0.total();
+  exchanged = e0.kinetic + e0.elastic + e0.springs;
+  largest_change = 0.0;
+  energy_terms = std::abs(e0.gravity) + e0.kinetic + e0.elastic + e0.springs;
+  energy_warned = momentum_warned = false;
+  if (scene.conserves.angular_momentum) {
+    const AngularMomentum l0 = angular_momentum(system, integrator->coordinates(), integrator->velocities());
+    momentum_initial = l0.value.norm();
+    momentum_terms = l0.terms;
+  }
 }
 
 // The last completed step, whatever output_every says; a failure to write it must not hide why the run stopped
@@ -229,16 +248,7 @@ Simulation::Simulation(Scene scene, const OutputSinks& sinks, std::function<void
       r.summary.files.push_back(r.series.back().collection());
     }
   }
-  const runtime::System& system = r.scene.system;
-  const runtime::Energies e0 = system.energies(r.integrator->coordinates(), r.integrator->velocities());
-  r.summary.energy_initial = r.summary.energy_final = e0.total();
-  r.exchanged = e0.kinetic + e0.elastic + e0.springs;
-  r.energy_terms = std::abs(e0.gravity) + e0.kinetic + e0.elastic + e0.springs;
-  if (r.scene.conserves.angular_momentum) {
-    const AngularMomentum l0 = angular_momentum(system, r.integrator->coordinates(), r.integrator->velocities());
-    r.momentum_initial = l0.value.norm();
-    r.momentum_terms = l0.terms;
-  }
+  r.baseline();
   r.record();
   r.draw();
   r.summary.cpu_seconds += cpu_since(cpu_start);
@@ -261,11 +271,19 @@ void Simulation::step() {
 void Simulation::run(double end, const std::function<void(double)>& progress) {
   Run& r = *run_;
   const double now = r.integrator->time();
-  if (!(end > now) || !std::isfinite(end))
+  const double h = r.scene.integrator.step;
+  // A time that is `end` up to the rounding of t0 + k h (nine steps of 1e-3 s end at 0.009000000000000001) is there.
+  const double slack = std::max(runtime::GeneralizedAlpha::kStepToSlack * h,
+                                8.0 * std::numeric_limits<double>::epsilon() * std::abs(end));
+  if (!std::isfinite(end) || end < now - slack)
     throw std::invalid_argument(fmt::format("run to t = {} s: the simulation is at t = {} s already", end, now));
+  if (end <= now + slack) return;
+  // Whole steps, the last one shortened to end on `end` exactly (step_count), at most kMostSteps (scene.hpp).
+  if ((end - now) / h > kMostSteps)
+    throw std::invalid_argument(fmt::format("run to t = {} s: {:.3g} steps of {} s, more than a run may take ({:.0e})",
+                                            end, (end - now) / h, h, kMostSteps));
   const std::clock_t cpu_start = std::clock();
-  // Whole steps, the last one shortened to end on `end` exactly (step_count; at most kMostSteps, scene.cpp).
-  const long steps = static_cast<long>(step_count(end - now, r.scene.integrator.step));
+  const long steps = static_cast<long>(step_count(end - now, h));
   try {
     for (long k = 1; k <= steps; ++k) {
       r.advance(k == steps, end, k == steps);
@@ -283,7 +301,10 @@ void Simulation::run(double end, const std::function<void(double)>& progress) {
 const Scene& Simulation::scene() const { return run_->scene; }
 const runtime::GeneralizedAlpha& Simulation::integrator() const { return *run_->integrator; }
 runtime::IntegratorState Simulation::state() const { return run_->integrator->state(); }
-void Simulation::set_state(const runtime::IntegratorState& state) { run_->integrator->set_state(state); }
+void Simulation::set_state(const runtime::IntegratorState& state) {
+  run_->integrator->set_state(state);
+  run_->baseline();
+}
 const std::vector<OutputTable>& Simulation::tables() const { return run_->tables; }
 
 RunSummary Simulation::summary() const {
@@ -292,6 +313,7 @@ RunSummary Simulation::summary() const {
   s.wall_seconds = std::chrono::duration<double>(run_->wall).count();
   s.integrator_wall_seconds = std::chrono::duration<double>(run_->in_integrator).count();
   s.energy_drift = run_->largest_change / std::max(run_->exchanged, 1e-300);
+  s.energy_final = run_->scene.system.energies(run_->integrator->coordinates(), run_->integrator->velocities()).total();
   return s;
 }
 

@@ -62,8 +62,8 @@ class SceneError : public std::invalid_argument {
   std::string key_;
 };
 
-/// The model of body `name` that `spec` asks for, from `data` (read from spec.file). Throws SceneError, whose
-/// messages begin with "body 'name'" where the key's value is the scene's.
+/// The model of body `name` that `spec` asks for, from `data` (read from spec.file). Throws SceneError: the body
+/// model's own message for a count of modes the file does not hold (key "modes"), else one naming "body 'name'".
 [[nodiscard]] BodyModel make_body_model(const std::string& name, const BodySpec& spec, const format::BodyData& data);
 
 }  // namespace flexbody::runtime

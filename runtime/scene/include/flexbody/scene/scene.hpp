@@ -40,7 +40,7 @@ struct SurfaceSeries {
   bool stresses = true;
 };
 
-/// Which conservation laws a scene's motion must obey, so that a run can check them (run.cpp). The energy is
+/// Which conservation laws a scene's motion must obey, so that a run can check them (simulation.cpp). The energy is
 /// conserved when only gravity, undamped springs and joints that are not driven act (no damping, no applied force or
 /// torque: a constant point force is conservative too, but its potential is not in System::energies); the angular
 /// momentum about the centre of mass besides when nothing ties a body to ground (no joint or spring to ground, no

@@ -83,8 +83,9 @@ class Simulation {
   /// Scene::paraview_every), counted from the start.
   void step();
   /// Steps to `end` [s]: whole steps, the last one shortened to end on `end` exactly (step_count); the state at
-  /// `end` is recorded whatever output_every says. `progress` gets the time every 100 steps. Throws
-  /// std::invalid_argument for an `end` that is not after the current time. The CSV files are complete up to the
+  /// `end` is recorded whatever output_every says. `progress` gets the time every 100 steps. Nothing to do when the
+  /// time is `end` up to the rounding of t0 + k h; throws std::invalid_argument for an `end` before the current time
+  /// or more than kMostSteps steps ahead. The CSV files are complete up to the
   /// last row when it returns (step() leaves them to the stream's buffer).
   void run(double end, const std::function<void(double)>& progress = {});
   // Either throws runtime::StepFailure for a step that fails, and passes an exception from the scene's own
@@ -93,7 +94,9 @@ class Simulation {
   [[nodiscard]] const Scene& scene() const;
   [[nodiscard]] const runtime::GeneralizedAlpha& integrator() const;
   [[nodiscard]] double time() const { return integrator().time(); }
-  /// The integrator's state, and a restart from one (GeneralizedAlpha::set_state).
+  /// The integrator's state, and a restart from one (GeneralizedAlpha::set_state). After set_state the conservation
+  /// checks and RunSummary's energies measure from the state set; the rows recorded so far stay, and the next ones
+  /// follow from the state's time (earlier than the last row's when a run is set back).
   [[nodiscard]] runtime::IntegratorState state() const;
   void set_state(const runtime::IntegratorState& state);
   /// The run so far.

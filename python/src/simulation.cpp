@@ -52,11 +52,16 @@ std::function<Eigen::Vector3d(double)> python_load(std::shared_ptr<PythonCallabl
   return [callables, index, where = std::move(where)](double t) -> Eigen::Vector3d {
     if (callables->cleared) throw std::runtime_error(where + ": its function was released with the simulation");
     const py::object value = callables->functions[index](t);  // a Python exception passes as error_already_set
+    const std::string what = fmt::format("{}: the function's value at t = {} s", where, t);
+    Eigen::Vector3d f;
     try {
-      return vector3_of(value, fmt::format("{}: the function's value at t = {} s", where, t));
+      f = vector3_of(value, what);
     } catch (const std::invalid_argument& e) {
       throw py::value_error(e.what());
     }
+    // Caught here, not as a singular start or a failed step far from its cause.
+    if (!f.allFinite()) throw py::value_error(fmt::format("{} is not finite: {}", what, py::repr(value).cast<std::string>()));
+    return f;
   };
 }
 

@@ -185,9 +185,11 @@ def test_a_function_may_not_step_its_own_simulation(folder):
     assert sim.time == 0.0
 
 
-def test_a_function_must_return_three_numbers(folder):
+def test_a_function_must_return_three_finite_numbers(folder):
     with pytest.raises(ValueError, match=r"force 'push' force: the function's value at t = 0 s must be 3 numbers"):
         scene_in_code(folder, force=lambda t: [0.0, 1.0]).simulate()
+    with pytest.raises(ValueError, match=r"force 'push' torque: the function's value at t = 0.003 s is not finite"):
+        scene_in_code(folder, torque=lambda t: [0.0, 0.0, np.nan if t > 0.0025 else 0.0]).simulate().run()
 
 
 def test_scenes_fbsim_refuses_raise_its_line(folder):

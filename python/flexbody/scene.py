@@ -253,6 +253,11 @@ class Scene:
         """The initial assembly's tolerance, a fraction of a body's size."""
         self._document["assembly"] = _given(keys)
 
+    def set_output_budget(self, **keys):
+        """What a run with an output_dir may write: size ("10 GB", "500MB" or bytes) and files; a run estimated over
+        it is refused before its first step (SceneError)."""
+        self._document["output_budget"] = _given(keys)
+
     def to_dict(self):
         """The scene file this scene is (without its functions of t), as a dict: yaml.safe_dump writes it."""
         return copy.deepcopy(self._document)

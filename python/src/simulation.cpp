@@ -295,8 +295,10 @@ void bind_simulation(py::module_& m) {
       "_load_scene",
       [](const std::filesystem::path& path, std::optional<double> end, std::optional<std::filesystem::path> directory,
          const py::object& warn) {
-        return simulate([&](const scene::SceneExtras&) { return scene::read_scene(path, {end}); }, py::list(), directory,
-                        warn);
+        scene::SceneOverrides overrides;
+        overrides.end_time = end;
+        return simulate([&](const scene::SceneExtras&) { return scene::read_scene(path, overrides); }, py::list(),
+                        directory, warn);
       },
       py::arg("path"), py::arg("end"), py::arg("directory"), py::arg("warn"));
   m.def(
@@ -304,7 +306,9 @@ void bind_simulation(py::module_& m) {
       [](const py::dict& document, const std::string& source, const std::filesystem::path& base, std::optional<double> end,
          std::optional<std::filesystem::path> directory, const py::list& loads, const py::object& warn) {
         const YAML::Node root = yaml_document(document);
-        return simulate([&](const scene::SceneExtras& extras) { return scene::read_scene(root, source, base, {end}, extras); },
+        scene::SceneOverrides overrides;
+        overrides.end_time = end;
+        return simulate([&](const scene::SceneExtras& extras) { return scene::read_scene(root, source, base, overrides, extras); },
                         loads, directory, warn);
       },
       py::arg("document"), py::arg("source"), py::arg("base"), py::arg("end"), py::arg("directory"), py::arg("loads"),

@@ -39,6 +39,10 @@ int main(int argc, char** argv) {
   std::optional<double> end_time;
   app.add_option("--end", end_time, "end time [s] instead of the scene's integrator end (a shorter trial run, or a "
                                     "longer one); refused below the integrator step");
+  std::string max_output;
+  app.add_option("--max-output", max_output, "the most the run may write into its output directory, e.g. 50GB (default "
+                                             "10 GB and 100000 files; the scene's output_budget sets both); a run "
+                                             "estimated over it is refused before its first step");
   int threads = 1;
   app.add_option("--threads", threads,
                  "threads for the per-body work of scenes of 64 bodies and more (default 1: with the cores shared, more "
@@ -65,7 +69,16 @@ int main(int argc, char** argv) {
   }
   flexbody::scene::Scene read;
   try {
-    read = flexbody::scene::read_scene(scene_path, {end_time});
+    flexbody::scene::SceneOverrides overrides;
+    overrides.end_time = end_time;
+    if (!max_output.empty()) {
+      try {
+        overrides.max_output = flexbody::scene::parse_size(max_output);
+      } catch (const std::invalid_argument& e) {
+        return fail(fmt::format("--max-output: {}", e.what()), kBadInput);
+      }
+    }
+    read = flexbody::scene::read_scene(scene_path, overrides);
   } catch (const std::invalid_argument& e) {
     return fail(e.what(), kBadInput);
   } catch (const std::exception& e) {
@@ -85,6 +98,8 @@ int main(int argc, char** argv) {
     simulation = std::make_unique<flexbody::scene::Simulation>(std::move(read), flexbody::scene::OutputSinks{directory, false},
                                                                warn);
     simulation->run(end, progress);
+  } catch (const flexbody::scene::OutputBudgetError& e) {  // before the first step, naming the scene's lines
+    return fail(e.what(), kBadInput);
   } catch (const flexbody::runtime::StepFailure& e) {
     if (terminal) std::cerr << '\n';
     return fail(fmt::format("{}: {} (outputs up to the last completed step are in {})", scene_path.string(), e.what(),
@@ -147,6 +162,9 @@ int main(int argc, char** argv) {
       std::cout << fmt::format("  {} warning{} (on stderr)\n", summary.warnings.size(),
                                summary.warnings.size() == 1 ? "" : "s");
     for (const auto& f : summary.files) std::cout << "  wrote " << f.string() << '\n';
+    std::cout << fmt::format("  wrote {} in {:.0f} files (estimated before the run: {} in {:.0f})\n",
+                             flexbody::scene::format_size(summary.written_bytes), summary.written_files,
+                             flexbody::scene::format_size(summary.estimated_bytes), summary.estimated_files);
   }
   return 0;
 }

@@ -23,7 +23,7 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
   const Reader r(source);
   r.expect_map(root, "the scene",
                {"bodies", "joints", "forces", "springs", "gravity", "integrator", "outputs", "monitors", "paraview",
-                "assembly"});
+                "assembly", "output_budget"});
   Scene scene;
   runtime::SceneBuilder builder(scene.system);
   std::map<std::string, int> bodies;  // name -> index
@@ -299,6 +299,7 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
   // paraview: {bodies: [names] (default: all), every: n steps (default: about 100 frames), stresses: true}
   if (const YAML::Node paraview = root["paraview"]) {
     r.expect_map(paraview, "paraview", {"bodies", "every", "stresses"});
+    scene.paraview_at = r.at(paraview["every"] ? paraview["every"] : paraview);
     bool stresses = true;
     if (const YAML::Node s = paraview["stresses"]) stresses = r.truth(s, "paraview stresses");
     std::vector<std::pair<int, YAML::Node>> chosen;
@@ -332,6 +333,25 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
       if (scene.paraview_every < 1) r.fail(every, "paraview every must be at least 1");
     }
   }
+  // output_budget: {size: SIZE, files: N}: what a run may write into its directory (output_budget.hpp); --max-output
+  // overrides the size.
+  if (const YAML::Node budget = root["output_budget"]) {
+    r.expect_map(budget, "output_budget", {"size", "files"});
+    if (const YAML::Node size = budget["size"]) {
+      try {
+        scene.budget.bytes = parse_size(r.text(size, "output_budget size"));
+      } catch (const std::invalid_argument& e) {
+        r.fail(size, fmt::format("output_budget size: {}", e.what()));
+      }
+    }
+    if (const YAML::Node files = budget["files"]) {
+      scene.budget.files = r.number(files, "output_budget files");
+      if (!(scene.budget.files >= 1.0) || scene.budget.files != std::floor(scene.budget.files))
+        r.fail(files, fmt::format("output_budget files must be a whole number of at least 1, got {}", scene.budget.files));
+    }
+  }
+  if (overrides.max_output) scene.budget.bytes = *overrides.max_output;
+
   // assembly: {tolerance: fraction of a body's size}: close the joints' gaps (an interface's point comes from a mesh,
   // micrometres off the CAD's nominal position) by the least mass-weighted move of the bodies (runtime/assembly.hpp).
   runtime::AssemblyOptions assembly;

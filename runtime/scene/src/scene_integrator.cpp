@@ -26,6 +26,8 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
       r.fail(rho, fmt::format("integrator rho_inf must lie in [0, 1], got {}", scene.integrator.rho_infinity));
   }
   scene.integrator.step = r.positive(r.required(integrator, "step", "integrator"), "integrator step");
+  scene.step_at = r.at(integrator["step"]);
+  scene.outputs_at = r.at(integrator["output_every"] ? integrator["output_every"] : integrator);
   scene.end_time = r.positive(r.required(integrator, "end", "integrator"), "integrator end");
   if (overrides.end_time) {
     if (!(*overrides.end_time > 0.0) || !std::isfinite(*overrides.end_time))

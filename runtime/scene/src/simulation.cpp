@@ -72,6 +72,7 @@ struct Simulation::Run {
   void draw();
   void check();
   void baseline();
+  [[nodiscard]] OutputEstimate estimate(double end) const;
   void advance(bool to_end, double end, bool last);
   void recover();  // after a failed step: the last completed step recorded and drawn
   void flush() {
@@ -185,6 +186,36 @@ void Simulation::Run::advance(bool to_end, double end, bool last) {
   wall += std::chrono::steady_clock::now() - start;
 }
 
+// The CSV files' and the ParaView series' sizes for a run from t = 0 to `end` (output_budget.hpp).
+OutputEstimate Simulation::Run::estimate(double end) const {
+  const double steps = step_count(end, scene.integrator.step);
+  // Rows at t = 0, every n-th step, and at the end when it is not one of them.
+  auto recorded = [steps](int every) { return 1.0 + std::floor(steps / every) + (std::fmod(steps, every) != 0.0 ? 1.0 : 0.0); };
+  constexpr double kValueBytes = 25.0;  // "%.17g" is at most 24 characters ("-1.2345678901234567e-100"), and its comma
+  OutputEstimate e;
+  double columns = 0.0, csv_files = 0.0;
+  for (const Sensor& s : scene.sensors) {
+    columns += 1.0 + static_cast<double>(columns_of(scene, s).size());
+    csv_files += 1.0;
+  }
+  if (scene.monitors) {
+    columns += 1.0 + static_cast<double>(monitor_columns().size());
+    csv_files += 1.0;
+  }
+  if (csv_files > 0.0) {
+    const double rows = recorded(scene.output_every);
+    e.parts.push_back({fmt::format("CSV outputs ({:.0f} files)", csv_files), scene.outputs_at, rows,
+                       rows * columns * kValueBytes, csv_files});
+  }
+  for (const runtime::ParaViewSeries& s : series) {
+    const double frames = recorded(scene.paraview_every);
+    // The frames, the collection (about 80 bytes per frame) and its folder.
+    e.parts.push_back({fmt::format("paraview body '{}'", s.collection().stem().string()), scene.paraview_at, frames,
+                       frames * (s.frame_bytes() + 80.0), frames + 2.0});
+  }
+  return e;
+}
+
 // The scales the conservation checks measure against, from the integrator's state (the start, or a state set).
 void Simulation::Run::baseline() {
   const runtime::System& system = scene.system;
@@ -233,6 +264,13 @@ Simulation::Simulation(Scene scene, const OutputSinks& sinks, std::function<void
   }
   if (sinks.directory) {
     const std::filesystem::path& directory = *sinks.directory;
+    for (const SurfaceSeries& s : r.scene.paraview)  // nothing is written before its first frame
+      r.series.emplace_back(directory, r.scene.system.body_name(s.body), r.scene.system.model(s.body), s.stresses);
+    // What a run to the scene's end would write, checked before any file is made.
+    const OutputEstimate estimate = r.estimate(r.scene.end_time);
+    r.summary.estimated_bytes = estimate.bytes();
+    r.summary.estimated_files = estimate.files();
+    check_output_budget(estimate, r.scene.budget, r.scene.step_at);
     if (std::error_code error; !std::filesystem::create_directories(directory, error) && error)
       throw std::runtime_error(fmt::format("{}: cannot create the output directory: {}", directory.string(), error.message()));
     for (const Sensor& s : r.scene.sensors) {
@@ -243,10 +281,7 @@ Simulation::Simulation(Scene scene, const OutputSinks& sinks, std::function<void
       r.summary.files.push_back(directory / "monitors.csv");
       r.monitors = std::make_unique<CsvFile>(r.summary.files.back(), monitor_columns());
     }
-    for (const SurfaceSeries& s : r.scene.paraview) {
-      r.series.emplace_back(directory, r.scene.system.body_name(s.body), r.scene.system.model(s.body), s.stresses);
-      r.summary.files.push_back(r.series.back().collection());
-    }
+    for (const runtime::ParaViewSeries& series : r.series) r.summary.files.push_back(series.collection());
   }
   r.baseline();
   r.record();
@@ -314,6 +349,18 @@ RunSummary Simulation::summary() const {
   s.integrator_wall_seconds = std::chrono::duration<double>(run_->in_integrator).count();
   s.energy_drift = run_->largest_change / std::max(run_->exchanged, 1e-300);
   s.energy_final = run_->scene.system.energies(run_->integrator->coordinates(), run_->integrator->velocities()).total();
+  // What is on disk: the CSV files and collections by their sizes, the frames as counted when written.
+  s.written_bytes = s.written_files = 0.0;
+  for (const std::filesystem::path& file : s.files) {
+    std::error_code unknown;
+    const std::uintmax_t size = std::filesystem::file_size(file, unknown);
+    s.written_bytes += unknown ? 0.0 : static_cast<double>(size);
+    s.written_files += 1.0;
+  }
+  for (const runtime::ParaViewSeries& series : run_->series) {
+    s.written_bytes += series.bytes_written();
+    s.written_files += static_cast<double>(series.frame_count());
+  }
   return s;
 }
 

@@ -65,6 +65,10 @@ std::string summary_json(const Simulation& simulation, const std::string& scene_
   std::vector<std::string> files;
   for (const auto& f : summary.files) files.push_back(f.string());
   j["outputs"] = files;
+  j["output_bytes"] = summary.written_bytes;
+  j["output_files"] = summary.written_files;
+  j["estimated_output_bytes"] = summary.estimated_bytes;
+  j["estimated_output_files"] = summary.estimated_files;
   return j.dump();
 }
 

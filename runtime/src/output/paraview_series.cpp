@@ -8,7 +8,9 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <stdexcept>
+#include <system_error>
 
 namespace flexbody::runtime {
 namespace {
@@ -140,8 +142,23 @@ void ParaViewSeries::write(double t, const Eigen::VectorXd& q_b) {
   out.points(points);
   out.cells(triangles_, 3, format::kVtkTriangle);
   out.commit();
+  std::error_code unknown;  // a size that cannot be read counts 0: the frame is written, the count is a report
+  const std::uintmax_t size = std::filesystem::file_size(directory_ / name_ / file, unknown);
+  bytes_written_ += unknown ? 0.0 : static_cast<double>(size);
   frames_.emplace_back(t, name_ + "/" + file);
   format::write_pvd(collection_, frames_);
+}
+
+double ParaViewSeries::frame_bytes() const {
+  // An array: base64 of an 8-byte length header and the data (format/vtk_xml.cpp).
+  auto array = [](double raw) { return 4.0 * std::ceil((8.0 + raw) / 3.0); };
+  const auto n_s = static_cast<double>(nodes_.rows());
+  const auto n_t = static_cast<double>(triangles_.size() / 3);
+  const double doubles = 8.0 * n_s;
+  double bytes = 1000.0 + array(3 * doubles) /* displacement */ + array(3 * doubles) /* points */ +
+                 array(3 * 8 * n_t) /* connectivity */ + array(8 * n_t) /* offsets */ + array(n_t) /* types */;
+  if (writes_stresses()) bytes += array(6 * doubles) + array(doubles);
+  return bytes;
 }
 
 }  // namespace flexbody::runtime

@@ -48,6 +48,12 @@ class YamlReader {
     return "unreadable";
   }
 
+  /// "<file>:<line>" of a node, or "<file>" for one that came from no file's text.
+  [[nodiscard]] std::string at(const YAML::Node& node) const {
+    const int line = node.IsDefined() ? node.Mark().line + 1 : 0;
+    return line > 0 ? fmt::format("{}:{}", file_, line) : file_;
+  }
+
   [[noreturn]] void fail(const YAML::Node& at, const std::string& message) const {
     const int line = at.IsDefined() ? at.Mark().line + 1 : 0;
     throw std::invalid_argument(line > 0 ? fmt::format("{}:{}: {}", file_, line, message)

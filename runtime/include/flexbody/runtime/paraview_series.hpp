@@ -40,6 +40,10 @@ class ParaViewSeries {
   [[nodiscard]] double last_time() const { return frames_.empty() ? -std::numeric_limits<double>::infinity() : frames_.back().first; }
   [[nodiscard]] Eigen::Index surface_node_count() const { return nodes_.rows(); }
   [[nodiscard]] bool writes_stresses() const { return stress_modes_.rows() > 0; }
+  /// The size of one frame's file [bytes]: its arrays in base64 with their headers, and about 1 kB of XML.
+  [[nodiscard]] double frame_bytes() const;
+  /// The bytes of the frames written so far (their files' sizes; the .pvd collection not counted).
+  [[nodiscard]] double bytes_written() const { return bytes_written_; }
 
  private:
   std::filesystem::path directory_, collection_;
@@ -53,6 +57,7 @@ class ParaViewSeries {
   Eigen::MatrixXd stress_modes_;                       ///< S rows of those nodes (6 n_s x 3 n_f), or empty
   std::vector<std::int64_t> triangles_;                ///< surface triangles in surface-node numbering
   std::vector<std::pair<double, std::string>> frames_;
+  double bytes_written_ = 0.0;
 };
 
 }  // namespace flexbody::runtime

@@ -7,6 +7,7 @@
 #include "flexbody/runtime/generalized_alpha.hpp"
 #include "flexbody/runtime/scene_builder.hpp"
 #include "flexbody/runtime/system.hpp"
+#include "flexbody/scene/output_budget.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -60,6 +61,10 @@ struct Scene {
   std::vector<SurfaceSeries> paraview;  ///< DIR/<body>.pvd + DIR/<body>/*.vtu
   int paraview_every = 1;               ///< a frame every n-th step
   Conservation conserves;
+  OutputBudget budget;  ///< what a run to end_time may write into its directory (output_budget.hpp)
+  /// Where the scene sets the step, the CSV outputs' and the ParaView series' frequency ("scene.yaml:7"), for the
+  /// budget's refusal.
+  std::string step_at = "the scene", outputs_at = "the scene", paraview_at = "the scene";
   runtime::AssemblyReport assembly;  ///< how the initial assembly moved the bodies
   std::vector<runtime::RemovedConstraint> removed;  ///< joint rows left out as redundant (System::remove_redundant_constraints)
 };
@@ -81,6 +86,7 @@ inline constexpr double kMostSteps = 1e9;
 /// What fbsim's command line changes in a scene (nullopt: the scene's own).
 struct SceneOverrides {
   std::optional<double> end_time;  ///< --end [s]: the integrator's end time, checked as the scene's `end` is
+  std::optional<double> max_output;  ///< --max-output [bytes]: the output budget's size, over the scene's
 };
 
 /// The scene's `integrator` map (required) into scene.integrator, scene.end_time (or overrides.end_time) and

@@ -39,6 +39,10 @@ struct RunSummary {
   std::vector<std::string> warnings;
   std::size_t conservation_warnings = 0, validity_warnings = 0;  ///< how many of each
   std::vector<std::filesystem::path> files;
+  /// With an output directory: what a run to the scene's end was estimated to write before it started, and what is
+  /// on disk now (the files above and the ParaView frames) [bytes, files].
+  double estimated_bytes = 0.0, estimated_files = 0.0;
+  double written_bytes = 0.0, written_files = 0.0;
 };
 
 /// Energies, constraint residuals and momenta are evaluated every kCheckEvery steps and at the end of a run (an
@@ -72,8 +76,9 @@ struct OutputSinks {
 class Simulation {
  public:
   /// Starts the run of `scene` at t = 0: builds the integrator (throws std::invalid_argument for a scene whose
-  /// initial state or constraints are inconsistent, before any file is made), opens the sinks and records the
-  /// initial state. `warn` gets each warning line when it arises (RunSummary::warnings keeps them all).
+  /// initial state or constraints are inconsistent, before any file is made), checks what a run to the scene's end
+  /// would write against Scene::budget (throws OutputBudgetError, before any file is made), opens the sinks and
+  /// records the initial state. `warn` gets each warning line when it arises (RunSummary::warnings keeps them all).
   Simulation(Scene scene, const OutputSinks& sinks, std::function<void(const std::string&)> warn = {});
   ~Simulation();
   Simulation(const Simulation&) = delete;

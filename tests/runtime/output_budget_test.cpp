@@ -1,0 +1,91 @@
+// The output budget (issue 32): a run whose outputs are estimated over the budget is refused before its first step,
+// with one line naming the scene line that sets the largest part, and no output directory; --max-output and the
+// scene's output_budget change it; the summary reports what was estimated and what was written.
+#include "fbsim_cli_helpers.hpp"
+
+#include "flexbody/scene/output_budget.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+using fbsim_cli::bar_folder;
+using fbsim_cli::CliRun;
+using fbsim_cli::expect_scene_error;
+using fbsim_cli::run_fbsim;
+using fbsim_cli::write_text;
+
+namespace {
+
+// The issue's pendulum (1e-4 s steps, 2 s) with `extra` lines.
+std::string pendulum(const std::string& integrator_extra, const std::string& extra) {
+  std::string scene = fbsim_cli::kIssueScene;
+  scene.replace(scene.find("end: 2.0"), 8, "end: 2.0" + integrator_extra);
+  return scene + extra;
+}
+
+}  // namespace
+
+TEST(OutputBudget, SizesAreReadAndWrittenAsPeopleWriteThem) {
+  using flexbody::scene::parse_size;
+  EXPECT_EQ(parse_size("10GB"), 10e9);
+  EXPECT_EQ(parse_size("500 MB"), 500e6);
+  EXPECT_EQ(parse_size("2 KiB"), 2048.0);
+  EXPECT_EQ(parse_size("1e9"), 1e9);
+  for (const char* bad : {"", "GB", "-1GB", "10 parsecs", "0", "nan"}) EXPECT_THROW(static_cast<void>(parse_size(bad)), std::invalid_argument) << bad;
+  EXPECT_EQ(flexbody::scene::format_size(8.8e9), "8.8 GB");
+  EXPECT_EQ(flexbody::scene::format_size(900.0), "900 B");
+  EXPECT_EQ(flexbody::scene::format_size(1.94e14), "194 TB");
+}
+
+TEST(OutputBudget, ParaViewFramesOverTheBudgetAreRefusedBeforeTheFirstStep) {
+  // 20 001 frames of the bar (315 kB each) every step: 6.3 GB, over a 100 MB budget; the line is paraview's `every`.
+  const std::string scene = pendulum("", "output_budget: {size: 100 MB}\nparaview:\n  every: 1\n");
+  expect_scene_error(scene, 11, "paraview body 'bar': 20001 frames (6.3 GB in 20003 files; the step is set at "
+                                "bad.yaml:6): the run would write about 6.31 GB in 20004 files, over the output "
+                                "budget of 100 MB and 100000 files");
+  EXPECT_FALSE(std::filesystem::exists(bar_folder() / "bad_out"));  // no directory, no file
+  // The default budget's files: 20 001 frames every step, over 100 000 at 2e-5 s steps.
+  std::string many = pendulum("", "paraview: {every: 1}\n");
+  many.replace(many.find("step: 1.0e-4"), 12, "step: 1.0e-5");
+  expect_scene_error(many, 9, "paraview body 'bar': 200001 frames");
+}
+
+TEST(OutputBudget, CsvRowsOverTheBudgetNameTheIntegratorsLine) {
+  // 20 001 rows of t, x, y, z: about 2 MB, over 1 MB; output_every is not given, so the integrator's line.
+  expect_scene_error(pendulum("", "output_budget: {size: 1 MB}\n"), 6, "CSV outputs (1 files): 20001 rows each (2 MB");
+  expect_scene_error(pendulum(", output_every: 10", "output_budget: {size: 100 kB}\n"), 6, "CSV outputs (1 files): 2001 rows each");
+  expect_scene_error(pendulum("", "output_budget: {size: 1 GB, files: 0}\n"), 9, "output_budget files must be a whole number");
+  expect_scene_error(pendulum("", "output_budget: {size: 1 parsec}\n"), 9, "output_budget size: '1 parsec' is not a size");
+}
+
+TEST(OutputBudget, MaxOutputChangesItAndTheSummaryReportsWhatWasWritten) {
+  const auto& dir = bar_folder();
+  write_text(dir / "budget.yaml", pendulum("", "monitors: true\nparaview: {every: 100}\n"));
+  const CliRun refused = run_fbsim(dir, "budget.yaml -o budget_out --end 0.02 --max-output 10kB -q");
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("over the output budget of 10 kB"), std::string::npos) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "budget_out"));
+  const CliRun bad = run_fbsim(dir, "budget.yaml -o budget_out --max-output 10parsec -q");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("fbsim: error: --max-output: '10parsec' is not a size"), std::string::npos) << bad.err;
+
+  const CliRun run = run_fbsim(dir, "budget.yaml -o budget_out --end 0.02 --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto json = nlohmann::json::parse(run.out);
+  double bytes = 0.0, files = 0.0;  // what is on disk
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir / "budget_out"))
+    if (entry.is_regular_file()) {
+      bytes += static_cast<double>(entry.file_size());
+      files += 1.0;
+    }
+  EXPECT_EQ(json["output_bytes"].get<double>(), bytes);
+  EXPECT_EQ(json["output_files"].get<double>(), files);  // tip.csv, monitors.csv, bar.pvd and 3 frames
+  EXPECT_EQ(files, 6.0);
+  // The estimate: the frames' arrays exactly, the XML and the CSV values' lengths roughly (measured 1.04 of it).
+  EXPECT_NEAR(json["estimated_output_bytes"].get<double>(), bytes, 0.15 * bytes);
+}

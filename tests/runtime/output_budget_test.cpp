@@ -89,3 +89,35 @@ TEST(OutputBudget, MaxOutputChangesItAndTheSummaryReportsWhatWasWritten) {
   // The estimate: the frames' arrays exactly, the XML and the CSV values' lengths roughly (measured 1.04 of it).
   EXPECT_NEAR(json["estimated_output_bytes"].get<double>(), bytes, 0.15 * bytes);
 }
+
+TEST(OutputInterval, RowsAndFramesFallAtTheSameTimesWhateverTheStep) {
+  // Issue 32: outputs by time, so that a smaller step does not multiply them.
+  const auto& dir = bar_folder();
+  for (const std::string step : {"1.0e-4", "2.0e-4", "3.0e-4"}) {
+    SCOPED_TRACE(step);
+    std::string scene = pendulum(", output_interval: 0.005", "paraview: {interval: 0.01, stresses: false}\n");
+    scene.replace(scene.find("step: 1.0e-4"), 12, "step: " + step);
+    write_text(dir / "interval.yaml", scene);
+    const CliRun run = run_fbsim(dir, "interval.yaml -o interval_out --end 0.02 -q");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const std::vector<double> times = fbsim_cli::times_of(dir / "interval_out" / "tip.csv");
+    ASSERT_EQ(times.size(), 5u);  // t = 0, the first step at or after 0.005, 0.010, 0.015, and the end 0.02
+    const double h = std::stod(step);
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      EXPECT_GE(times[k], 0.005 * static_cast<double>(k) - 1e-12);
+      EXPECT_LT(times[k], 0.005 * static_cast<double>(k) + h);  // within a step after its multiple
+    }
+    EXPECT_EQ(times.back(), 0.02);
+    std::size_t frames = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(dir / "interval_out" / "bar")) frames += entry.is_regular_file();
+    EXPECT_EQ(frames, 3u);  // t = 0, 0.01, 0.02
+    std::filesystem::remove_all(dir / "interval_out");
+  }
+  expect_scene_error(pendulum(", output_every: 10, output_interval: 0.005", ""), 6,
+                     "integrator: output_every (steps) and output_interval (seconds) are both given; give one");
+  expect_scene_error(pendulum("", "paraview: {every: 10, interval: 0.01}\n"), 9,
+                     "paraview: every (steps) and interval (seconds) are both given; give one");
+  // The budget counts by time too: 2 s at a row every 1e-5 s, whatever the step.
+  expect_scene_error(pendulum(", output_interval: 1.0e-5", "output_budget: {size: 1 MB}\n"), 6,
+                     "CSV outputs (1 files): 200001 rows each");
+}

@@ -298,8 +298,8 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
 
   // paraview: {bodies: [names] (default: all), every: n steps (default: about 100 frames), stresses: true}
   if (const YAML::Node paraview = root["paraview"]) {
-    r.expect_map(paraview, "paraview", {"bodies", "every", "stresses"});
-    scene.paraview_at = r.at(paraview["every"] ? paraview["every"] : paraview);
+    r.expect_map(paraview, "paraview", {"bodies", "every", "interval", "stresses"});
+    scene.paraview_at = r.at(paraview["every"] ? paraview["every"] : paraview["interval"] ? paraview["interval"] : paraview);
     bool stresses = true;
     if (const YAML::Node s = paraview["stresses"]) stresses = r.truth(s, "paraview stresses");
     std::vector<std::pair<int, YAML::Node>> chosen;
@@ -331,6 +331,10 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
     if (const YAML::Node every = paraview["every"]) {
       scene.paraview_every = r.count(every, "paraview every");
       if (scene.paraview_every < 1) r.fail(every, "paraview every must be at least 1");
+    }
+    if (const YAML::Node interval = paraview["interval"]) {  // [s]: frames at the same times whatever the step
+      if (paraview["every"]) r.fail(interval, "paraview: every (steps) and interval (seconds) are both given; give one");
+      scene.paraview_interval = r.positive(interval, "paraview interval");
     }
   }
   // output_budget: {size: SIZE, files: N}: what a run may write into its directory (output_budget.hpp); --max-output

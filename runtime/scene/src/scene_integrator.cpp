@@ -15,7 +15,8 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
                      Scene& scene) {
   const YAML::Node integrator = r.required(root, "integrator", "the scene");
   r.expect_map(integrator, "integrator",
-               {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every", "deformation_limit",
+               {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every", "output_interval",
+                "deformation_limit",
                 "spin_warning", "spin_limit", "stiffened_spin_warning", "stiffened_spin_limit", "constraints",
                 "linear_solver", "coupled_step"});
   if (const YAML::Node t = integrator["type"]; t && r.text(t, "integrator type") != "generalized-alpha")
@@ -27,7 +28,9 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
   }
   scene.integrator.step = r.positive(r.required(integrator, "step", "integrator"), "integrator step");
   scene.step_at = r.at(integrator["step"]);
-  scene.outputs_at = r.at(integrator["output_every"] ? integrator["output_every"] : integrator);
+  scene.outputs_at = r.at(integrator["output_every"]      ? integrator["output_every"]
+                          : integrator["output_interval"] ? integrator["output_interval"]
+                                                          : integrator);
   scene.end_time = r.positive(r.required(integrator, "end", "integrator"), "integrator end");
   if (overrides.end_time) {
     if (!(*overrides.end_time > 0.0) || !std::isfinite(*overrides.end_time))
@@ -102,6 +105,11 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
   if (const YAML::Node every = integrator["output_every"]) {
     scene.output_every = r.count(every, "integrator output_every");
     if (scene.output_every < 1) r.fail(every, "integrator output_every must be at least 1");
+  }
+  if (const YAML::Node interval = integrator["output_interval"]) {  // [s]: rows at the same times whatever the step
+    if (integrator["output_every"])
+      r.fail(interval, "integrator: output_every (steps) and output_interval (seconds) are both given; give one");
+    scene.output_interval = r.positive(interval, "integrator output_interval");
   }
 }
 

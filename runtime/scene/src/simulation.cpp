@@ -67,12 +67,15 @@ struct Simulation::Run {
   double exchanged = 0.0, largest_change = 0.0, energy_terms = 0.0;
   double momentum_initial = 0.0, momentum_terms = 0.0;
   bool energy_warned = false, momentum_warned = false;
+  double next_row = 0.0, next_frame = 0.0;  // output_interval, paraview_interval: the next times to record
 
   void record();
   void draw();
   void check();
   void baseline();
   [[nodiscard]] OutputEstimate estimate(double end) const;
+  [[nodiscard]] bool due(const std::optional<double>& interval, int every, double& next) const;
+  void reschedule();
   void advance(bool to_end, double end, bool last);
   void recover();  // after a failed step: the last completed step recorded and drawn
   void flush() {
@@ -168,11 +171,14 @@ void Simulation::Run::advance(bool to_end, double end, bool last) {
   ++count;
   ++summary.steps;
   summary.newton_iterations += integrator->last_iterations();
-  if (count % scene.output_every == 0 || last) {
+  // Both evaluated: each moves its next time.
+  const bool row = due(scene.output_interval, scene.output_every, next_row);
+  const bool frame = due(scene.paraview_interval, scene.paraview_every, next_frame);
+  if (row || last) {
     record();
     written = true;
   }
-  if (count % scene.paraview_every == 0 || last) {
+  if (frame || last) {
     draw();
     drawn = true;
   }
@@ -190,7 +196,13 @@ void Simulation::Run::advance(bool to_end, double end, bool last) {
 OutputEstimate Simulation::Run::estimate(double end) const {
   const double steps = step_count(end, scene.integrator.step);
   // Rows at t = 0, every n-th step, and at the end when it is not one of them.
-  auto recorded = [steps](int every) { return 1.0 + std::floor(steps / every) + (std::fmod(steps, every) != 0.0 ? 1.0 : 0.0); };
+  auto recorded = [steps, end](int every, const std::optional<double>& interval) {
+    if (interval) {
+      const double multiples = std::floor(end / *interval + 1e-9);
+      return 1.0 + multiples + (end - multiples * *interval > 1e-9 * *interval ? 1.0 : 0.0);
+    }
+    return 1.0 + std::floor(steps / every) + (std::fmod(steps, every) != 0.0 ? 1.0 : 0.0);
+  };
   constexpr double kValueBytes = 25.0;  // "%.17g" is at most 24 characters ("-1.2345678901234567e-100"), and its comma
   OutputEstimate e;
   double columns = 0.0, csv_files = 0.0;
@@ -203,17 +215,35 @@ OutputEstimate Simulation::Run::estimate(double end) const {
     csv_files += 1.0;
   }
   if (csv_files > 0.0) {
-    const double rows = recorded(scene.output_every);
+    const double rows = recorded(scene.output_every, scene.output_interval);
     e.parts.push_back({fmt::format("CSV outputs ({:.0f} files)", csv_files), scene.outputs_at, rows,
                        rows * columns * kValueBytes, csv_files});
   }
   for (const runtime::ParaViewSeries& s : series) {
-    const double frames = recorded(scene.paraview_every);
+    const double frames = recorded(scene.paraview_every, scene.paraview_interval);
     // The frames, the collection (about 80 bytes per frame) and its folder.
     e.parts.push_back({fmt::format("paraview body '{}'", s.collection().stem().string()), scene.paraview_at, frames,
                        frames * (s.frame_bytes() + 80.0), frames + 2.0});
   }
   return e;
+}
+
+// Whether the step just taken records: every n-th step, or the first step at or after the next multiple of the
+// interval (a time within a millionth of a step of it counts: t = t0 + k h rounds).
+bool Simulation::Run::due(const std::optional<double>& interval, int every, double& next) const {
+  if (!interval) return count % every == 0;
+  const double t = integrator->time(), slack = 1e-6 * scene.integrator.step;
+  if (t < next - slack) return false;
+  next = (std::floor((t + slack) / *interval) + 1.0) * *interval;
+  return true;
+}
+
+// After the time was set (set_state): the next multiples after it.
+void Simulation::Run::reschedule() {
+  const double t = integrator->time(), slack = 1e-6 * scene.integrator.step;
+  if (scene.output_interval) next_row = (std::floor((t + slack) / *scene.output_interval) + 1.0) * *scene.output_interval;
+  if (scene.paraview_interval)
+    next_frame = (std::floor((t + slack) / *scene.paraview_interval) + 1.0) * *scene.paraview_interval;
 }
 
 // The scales the conservation checks measure against, from the integrator's state (the start, or a state set).
@@ -284,6 +314,7 @@ Simulation::Simulation(Scene scene, const OutputSinks& sinks, std::function<void
     for (const runtime::ParaViewSeries& series : r.series) r.summary.files.push_back(series.collection());
   }
   r.baseline();
+  r.reschedule();
   r.record();
   r.draw();
   r.summary.cpu_seconds += cpu_since(cpu_start);
@@ -339,6 +370,7 @@ runtime::IntegratorState Simulation::state() const { return run_->integrator->st
 void Simulation::set_state(const runtime::IntegratorState& state) {
   run_->integrator->set_state(state);
   run_->baseline();
+  run_->reschedule();
 }
 const std::vector<OutputTable>& Simulation::tables() const { return run_->tables; }
 

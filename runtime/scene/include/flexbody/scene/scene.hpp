@@ -56,10 +56,14 @@ struct Scene {
   runtime::GeneralizedAlphaOptions integrator;
   double end_time = 0.0;
   int output_every = 1;        ///< write every n-th step
+  /// Write at the first step at or after each multiple of this time [s] instead (integrator output_interval): a
+  /// change of step then leaves the rows' times as they are.
+  std::optional<double> output_interval;
   bool monitors = false;       ///< monitors.csv: energies, ‖AᵀA − I‖, constraint residuals, Newton iterations
   std::vector<Sensor> sensors;
   std::vector<SurfaceSeries> paraview;  ///< DIR/<body>.pvd + DIR/<body>/*.vtu
   int paraview_every = 1;               ///< a frame every n-th step
+  std::optional<double> paraview_interval;  ///< a frame at each multiple of this time [s] instead (paraview interval)
   Conservation conserves;
   OutputBudget budget;  ///< what a run to end_time may write into its directory (output_budget.hpp)
   /// Where the scene sets the step, the CSV outputs' and the ParaView series' frequency ("scene.yaml:7"), for the

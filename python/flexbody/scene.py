@@ -14,6 +14,7 @@ import copy
 import json
 import os
 import sys
+import time
 import warnings
 
 from . import _flexbody
@@ -107,8 +108,12 @@ class Simulation:
         end = self.end_time if end is None else float(end)
         shown = progress is None and sys.stderr.isatty()
         if shown:
+            start, started = self.time, time.monotonic()
+
             def progress(t):
-                sys.stderr.write(f"\r  t = {t:.4g} / {end:.4g} s")
+                rate = (t - start) / max(time.monotonic() - started, 1e-9)  # simulated seconds per second
+                to_go = (end - t) / rate if rate > 0 else float("inf")
+                sys.stderr.write(f"\r  t = {t:.4g} / {end:.4g} s, {to_go:.0f} s to go   ")
                 sys.stderr.flush()
         try:
             self._native.run(end, progress)

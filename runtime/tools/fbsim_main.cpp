@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <iostream>
 #include <memory>
 #include <system_error>
@@ -19,6 +20,13 @@
 namespace {
 
 constexpr int kBadInput = 2, kFailed = 1;
+
+// "42 s", "7.5 min", "3.2 h": a time to go as people read it.
+std::string duration_text(double seconds) {
+  if (seconds < 90.0) return fmt::format("{:.0f} s", seconds);
+  if (seconds < 5400.0) return fmt::format("{:.1f} min", seconds / 60.0);
+  return fmt::format("{:.1f} h", seconds / 3600.0);
+}
 
 int fail(const std::string& message, int code) {
   std::cerr << "fbsim: error: " << message << '\n';
@@ -86,8 +94,16 @@ int main(int argc, char** argv) {
   }
   const double end = read.end_time;
   const bool terminal = !quiet && !json && ::isatty(STDERR_FILENO);
+  // On a terminal: the simulated time, steps per second and the time to go (at the rate so far), every 100 steps.
+  const double step = read.integrator.step;
+  const auto started = std::chrono::steady_clock::now();
   auto progress = [&](double t) {
-    if (terminal) std::cerr << fmt::format("\r  t = {:.4g} / {:.4g} s", t, end) << std::flush;
+    if (!terminal) return;
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    const double rate = t / step / std::max(seconds, 1e-9);
+    std::cerr << fmt::format("\r  t = {:.4g} / {:.4g} s, {:.3g} steps/s, {} to go   ", t, end, rate,
+                             duration_text((end - t) / step / rate))
+              << std::flush;
   };
   std::unique_ptr<flexbody::scene::Simulation> simulation;
   try {

@@ -93,6 +93,7 @@ int prep_command(int argc, char** argv) {
     }
     const std::filesystem::path stem_source = from_spec ? std::filesystem::path(input) : options.input;
     options.output = output.empty() ? stem_source.filename().replace_extension(".fbh5") : std::filesystem::path(output);
+    record("output", options.output.string());
     if (!from_spec || given("--unit")) {
       if (!unit_text.empty()) {
         const std::optional<fp::LengthUnit> spec_unit = options.mesh.unit;
@@ -138,12 +139,15 @@ int prep_command(int argc, char** argv) {
       throw std::invalid_argument(fmt::format("--volume-tolerance must be a fraction of the CAD volume between 0 and 1 "
                                               "(0.005: 0.5 %), got {}", volume_tolerance));
     if (!from_spec || given("--volume-tolerance")) options.mesh.volume_tolerance = volume_tolerance;
+    record("volume_tolerance", fmt::format("{}", options.mesh.volume_tolerance));
     if (given("--order")) options.mesh.order = order;  // like every flag, it replaces the spec's
+    record("element_order", options.mesh.order ? std::to_string(*options.mesh.order) : std::string("default"));
     if (!from_spec || given("--mesher")) {
       const std::optional<fp::MeshAlgorithm> mesher = fp::mesh_algorithm_from_string(mesher_text);
       if (!mesher) throw std::invalid_argument("--mesher '" + mesher_text + "' is not one of delaunay, hxt");
       options.mesh.algorithm = *mesher;
     }
+    record("mesher", std::string(fp::to_string(options.mesh.algorithm)));
     if (!from_spec || given("--material")) {
       options.material = fp::parse_material(material_text);
       record("material", material_text);
@@ -152,12 +156,15 @@ int prep_command(int argc, char** argv) {
       options.modes.modes = modes;  // 0 with --fmax alone: every mode up to fmax
       options.modes.fmax_hz = fmax;
     }
+    record("modes", std::to_string(options.modes.modes));
+    record("fmax", fmt::format("{}", options.modes.fmax_hz));
     if (given("--geometric-stiffness")) options.geometric_stiffness = true;  // like every flag, over the spec's
+    record("geometric_stiffness", options.geometric_stiffness ? "true" : "false");
     if (!from_spec || given("--eigensolver")) {
       options.modes.solver.backend = fp::eigensolver_backend_from_string(solver_text);
       record("eigensolver", solver_text);
     }
-    fp::record_resolved_options(options);  // output, volume tolerance, order, mesher, modes, fmax, stiffening
+    fp::record_resolved_options(options);  // what flags did not record: the same values, where they are (Python's prep)
     if (fp::parallel_ranks() > 1 && options.modes.solver.backend == fp::EigensolverBackend::automatic &&
         fp::slepc_available())  // the one backend that uses the ranks
       options.modes.solver.backend = fp::EigensolverBackend::slepc;

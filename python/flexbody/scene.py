@@ -113,7 +113,7 @@ class Simulation:
             def progress(t):
                 rate = (t - start) / max(time.monotonic() - started, 1e-9)  # simulated seconds per second
                 to_go = (end - t) / rate if rate > 0 else float("inf")
-                sys.stderr.write(f"\r  t = {t:.4g} / {end:.4g} s, {to_go:.0f} s to go   ")
+                sys.stderr.write(f"\r  t = {t:.4g} / {end:.4g} s, {_duration(to_go)} to go   ")
                 sys.stderr.flush()
         try:
             self._native.run(end, progress)
@@ -142,6 +142,13 @@ class Simulation:
     def summary(self):
         """The run so far as fbsim --json reports it (docs/scenes.md): steps, Newton iterations, energies, ..."""
         return json.loads(self._native.summary_json(self._source))
+
+
+def _duration(seconds):
+    """A time to go as fbsim prints it: "42 s", "7.5 min", "3.2 h"."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.1f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
 
 
 def _warn(line):

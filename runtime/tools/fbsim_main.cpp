@@ -96,12 +96,12 @@ int main(int argc, char** argv) {
   const bool terminal = !quiet && !json && ::isatty(STDERR_FILENO);
   // On a terminal: the simulated time, steps per second and the time to go (at the rate so far), every 100 steps.
   const double step = read.integrator.step;
-  const auto started = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point started;  // set when the steps begin (after the assembly and the first frame)
   auto progress = [&](double t) {
     if (!terminal) return;
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     const double rate = t / step / std::max(seconds, 1e-9);
-    std::cerr << fmt::format("\r  t = {:.4g} / {:.4g} s, {:.3g} steps/s, {} to go   ", t, end, rate,
+    std::cerr << fmt::format("\r  t = {:.4g} / {:.4g} s, {:.0f} steps/s, {} to go   ", t, end, rate,
                              duration_text((end - t) / step / rate))
               << std::flush;
   };
@@ -113,6 +113,7 @@ int main(int argc, char** argv) {
     };
     simulation = std::make_unique<flexbody::scene::Simulation>(std::move(read), flexbody::scene::OutputSinks{directory, false},
                                                                warn);
+    started = std::chrono::steady_clock::now();
     simulation->run(end, progress);
   } catch (const flexbody::scene::OutputBudgetError& e) {  // before the first step, naming the scene's lines
     return fail(e.what(), kBadInput);

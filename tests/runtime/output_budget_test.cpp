@@ -45,20 +45,25 @@ TEST(OutputBudget, SizesAreReadAndWrittenAsPeopleWriteThem) {
 TEST(OutputBudget, ParaViewFramesOverTheBudgetAreRefusedBeforeTheFirstStep) {
   // 20 001 frames of the bar (315 kB each) every step: 6.3 GB, over a 100 MB budget; the line is paraview's `every`.
   const std::string scene = pendulum("", "output_budget: {size: 100 MB}\nparaview:\n  every: 1\n");
-  expect_scene_error(scene, 11, "paraview body 'bar': 20001 frames (6.3 GB in 20003 files; the step is set at "
-                                "bad.yaml:6): the run would write about 6.31 GB in 20004 files, over the output "
-                                "budget of 100 MB and 100000 files");
+  expect_scene_error(scene, 11, "paraview body 'bar': 20001 frames (6.3 GB in 20002 files; the step is set at "
+                                "bad.yaml:6): the run would write about 6.3 GB in 20003 files, over the output "
+                                "budget of 100 MB and 100000 files (write less often, or raise it: fbsim --max-output "
+                                "SIZE or the scene's output_budget: {size: SIZE})");
   EXPECT_FALSE(std::filesystem::exists(bar_folder() / "bad_out"));  // no directory, no file
   // The default budget's files: 20 001 frames every step, over 100 000 at 2e-5 s steps.
   std::string many = pendulum("", "paraview: {every: 1}\n");
   many.replace(many.find("step: 1.0e-4"), 12, "step: 1.0e-5");
   expect_scene_error(many, 9, "paraview body 'bar': 200001 frames");
+  // Without `every` the paraview key's own line (a block map's value starts on the next line).
+  std::string block = pendulum("", "paraview:\n  stresses: false\n");
+  block.replace(block.find("step: 1.0e-4"), 12, "step: 1.0e-5");
+  expect_scene_error(block + "output_budget: {size: 1 MB}\n", 9, "paraview body 'bar': 101 frames");
 }
 
 TEST(OutputBudget, CsvRowsOverTheBudgetNameTheIntegratorsLine) {
   // 20 001 rows of t, x, y, z: about 2 MB, over 1 MB; output_every is not given, so the integrator's line.
-  expect_scene_error(pendulum("", "output_budget: {size: 1 MB}\n"), 6, "CSV outputs (1 files): 20001 rows each (2 MB");
-  expect_scene_error(pendulum(", output_every: 10", "output_budget: {size: 100 kB}\n"), 6, "CSV outputs (1 files): 2001 rows each");
+  expect_scene_error(pendulum("", "output_budget: {size: 1 MB}\n"), 6, "CSV outputs (1 file): 20001 rows each (2 MB");
+  expect_scene_error(pendulum(", output_every: 10", "output_budget: {size: 100 kB}\n"), 6, "CSV outputs (1 file): 2001 rows each");
   expect_scene_error(pendulum("", "output_budget: {size: 1 GB, files: 0}\n"), 9, "output_budget files must be a whole number");
   expect_scene_error(pendulum("", "output_budget: {size: 1 parsec}\n"), 9, "output_budget size: '1 parsec' is not a size");
 }
@@ -117,7 +122,9 @@ TEST(OutputInterval, RowsAndFramesFallAtTheSameTimesWhateverTheStep) {
                      "integrator: output_every (steps) and output_interval (seconds) are both given; give one");
   expect_scene_error(pendulum("", "paraview: {every: 10, interval: 0.01}\n"), 9,
                      "paraview: every (steps) and interval (seconds) are both given; give one");
-  // The budget counts by time too: 2 s at a row every 1e-5 s, whatever the step.
-  expect_scene_error(pendulum(", output_interval: 1.0e-5", "output_budget: {size: 1 MB}\n"), 6,
-                     "CSV outputs (1 files): 200001 rows each");
+  // The budget counts by time too: 2 s at a row every 2e-4 s, whatever the step; at most a row per step.
+  expect_scene_error(pendulum(", output_interval: 2.0e-4", "output_budget: {size: 500 kB}\n"), 6,
+                     "CSV outputs (1 file): 10001 rows each");
+  expect_scene_error(pendulum(", output_interval: 1.0e-6", "output_budget: {size: 1 MB}\n"), 6,
+                     "CSV outputs (1 file): 20001 rows each");
 }

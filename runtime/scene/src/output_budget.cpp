@@ -60,11 +60,11 @@ void check_output_budget(const OutputEstimate& estimate, const OutputBudget& bud
   });
   throw OutputBudgetError(fmt::format(
       "{}: {}: {:.0f} {} ({} in {:.0f} files; the step is set at {}): the run would write about {} in {:.0f} files, "
-      "over the output budget of {} and {:.0f} files (write less often, or raise it with --max-output SIZE or the "
-      "scene's output_budget: {{size: SIZE, files: N}})",
+      "over the output budget of {} and {:.0f} files (write less often, or raise it: {})",
       largest->where, largest->what, largest->rows, largest->what.rfind("paraview", 0) == 0 ? "frames" : "rows each",
       format_size(largest->bytes), largest->files, step_where, format_size(bytes), files, format_size(budget.bytes),
-      budget.files));
+      budget.files,
+      by_files ? "the scene's output_budget: {files: N}" : "fbsim --max-output SIZE or the scene's output_budget: {size: SIZE}"));
 }
 
 }  // namespace flexbody::scene

@@ -299,7 +299,9 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
   // paraview: {bodies: [names] (default: all), every: n steps (default: about 100 frames), stresses: true}
   if (const YAML::Node paraview = root["paraview"]) {
     r.expect_map(paraview, "paraview", {"bodies", "every", "interval", "stresses"});
-    scene.paraview_at = r.at(paraview["every"] ? paraview["every"] : paraview["interval"] ? paraview["interval"] : paraview);
+    scene.paraview_at = paraview["every"]      ? r.at(paraview["every"])
+                        : paraview["interval"] ? r.at(paraview["interval"])
+                                               : key_at(r, root, "paraview");
     bool stresses = true;
     if (const YAML::Node s = paraview["stresses"]) stresses = r.truth(s, "paraview stresses");
     std::vector<std::pair<int, YAML::Node>> chosen;

@@ -1,5 +1,6 @@
 // A scene's integrator settings (the `integrator` key, and --end): scene.hpp's read_integrator.
 #include "flexbody/scene/scene.hpp"
+#include "scene_parts.hpp"
 
 #include "flexbody/format/yaml_reader.hpp"
 
@@ -28,9 +29,9 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
   }
   scene.integrator.step = r.positive(r.required(integrator, "step", "integrator"), "integrator step");
   scene.step_at = r.at(integrator["step"]);
-  scene.outputs_at = r.at(integrator["output_every"]      ? integrator["output_every"]
-                          : integrator["output_interval"] ? integrator["output_interval"]
-                                                          : integrator);
+  scene.outputs_at = integrator["output_every"]      ? r.at(integrator["output_every"])
+                      : integrator["output_interval"] ? r.at(integrator["output_interval"])
+                                                      : key_at(r, root, "integrator");
   scene.end_time = r.positive(r.required(integrator, "end", "integrator"), "integrator end");
   if (overrides.end_time) {
     if (!(*overrides.end_time > 0.0) || !std::isfinite(*overrides.end_time))

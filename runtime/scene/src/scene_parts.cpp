@@ -24,6 +24,12 @@ runtime::Marker read_marker(const Reader& r, const YAML::Node& map, const runtim
   }
 }
 
+std::string key_at(const Reader& r, const YAML::Node& map, const char* key) {
+  for (auto it = map.begin(); it != map.end(); ++it)
+    if (it->first.IsScalar() && it->first.Scalar() == key) return r.at(it->first);
+  return r.at(map);
+}
+
 runtime::JointType joint_type(const Reader& r, const YAML::Node& node, const std::string& where) {
   const std::string t = r.text(node, where + " type");
   if (t == "spherical") return runtime::JointType::spherical;

@@ -18,6 +18,9 @@ using Reader = format::YamlReader;
 [[nodiscard]] runtime::Marker read_marker(const Reader& r, const YAML::Node& map, const runtime::SceneBuilder& builder,
                                           int body, const std::string& where);
 
+/// "<file>:<line>" of key `key` of `map` (the key's own line: a block map's value starts on the next).
+[[nodiscard]] std::string key_at(const Reader& r, const YAML::Node& map, const char* key);
+
 /// spherical, fixed, revolute, prismatic or driven-revolute; anything else fails on its line.
 [[nodiscard]] runtime::JointType joint_type(const Reader& r, const YAML::Node& node, const std::string& where);
 

@@ -75,6 +75,8 @@ struct Simulation::Run {
   void baseline();
   [[nodiscard]] OutputEstimate estimate(double end) const;
   [[nodiscard]] bool due(const std::optional<double>& interval, int every, double& next) const;
+  [[nodiscard]] double time_slack(double t) const;
+  [[nodiscard]] double next_multiple(double interval, double t) const;
   void reschedule();
   void advance(bool to_end, double end, bool last);
   void recover();  // after a failed step: the last completed step recorded and drawn
@@ -197,9 +199,9 @@ OutputEstimate Simulation::Run::estimate(double end) const {
   const double steps = step_count(end, scene.integrator.step);
   // Rows at t = 0, every n-th step, and at the end when it is not one of them.
   auto recorded = [steps, end](int every, const std::optional<double>& interval) {
-    if (interval) {
+    if (interval) {  // at most one row per step
       const double multiples = std::floor(end / *interval + 1e-9);
-      return 1.0 + multiples + (end - multiples * *interval > 1e-9 * *interval ? 1.0 : 0.0);
+      return std::min(1.0 + multiples + (end - multiples * *interval > 1e-9 * *interval ? 1.0 : 0.0), 1.0 + steps);
     }
     return 1.0 + std::floor(steps / every) + (std::fmod(steps, every) != 0.0 ? 1.0 : 0.0);
   };
@@ -216,34 +218,50 @@ OutputEstimate Simulation::Run::estimate(double end) const {
   }
   if (csv_files > 0.0) {
     const double rows = recorded(scene.output_every, scene.output_interval);
-    e.parts.push_back({fmt::format("CSV outputs ({:.0f} files)", csv_files), scene.outputs_at, rows,
+    e.parts.push_back({fmt::format("CSV outputs ({:.0f} file{})", csv_files, csv_files == 1.0 ? "" : "s"), scene.outputs_at, rows,
                        rows * columns * kValueBytes, csv_files});
   }
-  for (const runtime::ParaViewSeries& s : series) {
+  if (!series.empty()) {  // one part: the bodies' series are set by the same lines
     const double frames = recorded(scene.paraview_every, scene.paraview_interval);
-    // The frames, the collection (about 80 bytes per frame) and its folder.
-    e.parts.push_back({fmt::format("paraview body '{}'", s.collection().stem().string()), scene.paraview_at, frames,
-                       frames * (s.frame_bytes() + 80.0), frames + 2.0});
+    double bytes = 0.0;
+    for (const runtime::ParaViewSeries& s : series)  // the frames and the collection (an entry per frame)
+      bytes += frames * (s.frame_bytes() + 40.0 + 2.0 * static_cast<double>(s.collection().stem().string().size()));
+    const std::string what = series.size() == 1
+                                 ? fmt::format("paraview body '{}'", series.front().collection().stem().string())
+                                 : fmt::format("paraview series of {} bodies", series.size());
+    e.parts.push_back({what, scene.paraview_at, frames, bytes, static_cast<double>(series.size()) * (frames + 1.0)});
   }
   return e;
 }
 
 // Whether the step just taken records: every n-th step, or the first step at or after the next multiple of the
-// interval (a time within a millionth of a step of it counts: t = t0 + k h rounds).
+// interval. A time within the rounding of t0 + k h of a multiple counts as there (a millionth of a step, or 8 ε |t|
+// far from zero), and the next multiple is the first after it.
 bool Simulation::Run::due(const std::optional<double>& interval, int every, double& next) const {
   if (!interval) return count % every == 0;
-  const double t = integrator->time(), slack = 1e-6 * scene.integrator.step;
-  if (t < next - slack) return false;
-  next = (std::floor((t + slack) / *interval) + 1.0) * *interval;
+  const double t = integrator->time();
+  if (t < next - time_slack(t)) return false;
+  next = next_multiple(*interval, t);
   return true;
+}
+
+double Simulation::Run::time_slack(double t) const {
+  return std::max(1e-6 * scene.integrator.step, 8.0 * std::numeric_limits<double>::epsilon() * std::abs(t));
+}
+
+// The first multiple of `interval` after t (beyond its slack).
+double Simulation::Run::next_multiple(double interval, double t) const {
+  const double slack = time_slack(t);
+  double k = std::floor((t + slack) / interval) + 1.0;
+  while (k * interval <= t + slack) k += 1.0;  // floor's rounding at an exact multiple far from zero
+  return k * interval;
 }
 
 // After the time was set (set_state): the next multiples after it.
 void Simulation::Run::reschedule() {
-  const double t = integrator->time(), slack = 1e-6 * scene.integrator.step;
-  if (scene.output_interval) next_row = (std::floor((t + slack) / *scene.output_interval) + 1.0) * *scene.output_interval;
-  if (scene.paraview_interval)
-    next_frame = (std::floor((t + slack) / *scene.paraview_interval) + 1.0) * *scene.paraview_interval;
+  const double t = integrator->time();
+  if (scene.output_interval) next_row = next_multiple(*scene.output_interval, t);
+  if (scene.paraview_interval) next_frame = next_multiple(*scene.paraview_interval, t);
 }
 
 // The scales the conservation checks measure against, from the integrator's state (the start, or a state set).
@@ -349,7 +367,10 @@ void Simulation::run(double end, const std::function<void(double)>& progress) {
     throw std::invalid_argument(fmt::format("run to t = {} s: {:.3g} steps of {} s, more than a run may take ({:.0e})",
                                             end, (end - now) / h, h, kMostSteps));
   const std::clock_t cpu_start = std::clock();
-  const long steps = static_cast<long>(step_count(end - now, h));
+  // end − now carries the rounding of both times (8 ε of each, in steps) besides step_count's own slack.
+  const double span = (end - now) / h;
+  const double rounding = 8.0 * std::numeric_limits<double>::epsilon() * (std::abs(now) + std::abs(end)) / h;
+  const long steps = static_cast<long>(std::min(step_count(end - now, h), std::max(1.0, std::ceil(span - rounding))));
   try {
     for (long k = 1; k <= steps; ++k) {
       r.advance(k == steps, end, k == steps);
@@ -375,6 +396,7 @@ void Simulation::set_state(const runtime::IntegratorState& state) {
 const std::vector<OutputTable>& Simulation::tables() const { return run_->tables; }
 
 RunSummary Simulation::summary() const {
+  run_->flush();  // the CSV files' sizes below are what is on disk
   RunSummary s = run_->summary;
   s.newton_matrices = run_->integrator->factorizations();
   s.wall_seconds = std::chrono::duration<double>(run_->wall).count();

@@ -70,3 +70,18 @@ TEST(Simulation, ARunInPiecesRecordsWhatOneRunDoes) {
   for (std::size_t k = 0; k < a.values.size(); ++k) EXPECT_NEAR(a.values[k], b.values[k], 1e-12);
   EXPECT_EQ(pieces.summary().steps, whole.summary().steps);
 }
+
+TEST(Simulation, ARunFarFromTimeZeroTakesItsWholeSteps) {
+  // A state set at t = 1e6 s (a restart of a long run): the times carry a rounding of 8 ε 1e6 = 1.8e-9 s, far above a
+  // millionth of the step; run(end) counts its steps with it (it took a spurious last step of a few ε, which
+  // step_to refused).
+  fs::Simulation simulation(pendulum_scene(), fs::OutputSinks{std::nullopt, true});
+  flexbody::runtime::IntegratorState state = simulation.state();
+  state.time = 1e6;
+  simulation.set_state(state);
+  simulation.run(1e6 + 0.005);
+  EXPECT_EQ(simulation.summary().steps, 50);
+  EXPECT_EQ(simulation.time(), 1e6 + 0.005);
+  simulation.run(1e6 + 0.005);  // there already: nothing
+  EXPECT_EQ(simulation.summary().steps, 50);
+}

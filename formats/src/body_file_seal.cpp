@@ -205,4 +205,13 @@ bool begins_like_body_file(const std::filesystem::path& path) {
   return begins.starts_with(detail::kMagicLine) || begins.starts_with(detail::kHdf5Signature);
 }
 
+std::string recorded_sha256(const std::filesystem::path& path) {
+  const detail::FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  if (fd.get() < 0) return {};
+  detail::Block block{};
+  if (detail::read_at(fd.get(), block.data(), block.size(), 0) != static_cast<long long>(block.size())) return {};
+  const std::optional<detail::Recorded> recorded = detail::parse_block(block);
+  return recorded ? recorded->hex : std::string();
+}
+
 }  // namespace flexbody::format

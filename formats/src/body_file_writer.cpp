@@ -1,16 +1,10 @@
 // body_file_writer.cpp: write_body_file(), the layout of SCHEMA.md, sealed and written atomically.
-#include "body_file_seal.hpp"
 #include "hdf5_io.hpp"
-#include "temporary_cleanup.hpp"
+#include "sealed_write.hpp"
 
 #include "flexbody/format/body_file.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <atomic>
 #include <span>
-#include <system_error>
 
 namespace flexbody::format {
 namespace {
@@ -166,9 +160,8 @@ void write_geometric_stiffness(const Location& root, const GeometricStiffness& s
   detail::write_matrix(group, "matrices", rows_of(stacked), cols_of(stacked), stacked.data(), "mixed: see SCHEMA.md");
 }
 
-/// Writes the whole layout into a new file at `path`; every handle is closed on return.
-void write_layout(const BodyData& body, const std::filesystem::path& path, const std::string& label) {
-  Location file = detail::create_file(path, label, detail::kSealBytes);
+/// Writes the whole layout into the new file `file`.
+void write_layout(const BodyData& body, const Location& file) {
   write_root(file, body.provenance);
   write_provenance(file, body.provenance);
   write_material(file, body.material);
@@ -179,56 +172,13 @@ void write_layout(const BodyData& body, const std::filesystem::path& path, const
   write_interfaces(file, body.interfaces);
   write_recovery(file, body.recovery);
   write_geometric_stiffness(file, body.geometric_stiffness);
-  detail::flush_and_close(file);
-}
-
-/// Forces the written bytes to disk so that the rename never exposes a file with missing data.
-void sync_to_disk(const std::filesystem::path& path, const std::string& label) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  const bool ok = fd >= 0 && ::fsync(fd) == 0;
-  if (fd >= 0) ::close(fd);
-  if (!ok) throw BodyFileError(label + ": cannot sync the temporary file " + path.string() + " to disk");
-}
-
-std::filesystem::path temporary_beside(const std::filesystem::path& target) {
-  static std::atomic<unsigned long> counter{0};
-  for (;;) {
-    std::string name(1, '.');  // built by appending: GCC 12 warns falsely on "literal" + std::string&&
-    name += target.filename().string();
-    name += ".tmp-";
-    name += std::to_string(::getpid());
-    name += '-';
-    name += std::to_string(counter.fetch_add(1));
-    std::filesystem::path candidate = target.parent_path() / name;
-    std::error_code error;
-    if (!std::filesystem::exists(std::filesystem::symlink_status(candidate, error))) return candidate;
-  }
 }
 
 }  // namespace
 
 void write_body_file(const BodyData& body, const std::filesystem::path& path) {
   validate(body);
-  const std::string label = path.string();
-  if (path.filename().empty()) throw BodyFileError(label + ": not a file name");
-  const detail::QuietHdf5Errors quiet;
-  const std::filesystem::path temporary = temporary_beside(path);
-  const detail::TemporaryFileGuard removed_on_signal(temporary);  // remove_temporary_body_file_on_signal
-  try {
-    write_layout(body, temporary, label);
-    detail::write_seal(temporary, label);  // after HDF5 closed the file: every byte of it is final
-    sync_to_disk(temporary, label);
-    std::error_code error;
-    std::filesystem::rename(temporary, path, error);
-    if (error) {
-      throw BodyFileError(label + ": cannot move the temporary file " + temporary.filename().string() +
-                          " onto it: " + error.message());
-    }
-  } catch (...) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw;
-  }
+  detail::write_sealed_file(path, path.string(), [&body](const Location& file) { write_layout(body, file); });
 }
 
 }  // namespace flexbody::format

@@ -162,6 +162,19 @@ void write_int_vector(const Location& loc, std::string_view name, std::span<cons
   write_dataset(loc, name, dims, H5T_STD_I32LE, H5T_NATIVE_INT32, values.data(), unit);
 }
 
+void write_byte_vector(const Location& loc, std::string_view name, std::string_view bytes) {
+  const std::array<hsize_t, 1> dims{bytes.size()};
+  write_dataset(loc, name, dims, H5T_STD_U8LE, H5T_NATIVE_UCHAR, bytes.data(), "");
+}
+
+std::string read_byte_vector(const Location& loc, std::string_view name) {
+  const OpenDataset open = open_dataset(loc, name, 1, H5T_INTEGER, "byte");
+  const Handle type(H5Dget_type(open.dataset.id()), H5Tclose);
+  if (!type.valid() || H5Tget_size(type.id()) != 1) loc.fail(loc.child(name) + " does not hold bytes");
+  const std::vector<unsigned char> values = read_values<unsigned char>(loc, name, open, H5T_NATIVE_UCHAR);
+  return {values.begin(), values.end()};
+}
+
 Table<double> read_double_matrix(const Location& loc, std::string_view name) {
   return read_matrix<double>(loc, name, H5T_FLOAT, "floating-point", H5T_NATIVE_DOUBLE);
 }

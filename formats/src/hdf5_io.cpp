@@ -170,6 +170,23 @@ Location create_group(const Location& parent, std::string_view name) {
   return {std::move(group), parent.file_label(), parent.child(name)};
 }
 
+namespace {
+
+herr_t collect_name(hid_t /*group*/, const char* name, const H5L_info_t* /*info*/, void* data) {
+  static_cast<std::vector<std::string>*>(data)->emplace_back(name);
+  return 0;
+}
+
+}  // namespace
+
+std::vector<std::string> member_names(const Location& group) {
+  std::vector<std::string> names;
+  hsize_t index = 0;
+  if (H5Literate(group.id(), H5_INDEX_NAME, H5_ITER_INC, &index, collect_name, &names) < 0)
+    group.fail_hdf5("cannot list the members of " + group.path());
+  return names;
+}
+
 Location open_group(const Location& parent, std::string_view name) {
   const std::string key(name);
   if (H5Lexists(parent.id(), key.c_str(), H5P_DEFAULT) <= 0) parent.fail("missing group " + parent.child(name));

@@ -106,6 +106,8 @@ inline constexpr std::size_t kMaxLinks = 100000;
 void flush_and_close(Location& file);
 
 [[nodiscard]] Location create_group(const Location& parent, std::string_view name);
+/// The names of a group's members, in HDF5's name order.
+[[nodiscard]] std::vector<std::string> member_names(const Location& group);
 [[nodiscard]] Location open_group(const Location& parent, std::string_view name);
 
 /// What a path inside a file refers to.
@@ -158,6 +160,10 @@ void write_vector(const Location& loc, std::string_view name, std::span<const do
 /// Writes a 1-D integer dataset.
 void write_int_vector(const Location& loc, std::string_view name, std::span<const std::int32_t> values,
                       std::string_view unit);
+/// Writes a 1-D dataset of bytes (u8): text that may exceed an attribute's 64 KiB, without a heap.
+void write_byte_vector(const Location& loc, std::string_view name, std::string_view bytes);
+/// Reads a 1-D dataset of bytes (an unsigned 8-bit integer dataset).
+[[nodiscard]] std::string read_byte_vector(const Location& loc, std::string_view name);
 /// Reads a 1-D integer dataset into int32 values.
 [[nodiscard]] std::vector<std::int32_t> read_int_vector(const Location& loc, std::string_view name);
 /// Reads a 2-D floating-point dataset.

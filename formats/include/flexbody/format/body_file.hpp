@@ -59,6 +59,12 @@ void remove_temporary_body_file_on_signal();
 /// replace an existing file with a body file only when the file was one (fbprep -o, fbprep seal -o).
 [[nodiscard]] bool begins_like_body_file(const std::filesystem::path& path);
 
+/// The SHA-256 digest (64 lowercase hex digits) that the seal of the file at `path` records for its contents, read
+/// from its first 512 bytes without reading the rest; "" for a file without a seal or that cannot be read. It names a
+/// body file's contents cheaply: a checkpoint records its bodies' digests, so that a resume with another file is
+/// refused (read_body_file is what checks that the contents match it).
+[[nodiscard]] std::string recorded_sha256(const std::filesystem::path& path);
+
 /// Checks that `body` is complete and consistent (shapes against each other, finite numbers).
 /// Throws BodyFileError naming the first problem found.
 void validate(const BodyData& body);

@@ -70,6 +70,17 @@ void GeneralizedAlpha::evaluate_residual(const StepFrame& f) {
 
 bool GeneralizedAlpha::build_newton_matrix(const StepFrame& f, bool& evaluated, std::string& failure) {
   Iterate& w = work_;
+  built_at_.valid = true;  // its inputs, for restore() (a few vector copies against a factorization)
+  built_at_.t1 = f.t1;
+  built_at_.h = f.h;
+  built_at_.couple = couple_;
+  built_at_.iterations = iterations_;
+  built_at_.q = w.q;
+  built_at_.shift = w.shift;
+  built_at_.nu = w.nu;
+  built_at_.v = w.v;
+  built_at_.qdd = w.qdd;
+  built_at_.mu = w.mu;
   system_.sparse_constraint_jacobian(f.t1, w.q, w.jacobian);
   if (f.stabilized) {  // ν's correction so far, along the new Jacobian (position_correction)
     w.q -= w.shift;

@@ -22,7 +22,9 @@
 #include <Eigen/LU>
 #include <Eigen/SparseCholesky>
 
+#include <map>
 #include <memory>
+#include <string>
 
 #include <vector>
 
@@ -42,6 +44,14 @@ class NewtonSolver {
   /// not be one of the inputs.
   virtual void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
                      Eigen::VectorXd& dx) = 0;
+  /// What a continuation bit for bit needs beyond the iterate the next factor() is given (ReducedSolver::save_history:
+  /// the sparse factorization's pivot history); nothing for a solver whose factorization depends on its matrix alone.
+  virtual void save_history(std::map<std::string, std::vector<double>>& out, const std::string& prefix) const {
+    (void)out, (void)prefix;
+  }
+  virtual void restore_history(const std::map<std::string, std::vector<double>>& in, const std::string& prefix) {
+    (void)in, (void)prefix;
+  }
 };
 
 class DenseNewton final : public NewtonSolver {
@@ -69,6 +79,12 @@ class ConstantCoreNewton final : public NewtonSolver {
               const Eigen::VectorXd& mu, const Eigen::SparseMatrix<double>& jacobian) override;
   void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,
              Eigen::VectorXd& dx) override;
+  void save_history(std::map<std::string, std::vector<double>>& out, const std::string& prefix) const override {
+    reduced_->save_history(out, prefix);
+  }
+  void restore_history(const std::map<std::string, std::vector<double>>& in, const std::string& prefix) override {
+    reduced_->restore_history(in, prefix);
+  }
   /// The reduced matrix's solver (its last matrix: for tests).
   [[nodiscard]] const ReducedSolver& reduced() const { return *reduced_; }
 

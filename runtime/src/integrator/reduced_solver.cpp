@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 namespace flexbody::runtime::detail {
 namespace {
@@ -91,7 +92,10 @@ void SparseReducedSolver::factor(Eigen::Index size, const std::vector<Eigen::Tri
   int* outer = outer_.data();
   int* inner = inner_.data();
   double* values = values_.data();
+  const bool replay = std::exchange(replay_, false);
+  if (replay && pivoted_last_) return;  // restore_history's pivoting factorization of these values is this one's
   singular_ = true;
+  pivoted_last_ = false;
   if (klu_->numeric && klu_refactor(outer, inner, values, klu_->symbolic, klu_->numeric, &klu_->common) &&
       klu_rcond(klu_->symbolic, klu_->numeric, &klu_->common) && klu_->common.rcond >= kPivotDegradation * fresh_rcond_) {
     singular_ = false;
@@ -100,6 +104,8 @@ void SparseReducedSolver::factor(Eigen::Index size, const std::vector<Eigen::Tri
   klu_->free_numeric();
   klu_->numeric = klu_factor(outer, inner, values, klu_->symbolic, &klu_->common);
   ++pivoting_;
+  pivoted_last_ = true;
+  if (klu_->numeric) pivot_values_ = values_;
   if (!klu_->numeric) {  // singular: solve() reports it as non-finite, and the integrator names it
     if (klu_->common.status == KLU_SINGULAR) return;
     throw std::runtime_error("KLU could not factorize the reduced Newton matrix (" + std::to_string(size) +
@@ -109,6 +115,52 @@ void SparseReducedSolver::factor(Eigen::Index size, const std::vector<Eigen::Tri
   klu_rcond(klu_->symbolic, klu_->numeric, &klu_->common);
   fresh_rcond_ = klu_->common.rcond;
   singular_ = !(fresh_rcond_ > 0.0);
+}
+
+void SparseReducedSolver::save_history(std::map<std::string, std::vector<double>>& out, const std::string& prefix) const {
+  out[prefix + "outer"].assign(outer_.begin(), outer_.end());
+  out[prefix + "inner"].assign(inner_.begin(), inner_.end());
+  out[prefix + "pivot_values"] = klu_->numeric ? pivot_values_ : std::vector<double>();
+  out[prefix + "state"] = {static_cast<double>(growths_), klu_->numeric ? 1.0 : 0.0, pivoted_last_ ? 1.0 : 0.0,
+                           singular_ ? 1.0 : 0.0, fresh_rcond_, static_cast<double>(analyses_),
+                           static_cast<double>(pivoting_)};
+}
+
+void SparseReducedSolver::restore_history(const std::map<std::string, std::vector<double>>& in, const std::string& prefix) {
+  auto entry = [&](const char* name) -> const std::vector<double>& {
+    const auto found = in.find(prefix + name);
+    if (found == in.end()) throw std::invalid_argument("checkpoint: missing entry " + prefix + name);
+    return found->second;
+  };
+  const std::vector<double>& outer = entry("outer");
+  const std::vector<double>& inner = entry("inner");
+  const std::vector<double>& state = entry("state");
+  const std::vector<double>& pivot = entry("pivot_values");
+  if (state.size() != 7) throw std::invalid_argument("checkpoint: " + prefix + "state has " + std::to_string(state.size()) + " entries, not 7");
+  klu_->free_all();
+  outer_.assign(outer.begin(), outer.end());
+  inner_.assign(inner.begin(), inner.end());
+  growths_ = static_cast<int>(state[0]);
+  pivoted_last_ = state[2] != 0.0;
+  singular_ = state[3] != 0.0;
+  fresh_rcond_ = state[4];
+  analyses_ = static_cast<int>(state[5]);
+  pivoting_ = static_cast<int>(state[6]);
+  pivot_values_ = pivot;
+  replay_ = true;
+  if (outer_.empty()) return;  // nothing factorized yet
+  const int n = static_cast<int>(outer_.size()) - 1;
+  if (n < 1 || outer_.front() != 0 || static_cast<std::size_t>(outer_.back()) != inner_.size() ||
+      !std::is_sorted(outer_.begin(), outer_.end()) ||
+      std::any_of(inner_.begin(), inner_.end(), [n](int i) { return i < 0 || i >= n; }))
+    throw std::invalid_argument("checkpoint: " + prefix + "outer and inner are not a sparse pattern");
+  klu_->symbolic = klu_analyze(n, outer_.data(), inner_.data(), &klu_->common);
+  if (!klu_->symbolic) throw std::invalid_argument("checkpoint: KLU could not analyse the pattern " + prefix + "inner");
+  if (state[1] == 0.0) return;  // the last factorization found the matrix singular: no numeric object
+  if (pivot_values_.size() != inner_.size())
+    throw std::invalid_argument("checkpoint: " + prefix + "pivot_values does not match the pattern");
+  klu_->numeric = klu_factor(outer_.data(), inner_.data(), pivot_values_.data(), klu_->symbolic, &klu_->common);
+  if (!klu_->numeric) throw std::invalid_argument("checkpoint: KLU could not factorize " + prefix + "pivot_values again");
 }
 
 bool SparseReducedSolver::scatter() {

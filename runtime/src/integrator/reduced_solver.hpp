@@ -22,7 +22,9 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <map>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace flexbody::runtime::detail {
@@ -35,6 +37,16 @@ class ReducedSolver {
   /// x = A⁻¹ b (x resized to b's size; not b). A singular matrix gives non-finite entries, which the integrator
   /// reports as a singular Newton matrix.
   virtual void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) = 0;
+  /// What a continuation bit for bit needs beyond the matrix the next factor() is given (a checkpoint's entries,
+  /// named from `prefix`): nothing for the dense solver, whose factorization depends on its matrix alone.
+  virtual void save_history(std::map<std::string, std::vector<double>>& out, const std::string& prefix) const {
+    (void)out, (void)prefix;
+  }
+  /// Restores save_history's entries: the next factor() then repeats the last one before the save exactly (its
+  /// result and its effect on later factorizations). Throws std::invalid_argument naming a missing or malformed entry.
+  virtual void restore_history(const std::map<std::string, std::vector<double>>& in, const std::string& prefix) {
+    (void)in, (void)prefix;
+  }
   /// The matrix of the last factor(), sparse (for tests; the dense solver's has its size only).
   [[nodiscard]] const Eigen::SparseMatrix<double>& matrix() const { return matrix_; }
 
@@ -65,6 +77,13 @@ class SparseReducedSolver final : public ReducedSolver {
   [[nodiscard]] int pivoting_factorizations() const { return pivoting_; }
   /// Entries of the pattern KLU factorizes (the nonzeros seen so far): for tests.
   [[nodiscard]] Eigen::Index pattern_nonzeros() const { return static_cast<Eigen::Index>(inner_.size()); }
+  /// The analysed pattern, its growths, the values of the last pivoting factorization (whose pivot sequence later
+  /// refactorizations keep) and how the last factor() ended.
+  void save_history(std::map<std::string, std::vector<double>>& out, const std::string& prefix) const override;
+  /// Analyses the saved pattern and factorizes the saved pivoting values again (the same symbolic and numeric objects
+  /// as before the save); the next factor() then ends as the last one did: a refactorization with the same pivots
+  /// where it was one, the numeric object as restored where it was a pivoting factorization.
+  void restore_history(const std::map<std::string, std::vector<double>>& in, const std::string& prefix) override;
 
  private:
   struct Klu;  // KLU's objects, kept out of this header
@@ -80,6 +99,9 @@ class SparseReducedSolver final : public ReducedSolver {
   std::vector<int> outer_, inner_;  ///< the analysed pattern: every nonzero seen so far
   std::vector<double> values_;      ///< the last matrix on it
   bool singular_ = true;
+  std::vector<double> pivot_values_;  ///< values_ at the last pivoting factorization that succeeded
+  bool pivoted_last_ = false;  ///< the last factor() ended with a pivoting factorization (or a singular matrix)
+  bool replay_ = false;  ///< restore_history ran: the next factor() keeps the restored numeric object if pivoted_last_
   double fresh_rcond_ = 0.0;  ///< KLU's pivot-ratio estimate at the last pivoting factorization
   int analyses_ = 0, pivoting_ = 0;
 };

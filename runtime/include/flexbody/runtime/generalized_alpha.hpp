@@ -24,6 +24,10 @@
 #include <string>
 #include <vector>
 
+namespace flexbody::format {
+struct CheckpointData;
+}
+
 namespace flexbody::runtime {
 
 /// How each Newton iteration's linear system is solved.
@@ -182,6 +186,15 @@ class GeneralizedAlpha {
   /// changed state that does not is pulled onto them by the next step's Newton iteration, as an impulse would).
   /// Throws std::invalid_argument naming the entry for a size that is not the system's or a non-finite value.
   void set_state(const IntegratorState& state);
+  /// Writes into `out` (entries "integrator.*") everything a continuation bit for bit needs: the state, the step
+  /// count, the iterate where the kept Newton matrix was built (modified Newton keeps it across steps, and in the
+  /// stabilised form ν's direction too), the sparse factorization's pivot history, the counters and the warnings.
+  void save(format::CheckpointData& out) const;
+  /// Continues from save()'s entries as if the run had never stopped: the steps that follow give the numbers the saved
+  /// integrator's would have, bit for bit (the kept Newton matrix is rebuilt at its iterate). The integrator must be
+  /// built for the same system and options (a scene's checkpoint checks their identity); throws
+  /// std::invalid_argument naming a missing or malformed entry, or sizes, a step or ρ∞ that differ from this one's.
+  void restore(const format::CheckpointData& in);
   [[nodiscard]] double time() const { return t_; }
   [[nodiscard]] const Eigen::VectorXd& coordinates() const { return q_; }
   [[nodiscard]] const Eigen::VectorXd& velocities() const { return v_; }
@@ -269,6 +282,15 @@ class GeneralizedAlpha {
   std::vector<char> spin_warned_;  ///< per body: its spin warning was given
   /// Per body: System::prestress_gap at the start (empty: its spin is judged by the stiffened levels).
   std::vector<std::string> prestress_gaps_;
+  /// The inputs of the last Newton matrix built (build_newton_matrix), kept so that restore() rebuilds it bit for bit:
+  /// the iterate before ν's correction was turned to its Jacobian, that correction and ν, and the frame of its step.
+  struct BuildPoint {
+    bool valid = false;
+    double t1 = 0.0, h = 0.0;
+    bool couple = false;
+    int iterations = 0;
+    Eigen::VectorXd q, shift, nu, v, qdd, mu;
+  } built_at_;
   std::unique_ptr<detail::NewtonSolver> solver_;
   /// solver_ when it is the constant core with a sparse reduced matrix: its coupled stabilised step is one sparse
   /// system (ConstantCoreNewton::factor_coupled) instead of StabilizedCoupling's m solves; null otherwise.

@@ -7,6 +7,7 @@
 #include "hdf5_io.hpp"
 #include "hdf5_structure.hpp"
 #include "sealed_write.hpp"
+#include "sha256.hpp"
 
 #include "flexbody/format/body_file.hpp"
 
@@ -41,6 +42,12 @@ std::string utc_now() {
 }
 
 }  // namespace
+
+std::string sha256_hex(std::string_view bytes) {
+  detail::Sha256 hash;
+  hash.update({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()});
+  return detail::to_hex(hash.finish());
+}
 
 void write_checkpoint_file(const CheckpointData& checkpoint, const std::filesystem::path& path) {
   for (const auto& [name, values] : checkpoint.numbers) {

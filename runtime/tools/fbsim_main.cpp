@@ -1,6 +1,6 @@
 // fbsim: runs a scene of flexible (improved GCMS) and rigid bodies and writes what it asks for.
 //
-//   fbsim scene.yaml [-o DIR] [--json] [-q]
+//   fbsim scene.yaml [-o DIR] [--json] [-q] [--resume DIR]
 #include "flexbody/format/body_file.hpp"
 #include "flexbody/scene/scene.hpp"
 #include "flexbody/scene/simulation.hpp"
@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <iostream>
 #include <memory>
 #include <system_error>
@@ -20,6 +21,27 @@
 namespace {
 
 constexpr int kBadInput = 2, kFailed = 1;
+
+// The signal that asked the run to stop (SIGINT, SIGTERM, SIGHUP), 0 while none did: the run stops after the step in
+// progress and writes a checkpoint. The handler is reset once it ran, so that a second Ctrl-C ends fbsim at once.
+volatile std::sig_atomic_t stop_signal = 0;
+
+extern "C" void request_stop(int signal) { stop_signal = signal; }
+
+void stop_on_signals() {
+  struct sigaction action {};
+  action.sa_handler = request_stop;
+  action.sa_flags = SA_RESETHAND;
+  sigemptyset(&action.sa_mask);
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction before {};
+    // A signal the process was started ignoring (nohup, a background job's SIGINT) stays ignored.
+    if (sigaction(signal, nullptr, &before) == 0 && before.sa_handler == SIG_IGN) continue;
+    sigaction(signal, &action, nullptr);
+  }
+}
+
+const char* signal_name(int signal) { return signal == SIGINT ? "SIGINT (Ctrl-C)" : signal == SIGTERM ? "SIGTERM" : "SIGHUP"; }
 
 // "42 s", "7.5 min", "3.2 h": a time to go as people read it.
 std::string duration_text(double seconds) {
@@ -51,6 +73,11 @@ int main(int argc, char** argv) {
   app.add_option("--max-output", max_output, "the most the run may write into its output directory, e.g. 50GB (default "
                                              "10 GB and 100000 files; the scene's output_budget sets both); a run "
                                              "estimated over it is refused before its first step");
+  std::string resume;
+  app.add_option("--resume", resume, "continue the run whose outputs and checkpoint.h5 are in DIR (written when it was "
+                                     "stopped, or by the scene's checkpoint: {interval}), with the same scene and body "
+                                     "files; its outputs come out as an uninterrupted run's, bit for bit")
+      ->type_name("DIR");
   int threads = 1;
   app.add_option("--threads", threads,
                  "threads for the per-body work of scenes of 64 bodies and more (default 1: with the cores shared, more "
@@ -65,8 +92,16 @@ int main(int argc, char** argv) {
   }
   flexbody::runtime::set_threads(threads);
   const std::filesystem::path scene_path(scene_file);
+  if (!resume.empty() && !output.empty() &&
+      std::filesystem::weakly_canonical(resume) != std::filesystem::weakly_canonical(output))
+    return fail(fmt::format("--resume {} and -o {}: a run resumes in its own output directory; give one of them",
+                            resume, output), kBadInput);
+  if (!resume.empty() && !std::filesystem::is_regular_file(std::filesystem::path(resume) / flexbody::scene::kCheckpointFileName))
+    return fail(fmt::format("--resume {}: no {} there (a run writes it when it is stopped, or every interval of the "
+                            "scene's checkpoint key)", resume, flexbody::scene::kCheckpointFileName), kBadInput);
   const std::filesystem::path directory =
-      output.empty() ? std::filesystem::path(scene_path.stem().string() + "_results") : std::filesystem::path(output);
+      !resume.empty() ? std::filesystem::path(resume)
+      : output.empty() ? std::filesystem::path(scene_path.stem().string() + "_results") : std::filesystem::path(output);
   // Checked before anything is read or run: an existing file is never a directory to write into.
   if (std::error_code error; std::filesystem::exists(directory, error) && !std::filesystem::is_directory(directory, error)) {
     const std::string origin = output.empty() ? fmt::format("{} (the default output directory: the scene's name + "
@@ -97,30 +132,61 @@ int main(int argc, char** argv) {
   // On a terminal: the simulated time, steps per second and the time to go (at the rate so far), every 100 steps.
   const double step = read.integrator.step;
   std::chrono::steady_clock::time_point started;  // set when the steps begin (after the assembly and the first frame)
+  double start_time = 0.0;                        // and the simulated time then (a resumed run's is not 0)
   auto progress = [&](double t) {
     if (!terminal) return;
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    const double rate = t / step / std::max(seconds, 1e-9);
+    const double rate = (t - start_time) / step / std::max(seconds, 1e-9);
     std::cerr << fmt::format("\r  t = {:.4g} / {:.4g} s, {:.0f} steps/s, {} to go   ", t, end, rate,
                              duration_text((end - t) / step / rate))
               << std::flush;
   };
+  const bool checkpoints = read.checkpoint_interval.has_value();
   std::unique_ptr<flexbody::scene::Simulation> simulation;
+  // A checkpoint at a stop; one that cannot be written is said, and does not hide why the run stopped.
+  auto checkpoint_at_stop = [&]() -> std::string {
+    try {
+      const std::filesystem::path written = simulation->checkpoint();
+      return fmt::format("; checkpoint {} at t = {:.6g} s: continue with fbsim {} --resume {}", written.string(),
+                         simulation->time(), scene_path.string(), directory.string());
+    } catch (const std::exception& e) {
+      return fmt::format("; no checkpoint: {}", e.what());
+    }
+  };
   try {
     auto warn = [terminal](const std::string& line) {  // even with -q: a broken conservation law is not progress
       if (terminal) std::cerr << '\n';
       std::cerr << "fbsim: warning: " << line << '\n';
     };
-    simulation = std::make_unique<flexbody::scene::Simulation>(std::move(read), flexbody::scene::OutputSinks{directory, false},
-                                                               warn);
+    const flexbody::scene::OutputSinks sinks{directory, false};
+    if (resume.empty())
+      simulation = std::make_unique<flexbody::scene::Simulation>(std::move(read), sinks, warn);
+    else
+      simulation = std::make_unique<flexbody::scene::Simulation>(
+          std::move(read), sinks, flexbody::scene::Resume{directory / flexbody::scene::kCheckpointFileName}, warn);
+    stop_on_signals();
     started = std::chrono::steady_clock::now();
-    simulation->run(end, progress);
+    start_time = simulation->time();
+    if (!simulation->run(end, progress, [] { return stop_signal != 0; })) {
+      if (terminal) std::cerr << '\n';
+      std::cerr << fmt::format("fbsim: stopped by {} at t = {:.6g} s{}\n", signal_name(stop_signal), simulation->time(),
+                               checkpoint_at_stop());
+      return 128 + stop_signal;
+    }
+    // The end's checkpoint, from which a later --resume --end runs on; without checkpoints, one left by a stop before a
+    // --resume no longer matches the files (it would cut them back).
+    if (checkpoints) simulation->checkpoint();
+    else if (std::error_code ignored; !resume.empty()) std::filesystem::remove(directory / flexbody::scene::kCheckpointFileName, ignored);
   } catch (const flexbody::scene::OutputBudgetError& e) {  // before the first step, naming the scene's lines
+    return fail(e.what(), kBadInput);
+  } catch (const flexbody::scene::CheckpointMismatch& e) {  // --resume with a checkpoint of another scene or directory
+    return fail(e.what(), kBadInput);
+  } catch (const flexbody::format::BodyFileError& e) {  // --resume with a damaged or foreign checkpoint file
     return fail(e.what(), kBadInput);
   } catch (const flexbody::runtime::StepFailure& e) {
     if (terminal) std::cerr << '\n';
-    return fail(fmt::format("{}: {} (outputs up to the last completed step are in {})", scene_path.string(), e.what(),
-                            directory.string()), kFailed);
+    return fail(fmt::format("{}: {} (outputs up to the last completed step are in {}{})", scene_path.string(), e.what(),
+                            directory.string(), checkpoints ? checkpoint_at_stop() : std::string()), kFailed);
   } catch (const std::invalid_argument& e) {  // the assembled scene is inconsistent (before any step or file)
     return fail(fmt::format("{}: {}", scene_path.string(), e.what()), kBadInput);
   } catch (const std::exception& e) {
@@ -136,6 +202,9 @@ int main(int argc, char** argv) {
                              summary.newton_iterations,
                              summary.steps ? static_cast<double>(summary.newton_iterations) / static_cast<double>(summary.steps) : 0.0,
                              summary.cpu_seconds);
+    if (summary.resumed_at)
+      std::cout << fmt::format("  resumed at t = {:.6g} s from {} (the counts are the whole run's)\n", *summary.resumed_at,
+                               (directory / flexbody::scene::kCheckpointFileName).string());
     std::cout << fmt::format("  {} Newton matrices, factorized {}\n", summary.newton_matrices,
                              summary.sparse ? "sparse (KLU)" : "dense");
     if (const int moved = scene.assembly.most_moved(); scene.assembly.iterations > 0 && moved >= 0)
@@ -179,6 +248,9 @@ int main(int argc, char** argv) {
       std::cout << fmt::format("  {} warning{} (on stderr)\n", summary.warnings.size(),
                                summary.warnings.size() == 1 ? "" : "s");
     for (const auto& f : summary.files) std::cout << "  wrote " << f.string() << '\n';
+    if (checkpoints)
+      std::cout << fmt::format("  checkpoint {} at t = {:.6g} s\n", (directory / flexbody::scene::kCheckpointFileName).string(),
+                               simulation->time());
     std::cout << fmt::format("  wrote {} in {:.0f} files (estimated before the run: {} in {:.0f})\n",
                              flexbody::scene::format_size(summary.written_bytes), summary.written_files,
                              flexbody::scene::format_size(summary.estimated_bytes), summary.estimated_files);

@@ -12,7 +12,8 @@
 namespace flexbody::test {
 
 BoundedRun run_bounded(const std::string& executable, const std::vector<std::string>& arguments,
-                       const std::filesystem::path& output_stem, std::chrono::duration<double> limit) {
+                       const std::filesystem::path& output_stem, std::chrono::duration<double> limit,
+                       std::optional<std::chrono::duration<double>> interrupt_after, int signal) {
   const std::string out_path = output_stem.string() + ".out";
   const std::string err_path = output_stem.string() + ".err";
   std::vector<char*> argv;
@@ -35,6 +36,10 @@ BoundedRun run_bounded(const std::string& executable, const std::vector<std::str
   for (;;) {
     const pid_t done = ::waitpid(child, &status, WNOHANG);
     if (done == child) break;
+    if (interrupt_after && std::chrono::steady_clock::now() - start > *interrupt_after) {
+      ::kill(child, signal);
+      interrupt_after.reset();
+    }
     if (std::chrono::steady_clock::now() - start > limit) {
       run.timed_out = true;
       ::kill(child, SIGKILL);

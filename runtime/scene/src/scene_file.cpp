@@ -1,6 +1,7 @@
 #include "flexbody/scene/scene.hpp"
 #include "scene_parts.hpp"
 
+#include "flexbody/format/checkpoint_file.hpp"
 #include "flexbody/format/yaml_reader.hpp"
 #include "flexbody/runtime/paraview_series.hpp"
 
@@ -8,6 +9,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <numbers>
 #include <set>
@@ -15,7 +18,12 @@
 namespace flexbody::scene {
 
 Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overrides) {
-  return read_scene(Reader(file.string()).load("scene"), file.string(), file.parent_path(), overrides);
+  Scene scene = read_scene(Reader(file.string()).load("scene"), file.string(), file.parent_path(), overrides);
+  // The bytes, not the document: a checkpoint belongs to this file as it is (a changed comment changes it too).
+  std::ifstream in(file, std::ios::binary);
+  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  scene.source_sha256 = format::sha256_hex(bytes);
+  return scene;
 }
 
 Scene read_scene(const YAML::Node& root, const std::string& source, const std::filesystem::path& base,
@@ -23,8 +31,9 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
   const Reader r(source);
   r.expect_map(root, "the scene",
                {"bodies", "joints", "forces", "springs", "gravity", "integrator", "outputs", "monitors", "paraview",
-                "assembly", "output_budget"});
+                "assembly", "output_budget", "checkpoint"});
   Scene scene;
+  scene.source_sha256 = format::sha256_hex(YAML::Dump(root));
   runtime::SceneBuilder builder(scene.system);
   std::map<std::string, int> bodies;  // name -> index
 
@@ -61,6 +70,7 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
     const std::string path_text = r.text(r.required(b, "file", where), where + " file");
     spec.file = std::filesystem::path(path_text).is_absolute() ? std::filesystem::path(path_text) : base / path_text;
     spec.stresses = stresses_used.count(name) > 0;
+    scene.body_files.push_back(spec.file);
     // modes: all (default) | rigid | a count | full (the unreduced improved ACF of the file's mesh: the reference).
     if (const YAML::Node m = b["modes"]) {
       const std::string text = r.text(m, where + " modes");
@@ -357,6 +367,11 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
     }
   }
   if (overrides.max_output) scene.budget.bytes = *overrides.max_output;
+  // checkpoint: {interval: SECONDS}: DIR/checkpoint.h5 every so many seconds of wall-clock time (docs/scenes.md).
+  if (const YAML::Node checkpoint = root["checkpoint"]) {
+    r.expect_map(checkpoint, "checkpoint", {"interval"});
+    scene.checkpoint_interval = r.positive(r.required(checkpoint, "interval", "checkpoint"), "checkpoint interval");
+  }
 
   // assembly: {tolerance: fraction of a body's size}: close the joints' gaps (an interface's point comes from a mesh,
   // micrometres off the CAD's nominal position) by the least mass-weighted move of the bodies (runtime/assembly.hpp).

@@ -1,7 +1,9 @@
 #include "flexbody/scene/simulation.hpp"
 
 #include "output_values.hpp"
+#include "simulation_run.hpp"
 
+#include "flexbody/format/checkpoint_file.hpp"
 #include "flexbody/runtime/gcms_elastic.hpp"
 #include "flexbody/runtime/paraview_series.hpp"
 
@@ -19,26 +21,6 @@
 namespace flexbody::scene {
 namespace {
 
-// One CSV file per output; values with 17 significant digits (round-trip exact).
-class CsvFile {
- public:
-  CsvFile(const std::filesystem::path& path, const std::vector<std::string>& columns) : out_(path) {
-    if (!out_) throw std::runtime_error(path.string() + ": cannot write");
-    out_ << "t [s]";
-    for (const std::string& c : columns) out_ << ',' << c;
-    out_ << '\n';
-  }
-  void row(double t, const Eigen::VectorXd& values) {
-    out_ << fmt::format("{:.17g}", t);
-    for (Eigen::Index k = 0; k < values.size(); ++k) out_ << fmt::format(",{:.17g}", values(k));
-    out_ << '\n';
-  }
-  void flush() { out_.flush(); }
-
- private:
-  std::ofstream out_;
-};
-
 // The scales that E(t) − E_0 and |L(t)| − |L_0| round relative to are at least this fraction of the magnitudes of
 // the terms summed in them, so that round-off never warns.
 constexpr double kRoundOffScale = 1e-9;
@@ -47,48 +29,6 @@ constexpr double kRoundOffScale = 1e-9;
 double cpu_since(std::clock_t start) { return static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC; }
 
 }  // namespace
-
-struct Simulation::Run {
-  Scene scene;
-  std::unique_ptr<runtime::GeneralizedAlpha> integrator;
-  std::function<void(const std::string&)> warn;
-  std::vector<std::unique_ptr<CsvFile>> files;  // per output (empty without a directory), then monitors.csv
-  std::unique_ptr<CsvFile> monitors;
-  std::vector<runtime::ParaViewSeries> series;
-  std::vector<OutputTable> tables;  // OutputSinks::in_memory: per output, then the monitors
-  bool in_memory = false;
-  RunSummary summary;
-  long count = 0;               // steps since the start: output_every and paraview_every count them
-  bool written = true, drawn = true;  // the last completed step is recorded, drawn
-  std::chrono::steady_clock::duration wall{}, in_integrator{};
-  // The drift's scale: the largest kinetic + elastic + spring energy of the run (independent of where the gravity
-  // potential is zero); and the magnitudes of the terms summed in E and L (the gravity potential depends on where
-  // its zero is; |L_0| may be round-off of a body that only translates).
-  double exchanged = 0.0, largest_change = 0.0, energy_terms = 0.0;
-  double momentum_initial = 0.0, momentum_terms = 0.0;
-  bool energy_warned = false, momentum_warned = false;
-  double next_row = 0.0, next_frame = 0.0;  // output_interval, paraview_interval: the next times to record
-
-  void record();
-  void draw();
-  void check();
-  void baseline();
-  [[nodiscard]] OutputEstimate estimate(double end) const;
-  [[nodiscard]] bool due(const std::optional<double>& interval, int every, double& next) const;
-  [[nodiscard]] double time_slack(double t) const;
-  [[nodiscard]] double next_multiple(double interval, double t) const;
-  void reschedule();
-  void advance(bool to_end, double end, bool last);
-  void recover();  // after a failed step: the last completed step recorded and drawn
-  void flush() {
-    for (auto& f : files) f->flush();
-    if (monitors) monitors->flush();
-  }
-  void warning(std::string line) {
-    summary.warnings.push_back(std::move(line));
-    if (warn) warn(summary.warnings.back());
-  }
-};
 
 void Simulation::Run::record() {
   const double t = integrator->time();
@@ -298,44 +238,72 @@ void Simulation::Run::recover() {
 
 Simulation::Simulation(Scene scene, const OutputSinks& sinks, std::function<void(const std::string&)> warn)
     : run_(std::make_unique<Run>()) {
+  run_->start(std::move(scene), sinks, std::move(warn), nullptr);
+}
+
+Simulation::Simulation(Scene scene, const OutputSinks& sinks, const Resume& from, std::function<void(const std::string&)> warn)
+    : run_(std::make_unique<Run>()) {
+  if (!sinks.directory) throw std::logic_error("Simulation: a run resumes into its output directory; none was given");
+  const format::CheckpointData checkpoint = format::read_checkpoint_file(from.checkpoint);
+  run_->start(std::move(scene), sinks, std::move(warn), &checkpoint, from.checkpoint);
+}
+
+// The run from the start, or from a checkpoint (`from`, read from `label`): the integrator first, so that a scene
+// whose initial state or constraints are inconsistent fails before any file; then the budget, before any file too.
+void Simulation::Run::start(Scene s, const OutputSinks& sinks, std::function<void(const std::string&)> w,
+                            const format::CheckpointData* from, const std::filesystem::path& label) {
   const std::clock_t cpu_start = std::clock();
-  Run& r = *run_;
-  r.scene = std::move(scene);
-  r.warn = std::move(warn);
-  // The integrator first: a scene whose initial state or constraints are inconsistent fails before any file.
-  r.integrator = std::make_unique<runtime::GeneralizedAlpha>(r.scene.system, r.scene.integrator);
-  r.summary.sparse = r.integrator->sparse();
-  r.in_memory = sinks.in_memory;
-  if (r.in_memory) {
-    for (const Sensor& s : r.scene.sensors) r.tables.push_back({s.name, columns_of(r.scene, s), {}, {}});
-    if (r.scene.monitors) r.tables.push_back({"monitors", monitor_columns(), {}, {}});
+  scene = std::move(s);
+  warn = std::move(w);
+  if (from) check_identity(*from, label);
+  integrator = std::make_unique<runtime::GeneralizedAlpha>(scene.system, scene.integrator);
+  if (from) {
+    try {
+      integrator->restore(*from);
+    } catch (const std::invalid_argument& e) {
+      throw CheckpointMismatch(fmt::format("{}: {}", label.string(), e.what()));
+    }
+  }
+  summary.sparse = integrator->sparse();
+  in_memory = sinks.in_memory;
+  if (in_memory) {
+    for (const Sensor& sensor : scene.sensors) tables.push_back({sensor.name, columns_of(scene, sensor), {}, {}});
+    if (scene.monitors) tables.push_back({"monitors", monitor_columns(), {}, {}});
   }
   if (sinks.directory) {
     const std::filesystem::path& directory = *sinks.directory;
-    for (const SurfaceSeries& s : r.scene.paraview)  // nothing is written before its first frame
-      r.series.emplace_back(directory, r.scene.system.body_name(s.body), r.scene.system.model(s.body), s.stresses);
+    for (const SurfaceSeries& series_of : scene.paraview)  // nothing is written before its first frame
+      series.emplace_back(directory, scene.system.body_name(series_of.body), scene.system.model(series_of.body),
+                          series_of.stresses);
     // What a run to the scene's end would write, checked before any file is made.
-    const OutputEstimate estimate = r.estimate(r.scene.end_time);
-    r.summary.estimated_bytes = estimate.bytes();
-    r.summary.estimated_files = estimate.files();
-    check_output_budget(estimate, r.scene.budget, r.scene.step_at);
+    const OutputEstimate estimated = estimate(scene.end_time);
+    summary.estimated_bytes = estimated.bytes();
+    summary.estimated_files = estimated.files();
+    check_output_budget(estimated, scene.budget, scene.step_at);
     if (std::error_code error; !std::filesystem::create_directories(directory, error) && error)
       throw std::runtime_error(fmt::format("{}: cannot create the output directory: {}", directory.string(), error.message()));
-    for (const Sensor& s : r.scene.sensors) {
-      r.summary.files.push_back(directory / (s.name + ".csv"));
-      r.files.push_back(std::make_unique<CsvFile>(r.summary.files.back(), columns_of(r.scene, s)));
+    for (const Sensor& sensor : scene.sensors) summary.files.push_back(directory / (sensor.name + ".csv"));
+    if (scene.monitors) summary.files.push_back(directory / "monitors.csv");
+    for (const runtime::ParaViewSeries& one : series) summary.files.push_back(one.collection());
+    checkpoint_file = directory / kCheckpointFileName;
+    // A new run's files replace the directory's: a checkpoint left there by an earlier run would no longer match them.
+    if (std::error_code ignored; !from) std::filesystem::remove(*checkpoint_file, ignored);
+    if (from) {
+      restore(*from, label);  // the files continued where the checkpoint left them
+    } else {
+      for (std::size_t k = 0; k < scene.sensors.size(); ++k)
+        files.push_back(std::make_unique<CsvFile>(summary.files[k], columns_of(scene, scene.sensors[k])));
+      if (scene.monitors) monitors = std::make_unique<CsvFile>(summary.files[scene.sensors.size()], monitor_columns());
     }
-    if (r.scene.monitors) {
-      r.summary.files.push_back(directory / "monitors.csv");
-      r.monitors = std::make_unique<CsvFile>(r.summary.files.back(), monitor_columns());
-    }
-    for (const runtime::ParaViewSeries& series : r.series) r.summary.files.push_back(series.collection());
   }
-  r.baseline();
-  r.reschedule();
-  r.record();
-  r.draw();
-  r.summary.cpu_seconds += cpu_since(cpu_start);
+  last_checkpoint = std::chrono::steady_clock::now();
+  if (!from) {
+    baseline();
+    reschedule();
+    record();
+    draw();
+  }
+  summary.cpu_seconds += cpu_since(cpu_start);
 }
 
 Simulation::~Simulation() = default;
@@ -344,6 +312,7 @@ void Simulation::step() {
   const std::clock_t cpu_start = std::clock();
   try {
     run_->advance(false, 0.0, false);
+    run_->checkpoint_when_due();
   } catch (...) {
     run_->recover();
     run_->summary.cpu_seconds += cpu_since(cpu_start);
@@ -352,7 +321,7 @@ void Simulation::step() {
   run_->summary.cpu_seconds += cpu_since(cpu_start);
 }
 
-void Simulation::run(double end, const std::function<void(double)>& progress) {
+bool Simulation::run(double end, const std::function<void(double)>& progress, const std::function<bool()>& stop) {
   Run& r = *run_;
   const double now = r.integrator->time();
   const double h = r.scene.integrator.step;
@@ -361,7 +330,7 @@ void Simulation::run(double end, const std::function<void(double)>& progress) {
                                 8.0 * std::numeric_limits<double>::epsilon() * std::abs(end));
   if (!std::isfinite(end) || end < now - slack)
     throw std::invalid_argument(fmt::format("run to t = {} s: the simulation is at t = {} s already", end, now));
-  if (end <= now + slack) return;
+  if (end <= now + slack) return true;
   // Whole steps, the last one shortened to end on `end` exactly (step_count), at most kMostSteps (scene.hpp).
   if ((end - now) / h > kMostSteps)
     throw std::invalid_argument(fmt::format("run to t = {} s: {:.3g} steps of {} s, more than a run may take ({:.0e})",
@@ -374,7 +343,13 @@ void Simulation::run(double end, const std::function<void(double)>& progress) {
   try {
     for (long k = 1; k <= steps; ++k) {
       r.advance(k == steps, end, k == steps);
+      r.checkpoint_when_due();
       if (progress && k % 100 == 0) progress(r.integrator->time());
+      if (stop && k < steps && stop()) {
+        r.flush();
+        r.summary.cpu_seconds += cpu_since(cpu_start);
+        return false;
+      }
     }
   } catch (...) {
     r.recover();
@@ -383,7 +358,16 @@ void Simulation::run(double end, const std::function<void(double)>& progress) {
   }
   r.flush();
   r.summary.cpu_seconds += cpu_since(cpu_start);
+  return true;
 }
+
+std::filesystem::path Simulation::checkpoint() {
+  if (!run_->checkpoint_file) throw std::logic_error("Simulation::checkpoint: the run has no output directory");
+  run_->write_checkpoint();
+  return *run_->checkpoint_file;
+}
+
+std::optional<double> Simulation::last_checkpoint() const { return run_->checkpoint_time; }
 
 const Scene& Simulation::scene() const { return run_->scene; }
 const runtime::GeneralizedAlpha& Simulation::integrator() const { return *run_->integrator; }

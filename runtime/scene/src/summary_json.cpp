@@ -69,6 +69,7 @@ std::string summary_json(const Simulation& simulation, const std::string& scene_
   j["output_files"] = summary.written_files;
   j["estimated_output_bytes"] = summary.estimated_bytes;
   j["estimated_output_files"] = summary.estimated_files;
+  j["resumed_at_s"] = summary.resumed_at ? nlohmann::ordered_json(*summary.resumed_at) : nlohmann::ordered_json();
   return j.dump();
 }
 

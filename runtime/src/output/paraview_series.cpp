@@ -149,6 +149,25 @@ void ParaViewSeries::write(double t, const Eigen::VectorXd& q_b) {
   format::write_pvd(collection_, frames_);
 }
 
+void ParaViewSeries::resume(const std::vector<double>& times, double bytes) {
+  frames_.clear();
+  for (const double t : times) {
+    const std::string file = frame_name(name_, frames_.size());
+    if (std::error_code missing; !std::filesystem::is_regular_file(directory_ / name_ / file, missing))
+      throw std::runtime_error((directory_ / name_ / file).string() + ": a frame of the checkpoint's series is missing");
+    frames_.emplace_back(t, name_ + "/" + file);
+  }
+  bytes_written_ = bytes;
+  if (!frames_.empty()) format::write_pvd(collection_, frames_);
+}
+
+std::vector<double> ParaViewSeries::frame_times() const {
+  std::vector<double> times;
+  times.reserve(frames_.size());
+  for (const auto& frame : frames_) times.push_back(frame.first);
+  return times;
+}
+
 double ParaViewSeries::frame_bytes() const {
   // An array: base64 of an 8-byte length header and the data (format/vtk_xml.cpp).
   auto array = [](double raw) { return 4.0 * std::ceil((8.0 + raw) / 3.0); };

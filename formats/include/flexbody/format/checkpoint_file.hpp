@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace flexbody::format {
@@ -23,6 +24,9 @@ struct CheckpointData {
   std::map<std::string, std::vector<double>> numbers;
   std::map<std::string, std::string> texts;  ///< the same for texts (bytes; any length)
 };
+
+/// SHA-256 of `bytes`, 64 lowercase hex digits (what a checkpoint records of its scene; hashlib's hexdigest()).
+[[nodiscard]] std::string sha256_hex(std::string_view bytes);
 
 /// Writes `checkpoint` to `path` atomically: a temporary file beside it, sealed, synced and renamed onto it, so that
 /// a stop at any moment leaves the previous checkpoint or the new one, never a part. Throws BodyFileError naming the

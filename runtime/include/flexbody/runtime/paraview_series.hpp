@@ -34,6 +34,13 @@ class ParaViewSeries {
   /// Throws std::runtime_error naming the file if it cannot be written or a value is not finite.
   void write(double t, const Eigen::VectorXd& q_b);
 
+  /// Continues a series whose first frames, at `times` and of `bytes` in all, a stopped run wrote (a checkpoint's):
+  /// the collection is rewritten to list just them, and the next frame takes the next number. Throws
+  /// std::runtime_error naming the first frame file that is missing.
+  void resume(const std::vector<double>& times, double bytes);
+  /// The times of the frames written so far [s], in order.
+  [[nodiscard]] std::vector<double> frame_times() const;
+
   [[nodiscard]] const std::filesystem::path& collection() const { return collection_; }
   [[nodiscard]] std::size_t frame_count() const { return frames_.size(); }
   /// The time of the last frame written (−inf before the first).

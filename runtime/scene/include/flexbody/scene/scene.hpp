@@ -69,6 +69,13 @@ struct Scene {
   /// Where the scene sets the step, the CSV outputs' and the ParaView series' frequency ("scene.yaml:7"), for the
   /// budget's refusal.
   std::string step_at = "the scene", outputs_at = "the scene", paraview_at = "the scene";
+  /// checkpoint: {interval: SECONDS}: a run with an output directory writes DIR/checkpoint.h5 every `interval` seconds
+  /// of wall-clock time (Simulation); nullopt: none but those fbsim writes when it is stopped.
+  std::optional<double> checkpoint_interval;
+  /// What the scene was read from, for a checkpoint's identity: the SHA-256 of the scene file's bytes (of the
+  /// document's YAML for a scene built in code), and every body file it read, in the order of `bodies`.
+  std::string source_sha256;
+  std::vector<std::filesystem::path> body_files;
   runtime::AssemblyReport assembly;  ///< how the initial assembly moved the bodies
   std::vector<runtime::RemovedConstraint> removed;  ///< joint rows left out as redundant (System::remove_redundant_constraints)
 };

@@ -11,6 +11,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,9 @@ struct RunSummary {
   /// on disk now (the files above and the ParaView frames) [bytes, files].
   double estimated_bytes = 0.0, estimated_files = 0.0;
   double written_bytes = 0.0, written_files = 0.0;
+  /// A resumed run (Resume): the simulated time of the checkpoint it continued from [s]; the counts above are the
+  /// whole run's, from t = 0.
+  std::optional<double> resumed_at;
 };
 
 /// Energies, constraint residuals and momenta are evaluated every kCheckEvery steps and at the end of a run (an
@@ -73,6 +77,21 @@ struct OutputSinks {
   bool in_memory = false;  ///< tables(): the outputs and monitors (no ParaView series)
 };
 
+/// The checkpoint a run with an output directory writes there (Simulation::checkpoint).
+inline constexpr const char* kCheckpointFileName = "checkpoint.h5";
+
+/// A run to continue: its checkpoint file (Simulation's resuming constructor).
+struct Resume {
+  std::filesystem::path checkpoint;
+};
+
+/// A checkpoint that does not belong to the scene (another scene file or body file, another step), or that does not
+/// match its output directory (a CSV file shorter than it was, a frame missing): one line naming what differs.
+class CheckpointMismatch : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 class Simulation {
  public:
   /// Starts the run of `scene` at t = 0: builds the integrator (throws std::invalid_argument for a scene whose
@@ -80,6 +99,13 @@ class Simulation {
   /// would write against Scene::budget (throws OutputBudgetError, before any file is made), opens the sinks and
   /// records the initial state. `warn` gets each warning line when it arises (RunSummary::warnings keeps them all).
   Simulation(Scene scene, const OutputSinks& sinks, std::function<void(const std::string&)> warn = {});
+  /// Continues the run of `scene` that wrote `from.checkpoint` (Simulation::checkpoint), into `sinks.directory`,
+  /// where that run wrote: the steps that follow, and every output file, are what the run would have given had it
+  /// never stopped, bit for bit. Each CSV file is cut back to its length at the checkpoint and continued; each
+  /// ParaView series continues from its frames then. Refused with CheckpointMismatch (one line, naming what differs)
+  /// for a checkpoint of another scene file, body file, step or ρ∞, or when the directory's files do not match it;
+  /// format::BodyFileError for a damaged or foreign checkpoint file. Rows kept in memory start empty.
+  Simulation(Scene scene, const OutputSinks& sinks, const Resume& from, std::function<void(const std::string&)> warn = {});
   ~Simulation();
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
@@ -92,7 +118,9 @@ class Simulation {
   /// time is `end` up to the rounding of t0 + k h; throws std::invalid_argument for an `end` before the current time
   /// or more than kMostSteps steps ahead. The CSV files are complete up to the
   /// last row when it returns (step() leaves them to the stream's buffer).
-  void run(double end, const std::function<void(double)>& progress = {});
+  /// `stop`, when given, is asked after each step: true ends the run there (after the step is recorded as output_every
+  /// says), and run() returns false; it returns true when the run reached `end`.
+  bool run(double end, const std::function<void(double)>& progress = {}, const std::function<bool()>& stop = {});
   // Either throws runtime::StepFailure for a step that fails, and passes an exception from the scene's own
   // functions (a force's) through; both leave the state at the last completed step, which is recorded first.
 
@@ -104,6 +132,14 @@ class Simulation {
   /// follow from the state's time (earlier than the last row's when a run is set back).
   [[nodiscard]] runtime::IntegratorState state() const;
   void set_state(const runtime::IntegratorState& state);
+  /// Writes the run's checkpoint, `directory`/kCheckpointFileName (OutputSinks::directory; std::logic_error
+  /// without one), atomically: the integrator's state and history (GeneralizedAlpha::save), the counters and check
+  /// baselines, each output file's length and each series' frames, and the identity of the scene and its body
+  /// files. The scene's `checkpoint: {interval}` also writes it every so many seconds of wall-clock time.
+  /// Returns its path.
+  std::filesystem::path checkpoint();
+  /// The simulated time of the last checkpoint written [s], if any.
+  [[nodiscard]] std::optional<double> last_checkpoint() const;
   /// The run so far.
   [[nodiscard]] RunSummary summary() const;
   /// The rows recorded so far (OutputSinks::in_memory; empty otherwise), in the scene's order of outputs, then

@@ -31,7 +31,7 @@ extern "C" void request_stop(int signal) { stop_signal = signal; }
 void stop_on_signals() {
   struct sigaction action {};
   action.sa_handler = request_stop;
-  action.sa_flags = SA_RESETHAND;
+  action.sa_flags = SA_RESETHAND | SA_RESTART;  // no EINTR in the writes a step makes
   sigemptyset(&action.sa_mask);
   for (const int signal : {SIGINT, SIGTERM, SIGHUP}) {
     struct sigaction before {};
@@ -92,13 +92,17 @@ int main(int argc, char** argv) {
   }
   flexbody::runtime::set_threads(threads);
   const std::filesystem::path scene_path(scene_file);
-  if (!resume.empty() && !output.empty() &&
-      std::filesystem::weakly_canonical(resume) != std::filesystem::weakly_canonical(output))
-    return fail(fmt::format("--resume {} and -o {}: a run resumes in its own output directory; give one of them",
-                            resume, output), kBadInput);
-  if (!resume.empty() && !std::filesystem::is_regular_file(std::filesystem::path(resume) / flexbody::scene::kCheckpointFileName))
-    return fail(fmt::format("--resume {}: no {} there (a run writes it when it is stopped, or every interval of the "
-                            "scene's checkpoint key)", resume, flexbody::scene::kCheckpointFileName), kBadInput);
+  if (!resume.empty()) {
+    std::error_code error;  // the error_code overloads: a directory that cannot be read is a refusal, not an abort
+    if (!output.empty() &&
+        std::filesystem::weakly_canonical(resume, error) != std::filesystem::weakly_canonical(output, error))
+      return fail(fmt::format("--resume {} and -o {}: a run resumes in its own output directory; give one of them",
+                              resume, output), kBadInput);
+    if (!std::filesystem::is_regular_file(std::filesystem::path(resume) / flexbody::scene::kCheckpointFileName, error))
+      return fail(fmt::format("--resume {}: no {} there{} (a run writes it when it is stopped, or every interval of the "
+                              "scene's checkpoint key)", resume, flexbody::scene::kCheckpointFileName,
+                              error ? " (" + error.message() + ")" : ""), kBadInput);
+  }
   const std::filesystem::path directory =
       !resume.empty() ? std::filesystem::path(resume)
       : output.empty() ? std::filesystem::path(scene_path.stem().string() + "_results") : std::filesystem::path(output);
@@ -168,15 +172,29 @@ int main(int argc, char** argv) {
     started = std::chrono::steady_clock::now();
     start_time = simulation->time();
     if (!simulation->run(end, progress, [] { return stop_signal != 0; })) {
+      // A second signal while the checkpoint is written ends fbsim at once, without leaving its temporary file.
+      flexbody::format::remove_temporary_body_file_on_signal();
       if (terminal) std::cerr << '\n';
-      std::cerr << fmt::format("fbsim: stopped by {} at t = {:.6g} s{}\n", signal_name(stop_signal), simulation->time(),
+      const int signal = stop_signal;
+      std::cerr << fmt::format("fbsim: stopped by {} at t = {:.6g} s{}\n", signal_name(signal), simulation->time(),
                                checkpoint_at_stop());
-      return 128 + stop_signal;
+      // Ended by the signal, as the shell expects of a program it interrupted (a script's next command then does not
+      // run after Ctrl-C); the exit status is 128 + its number.
+      std::cout.flush();
+      std::raise(signal);
+      return 128 + signal;
     }
     // The end's checkpoint, from which a later --resume --end runs on; without checkpoints, one left by a stop before a
     // --resume no longer matches the files (it would cut them back).
-    if (checkpoints) simulation->checkpoint();
-    else if (std::error_code ignored; !resume.empty()) std::filesystem::remove(directory / flexbody::scene::kCheckpointFileName, ignored);
+    if (checkpoints) {
+      try {
+        simulation->checkpoint();
+      } catch (const std::exception& e) {  // the run itself is complete: said, and the exit code stays 0
+        std::cerr << fmt::format("fbsim: warning: the checkpoint at the end could not be written: {}\n", e.what());
+      }
+    } else if (std::error_code ignored; !resume.empty()) {
+      std::filesystem::remove(directory / flexbody::scene::kCheckpointFileName, ignored);
+    }
   } catch (const flexbody::scene::OutputBudgetError& e) {  // before the first step, naming the scene's lines
     return fail(e.what(), kBadInput);
   } catch (const flexbody::scene::CheckpointMismatch& e) {  // --resume with a checkpoint of another scene or directory

@@ -87,8 +87,8 @@ TEST_P(SimulationCheckpoint, AResumedRunWritesTheUninterruptedRunsFiles) {
   EXPECT_EQ(run(kind, by_time, whole, 0), 300);
   const auto expected = files_under(whole);
   EXPECT_EQ(expected.size(), 3u + 1u + 9u);  // tip, pivot, monitors; bar.pvd; frames at 0, 4, ..., 28 ms and the end
-  // Stopped after a row (step 7 or 13), between rows, and just before a frame.
-  for (const int stop : {7, 13, 39, 121}) {
+  // Stopped after a row (step 7), between rows, and just before a frame.
+  for (const int stop : {7, 39, 121}) {
     SCOPED_TRACE("stopped after step " + std::to_string(stop));
     EXPECT_EQ(run(kind, by_time, part, stop), 300);
     const auto resumed = files_under(part);
@@ -165,11 +165,24 @@ TEST(SimulationCheckpointRefusal, ADirectoryThatDoesNotMatchIsRefused) {
   std::filesystem::resize_file(out / "tip.csv", 10);
   std::string why = refusal(scene_of("gcms", false), out);
   EXPECT_NE(why.find("tip.csv: has 10 bytes, fewer than"), std::string::npos) << why;
-  // A frame gone.
+  // A frame gone, in a directory whose CSV files ran on after the checkpoint: refused before anything is changed.
   stopped_run(out);
+  {
+    fs::Simulation on(scene_of("gcms", false), fs::OutputSinks{out, false}, fs::Resume{out / fs::kCheckpointFileName});
+    on.run(0.03);
+  }
+  const std::string tip = bytes_of(out / "tip.csv");
   std::filesystem::remove(out / "bar" / "bar_000001.vtu");
   why = refusal(scene_of("gcms", false), out);
   EXPECT_NE(why.find("bar_000001.vtu: a frame of the checkpoint's series is missing"), std::string::npos) << why;
+  EXPECT_EQ(bytes_of(out / "tip.csv"), tip);
+  // Written by another fbsim (a build whose numbers may differ).
+  stopped_run(out);
+  flexbody::format::CheckpointData foreign = flexbody::format::read_checkpoint_file(out / fs::kCheckpointFileName);
+  foreign.texts["identity.program"] = "fbsim 0.0.1";
+  flexbody::format::write_checkpoint_file(foreign, out / fs::kCheckpointFileName);
+  why = refusal(scene_of("gcms", false), out);
+  EXPECT_NE(why.find("written by fbsim 0.0.1, this is fbsim "), std::string::npos) << why;
   // A damaged checkpoint: one byte changed.
   stopped_run(out);
   std::string bytes = bytes_of(out / fs::kCheckpointFileName);

@@ -1,6 +1,7 @@
 #include "flexbody/scene/scene.hpp"
 #include "scene_parts.hpp"
 
+#include "flexbody/format/body_file.hpp"
 #include "flexbody/format/checkpoint_file.hpp"
 #include "flexbody/format/yaml_reader.hpp"
 #include "flexbody/runtime/paraview_series.hpp"
@@ -139,6 +140,7 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
     if (b["angular_velocity"]) placement.angular_velocity = r.vector3(b["angular_velocity"], where + " angular_velocity");
     try {
       bodies[name] = builder.add_body(name, spec, placement);
+      scene.body_sha256.push_back(format::recorded_sha256(spec.file));  // right after the reader checked its seal
     } catch (const runtime::SceneError& e) {  // at the key's line (the body's when the key is not written)
       r.fail(b[e.key()] ? b[e.key()] : b, e.what());
     }

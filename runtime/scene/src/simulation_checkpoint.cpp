@@ -33,6 +33,8 @@ std::vector<std::string> lines_of(const std::string& text) {
   return lines;
 }
 
+constexpr const char* kProgram = "fbsim " FLEXBODY_PACKAGE_VERSION;
+
 std::string short_digest(const std::string& hex) { return hex.empty() ? "none (no seal)" : hex.substr(0, 12) + "..."; }
 
 }  // namespace
@@ -56,19 +58,18 @@ void Simulation::Run::check_identity(const format::CheckpointData& in, const std
     if (found == in.texts.end()) throw CheckpointMismatch(label.string() + ": not a checkpoint of fbsim (no " + name + ")");
     return found->second;
   };
+  // Another build's numbers may differ in their last bits (another compiler, Eigen, a change of the integrator).
+  if (text("identity.program") != kProgram)
+    throw CheckpointMismatch(fmt::format("{}: written by {}, this is {}: a run resumes with the fbsim that started it, "
+                                         "or is run again from the start", label.string(), text("identity.program"), kProgram));
   if (text("identity.scene") != scene.source_sha256)
     throw CheckpointMismatch(fmt::format("{}: written for another scene: the scene's SHA-256 was {}, it is {} now (a "
                                          "checkpoint continues the scene file it was written for, unchanged)",
                                          label.string(), short_digest(text("identity.scene")),
                                          short_digest(scene.source_sha256)));
-  identity_bodies.clear();
-  std::vector<std::string> digests;
-  for (const std::filesystem::path& file : scene.body_files) {
-    digests.push_back(format::recorded_sha256(file));
-    identity_bodies += digests.back() + '\n';
-  }
+  const std::vector<std::string>& digests = scene.body_sha256;
   const std::vector<std::string> then = lines_of(text("identity.bodies"));
-  for (std::size_t k = 0; k < digests.size(); ++k) {
+  for (std::size_t k = 0; k < digests.size() && k < scene.body_files.size(); ++k) {
     const std::string before = k < then.size() ? then[k] : std::string();
     if (before != digests[k])
       throw CheckpointMismatch(fmt::format("{}: written with another body file: {} has SHA-256 {} now, {} then",
@@ -128,7 +129,8 @@ void Simulation::Run::save(format::CheckpointData& out) const {
     bytes.push_back(series[k].bytes_written());
   }
   out.texts["identity.scene"] = scene.source_sha256;
-  out.texts["identity.bodies"] = identity_bodies;
+  out.texts["identity.bodies"] = joined(scene.body_sha256);
+  out.texts["identity.program"] = kProgram;
 }
 
 void Simulation::Run::restore(const format::CheckpointData& in, const std::filesystem::path& label) {
@@ -148,21 +150,33 @@ void Simulation::Run::restore(const format::CheckpointData& in, const std::files
                                          "and {}", label.string(), counts[kCsvFiles], counts[kSeries], csv_files,
                                          series.size()));
   const std::vector<double>& csv = entry("output.csv_bytes", csv_files);
-  for (std::size_t k = 0; k < scene.sensors.size(); ++k)
-    files.push_back(std::make_unique<CsvFile>(summary.files[k], static_cast<std::uintmax_t>(csv[k])));
-  if (scene.monitors)
-    monitors = std::make_unique<CsvFile>(summary.files[scene.sensors.size()], static_cast<std::uintmax_t>(csv.back()));
   const std::vector<double>& bytes = entry("output.paraview_bytes", series.size());
+  std::vector<const std::vector<double>*> frames;
   for (std::size_t k = 0; k < series.size(); ++k) {
     const std::string name = fmt::format("output.paraview.{}", k);
     const auto found = in.numbers.find(name);
     if (found == in.numbers.end()) throw CheckpointMismatch(label.string() + ": not a checkpoint of fbsim (no " + name + ")");
-    try {
-      series[k].resume(found->second, bytes[k]);
-    } catch (const std::runtime_error& e) {
-      throw CheckpointMismatch(e.what());
-    }
+    frames.push_back(&found->second);
   }
+  // Every file checked before any is changed: a refused resume leaves the directory as it was.
+  for (std::size_t k = 0; k < csv_files; ++k) {
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(summary.files[k], error);
+    if (error)
+      throw CheckpointMismatch(fmt::format("{}: an output of the checkpoint's run is missing ({})", summary.files[k].string(),
+                                           error.message()));
+    if (static_cast<double>(size) < csv[k])
+      throw CheckpointMismatch(fmt::format("{}: has {} bytes, fewer than the {} it had at the checkpoint: not the "
+                                           "directory this checkpoint's run wrote", summary.files[k].string(), size, csv[k]));
+  }
+  for (std::size_t k = 0; k < series.size(); ++k)
+    if (const std::string missing = series[k].missing_frame(*frames[k]); !missing.empty())
+      throw CheckpointMismatch(missing + ": a frame of the checkpoint's series is missing");
+  for (std::size_t k = 0; k < scene.sensors.size(); ++k)
+    files.push_back(std::make_unique<CsvFile>(summary.files[k], static_cast<std::uintmax_t>(csv[k])));
+  if (scene.monitors)
+    monitors = std::make_unique<CsvFile>(summary.files[scene.sensors.size()], static_cast<std::uintmax_t>(csv.back()));
+  for (std::size_t k = 0; k < series.size(); ++k) series[k].resume(*frames[k], bytes[k]);
   count = static_cast<long>(counts[kCount]);
   summary.steps = static_cast<long>(counts[kSteps]);
   summary.newton_iterations = static_cast<long>(counts[kIterations]);
@@ -195,10 +209,8 @@ void Simulation::Run::restore(const format::CheckpointData& in, const std::files
 
 void Simulation::Run::write_checkpoint() {
   flush();  // the CSV files' lengths are what is on disk
-  if (identity_bodies.empty())
-    for (const std::filesystem::path& file : scene.body_files) identity_bodies += format::recorded_sha256(file) + '\n';
   format::CheckpointData data;
-  data.created_by = "fbsim " FLEXBODY_PACKAGE_VERSION;
+  data.created_by = kProgram;
   save(data);
   format::write_checkpoint_file(data, *checkpoint_file);
   checkpoint_time = integrator->time();
@@ -208,7 +220,18 @@ void Simulation::Run::write_checkpoint() {
 void Simulation::Run::checkpoint_when_due() {
   if (!scene.checkpoint_interval || !checkpoint_file) return;
   const double since = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint).count();
-  if (since >= *scene.checkpoint_interval) write_checkpoint();
+  if (since < *scene.checkpoint_interval) return;
+  try {
+    write_checkpoint();
+  } catch (const std::exception& e) {
+    // A full disk must not end a run that can go on: said once, tried again after the next interval.
+    last_checkpoint = std::chrono::steady_clock::now();
+    if (!checkpoint_failed) {
+      checkpoint_failed = true;
+      warning(fmt::format("t = {:.6g} s: the checkpoint could not be written ({}); the run goes on, and tries again "
+                          "every interval", integrator->time(), e.what()));
+    }
+  }
 }
 
 }  // namespace flexbody::scene

@@ -68,7 +68,7 @@ struct Simulation::Run {
   std::optional<std::filesystem::path> checkpoint_file;
   std::chrono::steady_clock::time_point last_checkpoint;
   std::optional<double> checkpoint_time;  // the simulated time of the last checkpoint written
-  std::string identity_bodies;
+  bool checkpoint_failed = false;  // a periodic checkpoint failed (said once)
 
   void record();
   void draw();
@@ -83,7 +83,7 @@ struct Simulation::Run {
   void recover();  // after a failed step: the last completed step recorded and drawn
   void start(Scene s, const OutputSinks& sinks, std::function<void(const std::string&)> w,
              const format::CheckpointData* from, const std::filesystem::path& label = {});
-  /// Refuses (CheckpointMismatch) a checkpoint of another scene file or body file; sets identity_bodies.
+  /// Refuses (CheckpointMismatch) a checkpoint of another scene file or body file, or of another fbsim.
   void check_identity(const format::CheckpointData& in, const std::filesystem::path& label);
   void save(format::CheckpointData& out) const;
   void restore(const format::CheckpointData& in, const std::filesystem::path& label);

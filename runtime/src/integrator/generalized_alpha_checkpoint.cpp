@@ -154,6 +154,7 @@ void GeneralizedAlpha::restore(const format::CheckpointData& in) {
     }
     couple_ = couple;
   }
+  solver_->end_replay();  // a saved build that failed before its factorization leaves the replay unused
   steps_ = static_cast<long>(counts[kSteps]);
   t0_ = times[kStart];
   t_ = times[kTime];

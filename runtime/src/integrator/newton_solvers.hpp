@@ -52,6 +52,7 @@ class NewtonSolver {
   virtual void restore_history(const std::map<std::string, std::vector<double>>& in, const std::string& prefix) {
     (void)in, (void)prefix;
   }
+  virtual void end_replay() {}  ///< ReducedSolver::end_replay
 };
 
 class DenseNewton final : public NewtonSolver {
@@ -85,6 +86,7 @@ class ConstantCoreNewton final : public NewtonSolver {
   void restore_history(const std::map<std::string, std::vector<double>>& in, const std::string& prefix) override {
     reduced_->restore_history(in, prefix);
   }
+  void end_replay() override { reduced_->end_replay(); }
   /// The reduced matrix's solver (its last matrix: for tests).
   [[nodiscard]] const ReducedSolver& reduced() const { return *reduced_; }
 

@@ -47,6 +47,9 @@ class ReducedSolver {
   virtual void restore_history(const std::map<std::string, std::vector<double>>& in, const std::string& prefix) {
     (void)in, (void)prefix;
   }
+  /// After the factor() that repeats the saved one, or in its place when the saved build never reached factor() (it
+  /// failed before): later factor() calls take their own course.
+  virtual void end_replay() {}
   /// The matrix of the last factor(), sparse (for tests; the dense solver's has its size only).
   [[nodiscard]] const Eigen::SparseMatrix<double>& matrix() const { return matrix_; }
 
@@ -84,6 +87,7 @@ class SparseReducedSolver final : public ReducedSolver {
   /// as before the save); the next factor() then ends as the last one did: a refactorization with the same pivots
   /// where it was one, the numeric object as restored where it was a pivoting factorization.
   void restore_history(const std::map<std::string, std::vector<double>>& in, const std::string& prefix) override;
+  void end_replay() override { replay_ = false; }
 
  private:
   struct Klu;  // KLU's objects, kept out of this header

@@ -33,7 +33,7 @@ double von_mises_of(const Eigen::Matrix3d& s) {
 }
 
 std::string frame_name(const std::string& name, std::size_t frame) {
-  char number[16];
+  char number[32];  // "_" + up to 20 digits + ".vtu"
   std::snprintf(number, sizeof number, "_%06zu.vtu", frame);
   return name + number;
 }
@@ -149,14 +149,19 @@ void ParaViewSeries::write(double t, const Eigen::VectorXd& q_b) {
   format::write_pvd(collection_, frames_);
 }
 
-void ParaViewSeries::resume(const std::vector<double>& times, double bytes) {
-  frames_.clear();
-  for (const double t : times) {
-    const std::string file = frame_name(name_, frames_.size());
-    if (std::error_code missing; !std::filesystem::is_regular_file(directory_ / name_ / file, missing))
-      throw std::runtime_error((directory_ / name_ / file).string() + ": a frame of the checkpoint's series is missing");
-    frames_.emplace_back(t, name_ + "/" + file);
+std::string ParaViewSeries::missing_frame(const std::vector<double>& times) const {
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    const std::filesystem::path path = directory_ / name_ / frame_name(name_, k);
+    if (std::error_code unknown; !std::filesystem::is_regular_file(path, unknown)) return path.string();
   }
+  return {};
+}
+
+void ParaViewSeries::resume(const std::vector<double>& times, double bytes) {
+  if (const std::string missing = missing_frame(times); !missing.empty())
+    throw std::runtime_error(missing + ": a frame of the checkpoint's series is missing");
+  frames_.clear();
+  for (const double t : times) frames_.emplace_back(t, name_ + "/" + frame_name(name_, frames_.size()));
   bytes_written_ = bytes;
   if (!frames_.empty()) format::write_pvd(collection_, frames_);
 }

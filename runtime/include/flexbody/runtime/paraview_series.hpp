@@ -34,9 +34,11 @@ class ParaViewSeries {
   /// Throws std::runtime_error naming the file if it cannot be written or a value is not finite.
   void write(double t, const Eigen::VectorXd& q_b);
 
+  /// The path of the first of the frames at `times` (this series' first frames) that is not a file, or "".
+  [[nodiscard]] std::string missing_frame(const std::vector<double>& times) const;
   /// Continues a series whose first frames, at `times` and of `bytes` in all, a stopped run wrote (a checkpoint's):
   /// the collection is rewritten to list just them, and the next frame takes the next number. Throws
-  /// std::runtime_error naming the first frame file that is missing.
+  /// std::runtime_error naming the first frame file that is missing (missing_frame).
   void resume(const std::vector<double>& times, double bytes);
   /// The times of the frames written so far [s], in order.
   [[nodiscard]] std::vector<double> frame_times() const;

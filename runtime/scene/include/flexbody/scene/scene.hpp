@@ -73,9 +73,11 @@ struct Scene {
   /// of wall-clock time (Simulation); nullopt: none but those fbsim writes when it is stopped.
   std::optional<double> checkpoint_interval;
   /// What the scene was read from, for a checkpoint's identity: the SHA-256 of the scene file's bytes (of the
-  /// document's YAML for a scene built in code), and every body file it read, in the order of `bodies`.
+  /// document's YAML for a scene built in code), and every body file it read, in the order of `bodies`, with the
+  /// SHA-256 its seal recorded when it was read (a file replaced during a run does not become the run's).
   std::string source_sha256;
   std::vector<std::filesystem::path> body_files;
+  std::vector<std::string> body_sha256;
   runtime::AssemblyReport assembly;  ///< how the initial assembly moved the bodies
   std::vector<runtime::RemovedConstraint> removed;  ///< joint rows left out as redundant (System::remove_redundant_constraints)
 };

@@ -212,10 +212,10 @@ int main(int argc, char** argv) {
   }
   if (terminal) std::cerr << '\n';
   const flexbody::scene::Scene& scene = simulation->scene();
-  const flexbody::scene::RunSummary summary = simulation->summary();
   if (json) {
     std::cout << flexbody::scene::summary_json(*simulation, scene_path.string()) << '\n';
   } else if (!quiet) {
+    const flexbody::scene::RunSummary summary = simulation->summary();  // (summary_json evaluates its own)
     std::cout << fmt::format("fbsim: {} steps, {} Newton iterations ({:.2f} per step), {:.3f} s CPU\n", summary.steps,
                              summary.newton_iterations,
                              summary.steps ? static_cast<double>(summary.newton_iterations) / static_cast<double>(summary.steps) : 0.0,

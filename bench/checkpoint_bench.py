@@ -9,6 +9,7 @@ Writes bench/results/checkpoint_bench.csv and checkpoint_bench.png (ms and MB pe
 the table. See bench/README.md.
 
     /usr/bin/python3 bench/checkpoint_bench.py [--build build] [--body build/bracket.fbh5] [--steps 40] [--repeat 3]
+    /usr/bin/python3 bench/checkpoint_bench.py --replot
 """
 import argparse
 import csv
@@ -40,7 +41,13 @@ def main():
     parser.add_argument("--work", default=str(REPO / "bench" / "results" / "work" / "checkpoint"))
     parser.add_argument("--steps", type=int, default=40)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--replot", action="store_true", help="the plot from the CSV, without running")
     args = parser.parse_args()
+    results = REPO / "bench" / "results"
+    if args.replot:
+        with open(results / "checkpoint_bench.csv") as f:
+            plot([{k: (v if k == "kind" else float(v)) for k, v in row.items()} for row in csv.DictReader(f)], results)
+        return
     build, work = Path(args.build), Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
     body = Path(args.body) if args.body else build / "bracket.fbh5"
@@ -65,18 +72,23 @@ def main():
         r = rows[-1]
         print(f"{kind:6s} {n:5d} bodies: {r['ms_per_checkpoint']:8.2f} ms, {r['checkpoint_mb']:7.3f} MB per checkpoint "
               f"(runs of {args.steps} steps: {without:.2f} s, {with_:.2f} s with a checkpoint a step)")
-    results = REPO / "bench" / "results"
     with open(results / "checkpoint_bench.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
+    plot(rows, results)
+
+
+def plot(rows, results):
+    """checkpoint_bench.png: ms and MB per checkpoint against N (a time within the runs' noise, 0, left out)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))
     for kind, style in (("rigid", "o-"), ("gcms", "s-"), ("ffrf", "^")):
         mine = [r for r in rows if r["kind"] == kind]
-        axes[0].loglog([r["bodies"] for r in mine], [r["ms_per_checkpoint"] for r in mine], style, label=kind)
+        timed = [r for r in mine if r["ms_per_checkpoint"] > 0]
+        axes[0].loglog([r["bodies"] for r in timed], [r["ms_per_checkpoint"] for r in timed], style, label=kind)
         axes[1].loglog([r["bodies"] for r in mine], [r["checkpoint_mb"] for r in mine], style, label=kind)
     axes[0].set(xlabel="bodies", ylabel="ms per checkpoint", title="time to write a checkpoint")
     axes[1].set(xlabel="bodies", ylabel="MB", title="checkpoint size")
@@ -85,7 +97,7 @@ def main():
         ax.legend()
     fig.tight_layout()
     fig.savefig(results / "checkpoint_bench.png", dpi=120)
-    print(f"wrote {results / 'checkpoint_bench.csv'} and checkpoint_bench.png")
+    print(f"wrote {results / 'checkpoint_bench.png'}")
 
 
 if __name__ == "__main__":

@@ -93,15 +93,21 @@ int main(int argc, char** argv) {
   flexbody::runtime::set_threads(threads);
   const std::filesystem::path scene_path(scene_file);
   if (!resume.empty()) {
-    std::error_code error;  // the error_code overloads: a directory that cannot be read is a refusal, not an abort
-    if (!output.empty() &&
-        std::filesystem::weakly_canonical(resume, error) != std::filesystem::weakly_canonical(output, error))
+    // The error_code overloads: a directory that cannot be read is a refusal, not an abort.
+    std::error_code resume_error, output_error, file_error;
+    if (!output.empty() && std::filesystem::weakly_canonical(resume, resume_error) !=
+                               std::filesystem::weakly_canonical(output, output_error))
       return fail(fmt::format("--resume {} and -o {}: a run resumes in its own output directory; give one of them",
                               resume, output), kBadInput);
-    if (!std::filesystem::is_regular_file(std::filesystem::path(resume) / flexbody::scene::kCheckpointFileName, error))
+    if (resume_error || output_error)
+      return fail(fmt::format("--resume {}: {}", resume, (resume_error ? resume_error : output_error).message()), kBadInput);
+    const bool found = std::filesystem::is_regular_file(std::filesystem::path(resume) / flexbody::scene::kCheckpointFileName,
+                                                        file_error);
+    if (!found)  // a missing file is the usual case, said without the system's "No such file or directory"
       return fail(fmt::format("--resume {}: no {} there{} (a run writes it when it is stopped, or every interval of the "
                               "scene's checkpoint key)", resume, flexbody::scene::kCheckpointFileName,
-                              error ? " (" + error.message() + ")" : ""), kBadInput);
+                              file_error && file_error != std::errc::no_such_file_or_directory
+                                  ? " (" + file_error.message() + ")" : ""), kBadInput);
   }
   const std::filesystem::path directory =
       !resume.empty() ? std::filesystem::path(resume)
@@ -146,6 +152,7 @@ int main(int argc, char** argv) {
               << std::flush;
   };
   const bool checkpoints = read.checkpoint_interval.has_value();
+  bool end_checkpoint = false;  // written at the end (checkpoints)
   std::unique_ptr<flexbody::scene::Simulation> simulation;
   // A checkpoint at a stop; one that cannot be written is said, and does not hide why the run stopped.
   auto checkpoint_at_stop = [&]() -> std::string {
@@ -189,6 +196,7 @@ int main(int argc, char** argv) {
     if (checkpoints) {
       try {
         simulation->checkpoint();
+        end_checkpoint = true;
       } catch (const std::exception& e) {  // the run itself is complete: said, and the exit code stays 0
         std::cerr << fmt::format("fbsim: warning: the checkpoint at the end could not be written: {}\n", e.what());
       }
@@ -266,7 +274,7 @@ int main(int argc, char** argv) {
       std::cout << fmt::format("  {} warning{} (on stderr)\n", summary.warnings.size(),
                                summary.warnings.size() == 1 ? "" : "s");
     for (const auto& f : summary.files) std::cout << "  wrote " << f.string() << '\n';
-    if (checkpoints)
+    if (end_checkpoint)
       std::cout << fmt::format("  checkpoint {} at t = {:.6g} s\n", (directory / flexbody::scene::kCheckpointFileName).string(),
                                simulation->time());
     std::cout << fmt::format("  wrote {} in {:.0f} files (estimated before the run: {} in {:.0f})\n",

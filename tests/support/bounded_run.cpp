@@ -13,7 +13,7 @@ namespace flexbody::test {
 
 BoundedRun run_bounded(const std::string& executable, const std::vector<std::string>& arguments,
                        const std::filesystem::path& output_stem, std::chrono::duration<double> limit,
-                       std::optional<std::chrono::duration<double>> interrupt_after, int signal) {
+                       const std::function<bool()>& interrupt_when, int signal) {
   const std::string out_path = output_stem.string() + ".out";
   const std::string err_path = output_stem.string() + ".err";
   std::vector<char*> argv;
@@ -33,12 +33,13 @@ BoundedRun run_bounded(const std::string& executable, const std::vector<std::str
   }
   if (child < 0) return run;
   int status = 0;
+  bool interrupted = false;
   for (;;) {
     const pid_t done = ::waitpid(child, &status, WNOHANG);
     if (done == child) break;
-    if (interrupt_after && std::chrono::steady_clock::now() - start > *interrupt_after) {
+    if (interrupt_when && !interrupted && interrupt_when()) {
       ::kill(child, signal);
-      interrupt_after.reset();
+      interrupted = true;
     }
     if (std::chrono::steady_clock::now() - start > limit) {
       run.timed_out = true;

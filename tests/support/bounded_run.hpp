@@ -5,7 +5,7 @@
 #include <chrono>
 #include <csignal>
 #include <filesystem>
-#include <optional>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -21,11 +21,10 @@ struct BoundedRun {
 
 /// Runs `executable ARGUMENTS` (no shell) with stdout and stderr captured in `output_stem`.out and .err, and
 /// kills it once `limit` has passed.
-/// `interrupt_after`: when given, the tool gets `signal` that long after it started (if it still runs), as a user's
-/// Ctrl-C or a batch system's time limit would send it.
+/// `interrupt_when`: when given, asked every 2 ms while the tool runs; the first time it is true the tool gets
+/// `signal`, as a user's Ctrl-C or a batch system's time limit would send it.
 [[nodiscard]] BoundedRun run_bounded(const std::string& executable, const std::vector<std::string>& arguments,
                                      const std::filesystem::path& output_stem, std::chrono::duration<double> limit,
-                                     std::optional<std::chrono::duration<double>> interrupt_after = std::nullopt,
-                                     int signal = SIGTERM);
+                                     const std::function<bool()>& interrupt_when = {}, int signal = SIGTERM);
 
 }  // namespace flexbody::test

@@ -58,7 +58,8 @@ void Simulation::Run::check_identity(const format::CheckpointData& in, const std
     if (found == in.texts.end()) throw CheckpointMismatch(label.string() + ": not a checkpoint of fbsim (no " + name + ")");
     return found->second;
   };
-  // Another build's numbers may differ in their last bits (another compiler, Eigen, a change of the integrator).
+  // Another version's numbers may differ in their last bits (a change of the integrator). Only the version is
+  // compared: a rebuild of the same version with another compiler is not caught.
   if (text("identity.program") != kProgram)
     throw CheckpointMismatch(fmt::format("{}: written by {}, this is {}: a run resumes with the fbsim that started it, "
                                          "or is run again from the start", label.string(), text("identity.program"), kProgram));

@@ -74,7 +74,8 @@ struct Scene {
   std::optional<double> checkpoint_interval;
   /// What the scene was read from, for a checkpoint's identity: the SHA-256 of the scene file's bytes (of the
   /// document's YAML for a scene built in code), and every body file it read, in the order of `bodies`, with the
-  /// SHA-256 its seal recorded when it was read (a file replaced during a run does not become the run's).
+  /// SHA-256 its seal records, read as the scene is read (so that a file replaced during the run does not become the
+  /// run's; a file replaced while the scene is being read is not caught).
   std::string source_sha256;
   std::vector<std::filesystem::path> body_files;
   std::vector<std::string> body_sha256;

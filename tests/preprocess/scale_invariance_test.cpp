@@ -278,20 +278,22 @@ TEST(ScaleInvariance, ScenesWithTheBeamScaleExactly) {
           largest = std::max(largest, std::abs(reference[r][c]));
           worst = std::max(worst, std::abs(rows[r][c] / unit - reference[r][c]));
         }
-      // Newton stops each step at its tolerance (1e-12 here), so the runs agree to that, not to round-off:
-      // measured 1.2e-8 of the largest amplitude with the stopping test of 521de58 (1e-12 (1 + |q|), metres and
-      // kg^1/2 m mixed), 1e-10 with the one in each body's length scale (a5b7c38). The spurious constraint gave
-      // 4.8e-5 (push) and 7.4e-3 (pendulum) on this mesh; 1e-6 tells the two apart with a margin of 50 either way.
-      // The spun beam's modal coordinates are the exception (issue 46): its Newton iteration keeps its matrix, and the
-      // converged step moves with the iterate where that matrix was last built (newton_history_test.cpp,
-      // docs/limits.md): by 1.2e-5 of the largest amplitude at one rebuild more or less. Which step rebuilds follows
-      // the round-off, so the 1 m scene alone spreads that far when its drive's speed is changed by one ulp (measured
-      // over 60 such runs at 1 m and 60 at 100 m: 15 above 1e-9, at most 1.25e-5; the push, pendulum and spin scenes
-      // at most 2e-14, 2.4e-9 and 9.4e-9 over 25 each); so does the round-off of the OpenBLAS kernel that makes the body
-      // files (their fields differ by 5e-10 between kernels): 100 m against 1 m gave 2.9e-6 under
-      // OPENBLAS_CORETYPE=Haswell OPENBLAS_L2_SIZE=512 on one AMD EPYC, and on another 2e-11 under that setting and
-      // 1.2e-5 under the kernel OpenBLAS picked. 1e-4 allows 8 times the largest spread and still fails a mistake on
-      // the prestress path: without geometric stiffening the modes differ by 100 % of the largest.
+      // Newton stops each step at its tolerance (1e-12 here), but the runs do not agree to that: in the stabilised
+      // form the converged step also moves with the iterate where the kept Newton matrix was last built
+      // (docs/limits.md, "The Integrator"; newton_history_test.cpp measures it on another beam), and which step
+      // rebuilds follows the round-off. Measured with the stopping test of 521de58 (1e-12 (1 + |q|), metres and
+      // kg^1/2 m mixed): 1.2e-8 of the largest amplitude; with the one in each body's length scale (a5b7c38): 1e-10;
+      // on ed088f2, up to 6.6e-9 (spin) and 1.8e-9 (pendulum). The spurious constraint gave 4.8e-5 (push)
+      // and 7.4e-3 (pendulum) on this mesh; 1e-6 tells the two apart with a margin of 50 either way.
+      // The spun beam's modal coordinates move most (issue 46): one rebuild more or less moves them by 1.2e-5 of the
+      // largest amplitude. Its 1 m scene alone spreads that far when the drive's speed is changed by one ulp (over 60
+      // such runs at 1 m and 60 at 100 m: 15 above 1e-9, at most 1.25e-5; the push, pendulum and spin scenes at most
+      // 2e-14, 2.4e-9 and 9.4e-9 over 25 each); so does the round-off of the OpenBLAS kernel that makes the body files
+      // (their fields differ by 5e-10 between kernels): 100 m against 1 m gave 2.9e-6 under OPENBLAS_CORETYPE=Haswell
+      // OPENBLAS_L2_SIZE=512 on one AMD EPYC, and on another 2e-11 under that setting and 1.2e-5 under the kernel
+      // OpenBLAS picked. 1e-4 allows 8 times the largest spread. It fails a unit mistake on the prestress path (without
+      // geometric stiffening the modes differ by 100 % of the largest), but an error of that path below 1e-4 of the
+      // modes would pass: only this scene stiffens, and its 1 mm run, 3.4e-7 from the 1 m one, would show it.
       const double tolerance = key == "spun/modes" ? 1e-4 : 1e-6;
       EXPECT_LT(worst, tolerance * largest) << "largest " << largest;
     }

@@ -286,12 +286,13 @@ TEST(ScaleInvariance, ScenesWithTheBeamScaleExactly) {
       // on ed088f2, up to 6.6e-9 (spin) and 1.8e-9 (pendulum). The spurious constraint gave 4.8e-5 (push)
       // and 7.4e-3 (pendulum) on this mesh; 1e-6 tells the two apart with a margin of 50 either way.
       // The spun beam's modal coordinates move most (issue 46): one rebuild more or less moves them by 1.2e-5 of the
-      // largest amplitude. Its 1 m scene alone spreads that far when the drive's speed is changed by one ulp (over 60
-      // such runs at 1 m and 60 at 100 m: 15 above 1e-9, at most 1.25e-5; the push, pendulum and spin scenes at most
-      // 2e-14, 2.4e-9 and 9.4e-9 over 25 each); so does the round-off of the OpenBLAS kernel that makes the body files
+      // largest amplitude. Its 1 m scene alone spreads that far when the drive's speed is changed by one ulp
+      // (bench/newton_history_spread.py, 60 runs a scale: at most 1.25e-5 at 1 m, 2.0e-5 at 100 m, where the unchanged
+      // run itself had taken the other branch; the pendulum and push scenes at most 3.0e-9 and 3.4e-14, the spin
+      // scene 9.4e-9 over 25 runs); so does the round-off of the OpenBLAS kernel that makes the body files
       // (their fields differ by 5e-10 between kernels): 100 m against 1 m gave 2.9e-6 under OPENBLAS_CORETYPE=Haswell
       // OPENBLAS_L2_SIZE=512 on one AMD EPYC, and on another 2e-11 under that setting and 1.2e-5 under the kernel
-      // OpenBLAS picked. 1e-4 allows 8 times the largest spread. It fails a unit mistake on the prestress path (without
+      // OpenBLAS picked. 1e-4 allows 5 times the largest spread. It fails a unit mistake on the prestress path (without
       // geometric stiffening the modes differ by 100 % of the largest), but an error of that path below 1e-4 of the
       // modes would pass: only this scene stiffens, and its 1 mm run, 3.4e-7 from the 1 m one, would show it.
       const double tolerance = key == "spun/modes" ? 1e-4 : 1e-6;

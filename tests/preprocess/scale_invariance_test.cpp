@@ -246,8 +246,11 @@ TEST(ScaleInvariance, ScenesWithTheBeamScaleExactly) {
       results[s][scene + "/modes"] = read_csv(dir / out / "modes.csv");
     }
     // The spun scene without its centre of mass's velocity: the consistent initial velocities give it the same (the
-    // rigid velocities close the rows). Measured 2.5e-15 of the largest modal amplitude at 1 m; before, M-nearest over
-    // all velocities put part of the root's 165 m/s into the modes: the beam rang at 2 % of its size and Newton failed.
+    // rigid velocities close the rows); before, M-nearest over all velocities put part of the root's 165 m/s into the
+    // modes: the beam rang at 2 % of its size and Newton failed. The two starts differ by round-off, and a run of this
+    // scene moves by up to 1.25e-5 of its largest modal amplitude under a one-ulp change of an input (where its kept
+    // Newton matrix is rebuilt: docs/limits.md, "The Integrator"): measured 2.5e-15 until the fields' predictor of
+    // issue 47, 2.4e-6 with it. 1e-4 holds the former failure's 2 % off by a factor of 200.
     if (s == 1.0) {
       std::string unmoved = spun;
       unmoved.erase(unmoved.find(", velocity: [0, 165, 0]"), std::string(", velocity: [0, 165, 0]").size());
@@ -262,7 +265,7 @@ TEST(ScaleInvariance, ScenesWithTheBeamScaleExactly) {
           largest = std::max(largest, std::abs(b[r][c]));
           worst = std::max(worst, std::abs(a[r][c] - b[r][c]));
         }
-      EXPECT_LT(worst, 1e-9 * largest) << "largest " << largest;
+      EXPECT_LT(worst, 1e-4 * largest) << "largest " << largest;
     }
   }
   for (const double s : {1e-3, 1e2}) {

@@ -3,6 +3,7 @@
 #include "flexbody/runtime/generalized_alpha.hpp"
 
 #include "constraint_projection.hpp"
+#include "field_predictor.hpp"
 #include "newton_solvers.hpp"
 #include "saddle_point.hpp"
 #include "stabilized_coupling.hpp"
@@ -304,6 +305,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   body_columns.push_back(system.coordinate_count());
   projected_ = std::make_unique<detail::ConstraintProjection>(sparse_, std::move(body_columns));
   couple_ = options.coupled_from_start;
+  field_predictor_ = std::make_unique<detail::FieldPredictor>(system);
   build_solver(options.step);
 }
 
@@ -319,6 +321,7 @@ void GeneralizedAlpha::build_solver(double h) {
     solver_ = std::move(core);
   }
   solver_step_ = h;
+  field_predictor_->set_step(h);
   refresh_ = true;
 }
 

@@ -149,6 +149,7 @@ class NewtonSolver;
 class ConstantCoreNewton;
 class StabilizedCoupling;
 class ConstraintProjection;
+class FieldPredictor;
 }
 
 class GeneralizedAlpha {
@@ -219,6 +220,7 @@ class GeneralizedAlpha {
   void advance(double h, double t1);  ///< one step of size h to time t1 (step, step_to)
   void attempt_step(double h, double t1);  ///< advance's work, which it guards
   void predict(const StepFrame& f);   ///< the Newton iterate's start (generalized_alpha_step.cpp)
+  void predict_fields(const StepFrame& f);  ///< a GCMS body's unresolved field components: its last deformation
   void accept(const StepFrame& f);    ///< the converged iterate, checked, becomes the state
   /// One attempt's Newton iterations from the predictor (generalized_alpha_newton.cpp): true when they converged;
   /// a failure's reason goes to `failure` (the first kept), `fresh` is set when a Newton matrix was built.
@@ -292,6 +294,7 @@ class GeneralizedAlpha {
     Eigen::VectorXd q, shift, nu, v, qdd, mu;
   } built_at_;
   std::unique_ptr<detail::NewtonSolver> solver_;
+  std::unique_ptr<detail::FieldPredictor> field_predictor_;  ///< a GCMS body's unresolved fields' predictor
   /// solver_ when it is the constant core with a sparse reduced matrix: its coupled stabilised step is one sparse
   /// system (ConstantCoreNewton::factor_coupled) instead of StabilizedCoupling's m solves; null otherwise.
   detail::ConstantCoreNewton* sparse_core_ = nullptr;

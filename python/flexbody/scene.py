@@ -243,7 +243,7 @@ class Scene:
 
     def set_integrator(self, **keys):
         """step [s] and end [s] (required), rho_inf, tolerance, max_iterations, output_every, deformation_limit, the
-        spin levels, constraints, linear_solver, coupled_step: the scene file's `integrator` keys."""
+        spin levels, constraints, linear_solver, coupled_step, min_step: the scene file's `integrator` keys."""
         self._document["integrator"] = _given(keys)
 
     def add_output(self, name, quantities, **keys):

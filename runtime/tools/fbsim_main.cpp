@@ -233,6 +233,9 @@ int main(int argc, char** argv) {
                                (directory / flexbody::scene::kCheckpointFileName).string());
     std::cout << fmt::format("  {} Newton matrices, factorized {}\n", summary.newton_matrices,
                              summary.sparse ? "sparse (KLU)" : "dense");
+    if (summary.retried_steps > 0)
+      std::cout << fmt::format("  {} steps failed and were taken again in halves; the smallest step was {:.3g} s\n",
+                               summary.retried_steps, summary.smallest_step);
     if (const int moved = scene.assembly.most_moved(); scene.assembly.iterations > 0 && moved >= 0)
       std::cout << fmt::format("  assembly: joint gaps up to {:.3g} m closed in {} steps; largest move {:.3g} m (body '{}')\n",
                                scene.assembly.largest_gap, scene.assembly.iterations,

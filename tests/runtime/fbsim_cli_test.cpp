@@ -155,6 +155,9 @@ TEST(FbsimCli, BadScenesNameTheLine) {
   expect_scene_error(head + "paraview: {every: 0}\n" + tail, 3, "paraview every must be at least 1");
   expect_scene_error(head + "integrator: {step: 1.0e-3, end: 0.01, tolerance: 1.0e-2}\n", 3,
                      "integrator tolerance 0.01 is above 0.001: it is relative to each step's predictor-corrector");
+  expect_scene_error(head + "integrator: {step: 1.0e-3, end: 0.01, min_step: 2.0e-3}\n", 3,
+                     "integrator min_step 0.002 s is larger than the step 0.001 s");
+  expect_scene_error(head + "integrator: {step: 1.0e-3, end: 0.01, min_step: 0}\n", 3, "integrator min_step");
 }
 
 TEST(FbsimCli, RegionDisplacementsStressesAndOrientationsAreWritten) {

@@ -16,7 +16,7 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
                      Scene& scene) {
   const YAML::Node integrator = r.required(root, "integrator", "the scene");
   r.expect_map(integrator, "integrator",
-               {"type", "rho_inf", "step", "end", "tolerance", "max_iterations", "output_every", "output_interval",
+               {"type", "rho_inf", "step", "min_step", "end", "tolerance", "max_iterations", "output_every", "output_interval",
                 "deformation_limit",
                 "spin_warning", "spin_limit", "stiffened_spin_warning", "stiffened_spin_limit", "constraints",
                 "linear_solver", "coupled_step"});
@@ -49,6 +49,12 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
                                            "most {:.0e} are allowed (is the step meant to be that small?)",
                                            scene.integrator.step, steps, scene.end_time,
                                            overrides.end_time ? " (--end)" : "", kMostSteps));
+  if (const YAML::Node floor = integrator["min_step"]) {
+    scene.integrator.min_step = r.positive(floor, "integrator min_step");
+    if (scene.integrator.min_step > scene.integrator.step)
+      r.fail(floor, fmt::format("integrator min_step {} s is larger than the step {} s: it is the smallest piece a "
+                                "failed step is halved into", scene.integrator.min_step, scene.integrator.step));
+  }
   if (const YAML::Node tol = integrator["tolerance"]) {
     scene.integrator.tolerance = r.positive(tol, "integrator tolerance");
     if (scene.integrator.tolerance > runtime::kLargestTolerance)

@@ -16,6 +16,8 @@ std::string summary_json(const Simulation& simulation, const std::string& scene_
   j["steps"] = summary.steps;
   j["newton_iterations"] = summary.newton_iterations;
   j["newton_matrices"] = summary.newton_matrices;
+  j["retried_steps"] = summary.retried_steps;
+  j["smallest_step_s"] = summary.smallest_step;
   j["linear_solver"] = summary.sparse ? "sparse" : "dense";
   {
     const runtime::AssemblyReport& a = scene.assembly;

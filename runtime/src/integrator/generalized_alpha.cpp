@@ -92,6 +92,8 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   if (!(rho >= 0.0 && rho <= 1.0)) throw std::invalid_argument("generalized-alpha: rho_inf must lie in [0, 1]");
   if (!(options.step > 0.0) || !std::isfinite(options.step))
     throw std::invalid_argument("generalized-alpha: the step must be positive");
+  if (!(options.min_step >= 0.0 && options.min_step <= options.step))
+    throw std::invalid_argument("generalized-alpha: min_step must lie in (0, step] (0: step / 64)");
   if (options.max_iterations < 1 || !(options.tolerance > 0.0 && options.tolerance <= kLargestTolerance) ||
       !(options.deformation_limit >= 0.0) || !(options.spin_warning >= 0.0) || !(options.spin_limit >= 0.0) ||
       !(options.stiffened_spin_warning >= 0.0) || !(options.stiffened_spin_limit >= 0.0))

@@ -8,6 +8,8 @@
 
 #include "flexbody/format/checkpoint_file.hpp"
 
+#include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -67,6 +69,11 @@ void GeneralizedAlpha::save(format::CheckpointData& out) const {
   times[kStep] = options_.step;
   times[kRho] = options_.rho_infinity;
   e["integrator.counts"] = counts;
+  // The halving of failed steps and the coupled step's turn (issue 47): what the next step starts with.
+  e["integrator.retries"] = {static_cast<double>(split_), static_cast<double>(retried_steps_),
+                             std::isfinite(smallest_step_) ? smallest_step_ : 0.0,  // 0: no step yet
+                             static_cast<double>(coupled_steps_left_), static_cast<double>(coupled_backoff_),
+                             coupled_warned_ ? 1.0 : 0.0};
   e["integrator.times"] = times;
   e["integrator.q"] = values_of(q_);
   e["integrator.v"] = values_of(v_);
@@ -166,6 +173,13 @@ void GeneralizedAlpha::restore(const format::CheckpointData& in) {
   iterations_ = static_cast<int>(counts[kIterations]);
   total_iterations_ = static_cast<long>(counts[kTotalIterations]);
   factorizations_ = static_cast<long>(counts[kFactorizations]);
+  const std::vector<double>& retries = entry(e, "integrator.retries", 6);
+  split_ = static_cast<int>(retries[0]);
+  retried_steps_ = static_cast<long>(retries[1]);
+  smallest_step_ = retries[2] > 0.0 ? retries[2] : std::numeric_limits<double>::infinity();
+  coupled_steps_left_ = static_cast<long>(retries[3]);
+  coupled_backoff_ = static_cast<long>(retries[4]);
+  coupled_warned_ = retries[5] != 0.0;
 }
 
 }  // namespace flexbody::runtime

@@ -45,14 +45,16 @@ void GeneralizedAlpha::position_correction(const Eigen::VectorXd& nu, Eigen::Vec
 
 // Why the first attempt that diverged did: the step fails with it unless a fresh matrix or the coupled step
 // (advance) gets through.
-void GeneralizedAlpha::record_divergence(double t1, const Eigen::VectorXd& phi, std::string& failure) const {
+void GeneralizedAlpha::record_divergence(double t1, const Eigen::VectorXd& phi, bool growing, std::string& failure) const {
   if (!failure.empty()) return;
   const Eigen::Index m = lambda_.size();
   std::ostringstream why;
   Eigen::Index worst = 0;
   if (m > 0) phi.cwiseAbs().maxCoeff(&worst);
-  why << "t = " << t1 << " s: the Newton iteration diverged or its matrix is singular: a correction was not finite at "
-      << "iteration " << iterations_ << " (largest constraint residual in "
+  why << "t = " << t1 << " s: "
+      << (growing ? "the Newton iteration diverged: its corrections grew until one was not finite at iteration "
+                  : "the Newton matrix is singular or the residual not finite: a correction was not finite at iteration ")
+      << iterations_ << " (largest constraint residual in "
       << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")" << last_state_diagnosis();
   failure = why.str();
 }
@@ -97,9 +99,10 @@ bool GeneralizedAlpha::build_newton_matrix(const StepFrame& f, bool& evaluated, 
     if (!projected_->factor(w.jacobian, squared_scales_)) {  // Φ_q W Φ_qᵀ
       if (iterations_ > 1) {  // rows independent at the predictor lost it at a diverging iterate
         if (failure.empty())
-          failure = "t = " + std::to_string(f.t1) + " s: the Newton iteration diverged: at iteration " +
-                    std::to_string(iterations_) + " the constraint rows became dependent (Φ_q W Φ_qᵀ is not "
-                    "positive definite)" + last_state_diagnosis();
+          failure = "t = " + std::to_string(f.t1) + " s: the Newton iteration diverged: by iteration " +
+                    std::to_string(iterations_) + " it had moved the bodies so far that the constraint rows were "
+                    "dependent there (Φ_q W Φ_qᵀ not positive definite at the iterate; at the step's start they are "
+                    "not)" + last_state_diagnosis();
         return false;
       }
       throw StepFailure("t = " + std::to_string(f.t1) + " s: the constraint rows are dependent (Φ_q W Φ_qᵀ is not "
@@ -162,7 +165,7 @@ bool GeneralizedAlpha::iterate(const StepFrame& f, double extent, bool& fresh, s
       projected_->solve_in_place(w.nu_step);
       position_correction(w.nu_step, position_step);
       if (!all_finite(position_step)) {
-        record_divergence(f.t1, phi, failure);
+        record_divergence(f.t1, phi, std::isfinite(rate) && rate > 1.0, failure);
         return false;
       }
       w.nu += w.nu_step;
@@ -171,7 +174,7 @@ bool GeneralizedAlpha::iterate(const StepFrame& f, double extent, bool& fresh, s
       evaluate_residual(f);
       solver_->solve(q, w.residual, velocity_rows, dx);
       if (!all_finite(dx)) {
-        record_divergence(f.t1, phi, failure);
+        record_divergence(f.t1, phi, std::isfinite(rate) && rate > 1.0, failure);
         return false;
       }
     } else {
@@ -186,7 +189,7 @@ bool GeneralizedAlpha::iterate(const StepFrame& f, double extent, bool& fresh, s
         dx.head(n) = w.coupled.head(n) - position_step;
         dx.tail(m) = w.coupled.segment(n, m);
         if (!all_finite(position_step) || !all_finite(dx)) {
-          record_divergence(f.t1, phi, failure);
+          record_divergence(f.t1, phi, std::isfinite(rate) && rate > 1.0, failure);
           return false;
         }
         w.nu += w.nu_step;
@@ -195,14 +198,14 @@ bool GeneralizedAlpha::iterate(const StepFrame& f, double extent, bool& fresh, s
       } else {
         solver_->solve(q, w.residual, phi, dx);
         if (!all_finite(dx)) {
-          record_divergence(f.t1, phi, failure);
+          record_divergence(f.t1, phi, std::isfinite(rate) && rate > 1.0, failure);
           return false;
         }
         if (stabilized) {
           coupling_->complete(dx, phi, velocity_rows, w.nu_step);
           position_correction(w.nu_step, position_step);
           if (!all_finite(position_step) || !all_finite(dx)) {
-            record_divergence(f.t1, phi, failure);
+            record_divergence(f.t1, phi, std::isfinite(rate) && rate > 1.0, failure);
             return false;
           }
           w.nu += w.nu_step;

@@ -160,6 +160,7 @@ void GeneralizedAlpha::set_state(const IntegratorState& s) {
   nu_ = s.nu;
   t_ = t0_ = s.time;
   steps_ = 0;
+  split_ = 0;
   refresh_ = true;  // the kept Newton matrix belongs to another state
   fresh_starts_ = fresh_start_backoff_ = 0;
 }
@@ -224,27 +225,92 @@ void GeneralizedAlpha::predict(const StepFrame& f) {
 }
 
 void GeneralizedAlpha::advance(double h, double t1) {
+  step_start_.valid = false;
+  if (split_ > 0) keep_step_start();
   try {
-    attempt_step(h, t1);
+    int deepest = 0;
+    cover(h, t1, split_, 0, deepest);
+    split_ = std::max(deepest - 1, 0);  // the next step in half as many pieces: the step grows back
+  } catch (const StepFailure&) {
+    restore_step_start();  // a failure at min_step: back to the step's start
+    refresh_ = true;
+    throw;
   } catch (...) {
-    // The state is the last good step's (accept() is the only writer); a Newton matrix the failure may have left
-    // half built is not used again.
+    // The state is the last good step's, or a piece's of this one (accept() is the only writer); a Newton matrix the
+    // failure may have left half built is not used again.
     refresh_ = true;
     throw;
   }
 }
 
-void GeneralizedAlpha::attempt_step(double h, double t1) {
+void GeneralizedAlpha::keep_step_start() {
+  step_start_.valid = true;
+  step_start_.time = t_;
+  step_start_.q = q_;
+  step_start_.v = v_;
+  step_start_.qdd = qdd_;
+  step_start_.a = a_;
+  step_start_.lambda = lambda_;
+  step_start_.nu = nu_;
+}
+
+void GeneralizedAlpha::restore_step_start() {
+  if (!step_start_.valid) return;
+  t_ = step_start_.time;
+  q_ = step_start_.q;
+  v_ = step_start_.v;
+  qdd_ = step_start_.qdd;
+  a_ = step_start_.a;
+  lambda_ = step_start_.lambda;
+  nu_ = step_start_.nu;
+  step_start_.valid = false;
+}
+
+double GeneralizedAlpha::min_step() const {
+  return options_.min_step > 0.0 ? options_.min_step : options_.step / kDefaultSplits;
+}
+
+// From t_ to t1 = t_ + h: as 2^pieces steps, and a step that fails as two halves, recursively, while a half is at least
+// min_step; `depth` counts the halvings so far, `deepest` the most any step that was accepted needed.
+void GeneralizedAlpha::cover(double h, double t1, int pieces, int depth, int& deepest) {
+  const bool can_split = 0.5 * h >= min_step() * (1.0 - kStepToSlack);
+  if (pieces > 0 && can_split) {
+    const double mid = t_ + 0.5 * h;
+    cover(mid - t_, mid, pieces - 1, depth + 1, deepest);
+    cover(t1 - t_, t1, pieces - 1, depth + 1, deepest);
+    return;
+  }
+  std::string failure;
+  if (attempt_step(h, t1, failure)) {
+    deepest = std::max(deepest, depth);
+    smallest_step_ = std::min(smallest_step_, h);
+    return;
+  }
+  if (!can_split) {
+    std::ostringstream why;
+    why << failure << " (a step of h = " << h << " s from t = " << t_ << " s";
+    if (depth > 0) why << ", taken in halves down to min_step = " << min_step() << " s";
+    else why << "; its halves would be below min_step = " << min_step() << " s";
+    why << ")";
+    throw StepFailure(why.str());
+  }
+  ++retried_steps_;
+  if (!step_start_.valid) keep_step_start();  // nothing of this step was accepted yet
+  const double mid = t_ + 0.5 * h;
+  cover(mid - t_, mid, 0, depth + 1, deepest);
+  cover(t1 - t_, t1, 0, depth + 1, deepest);
+}
+
+bool GeneralizedAlpha::attempt_step(double h, double t1, std::string& failure) {
   const Eigen::Index n = q_.size(), m = lambda_.size();
   // β' and γ' of the solver's matrix are those of the step it was built for; a step size changed beyond rounding
-  // rebuilds it (step_to), a kept one is a modified Newton matrix (GeneralizedAlphaOptions::reuse_newton_matrix).
+  // rebuilds it (step_to, a failed step's halves), a kept one is a modified Newton matrix (reuse_newton_matrix).
   if (std::abs(h - solver_step_) > kStepToSlack * solver_step_) build_solver(h);
   const StepFrame f{h, t1, (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_)), gamma_ / (beta_ * h),
                     options_.constraints == ConstraintForm::stabilized_index2 && m > 0};
   // A Newton matrix kept from earlier iterations and steps (modified Newton) is refreshed when the corrections
   // stop shrinking fast (ratio > 1/4); a step that does not converge with a kept matrix is retried with a fresh one.
-  bool fresh_this_step = false;
-  std::string failure;  // why the first attempt that failed did (iterate)
+  bool fresh_this_step = false, coupled_this_step = false;
   if (fresh_starts_ > 0) {
     refresh_ = true;
     --fresh_starts_;
@@ -256,36 +322,54 @@ void GeneralizedAlpha::attempt_step(double h, double t1) {
     // it, wherever the body is (a pendulum pivoted 100 m from the origin).
     double extent = ground_extent_;
     for (int b = 0; b < system_.body_count(); ++b) extent = std::max(extent, q_.segment<3>(system_.offset(b)).norm());
-    if (iterate(f, extent, fresh_this_step, failure)) break;
+    if (iterate(f, extent, fresh_this_step, failure)) {
+      if (all_finite(work_.q) && all_finite(work_.v) && all_finite(work_.qdd)) break;
+      failure = "t = " + std::to_string(t1) + " s: the step converged to a non-finite state";
+    }
     // A step that failed is tried again from its predictor (in the stabilised form moved by the last step's ν along the
-    // last Jacobian built, which a fresh matrix then turns to its own): with a fresh matrix if its matrix was kept,
-    // then (stabilised form) with the coupled step; a failure of the last resort stops the run with the reason.
+    // Jacobian at the last step, which a fresh matrix then turns to its own; the failed iterate's Jacobian may not be
+    // finite): with a fresh matrix if its matrix was kept, then (stabilised form) with the coupled step; then advance
+    // takes it in halves.
+    if (f.stabilized) system_.sparse_constraint_jacobian(t_, q_, work_.jacobian);
     if (attempt == 0 && !fresh_this_step) {  // the kept matrix was too old: once more with a fresh one
       refresh_ = true;
       continue;
     }
     if (f.stabilized && !couple_) {  // (couple_, not coupled_: an attempt may fail before its matrix is built)
-      // A fresh matrix did not converge with the alternating step: once more with the coupled one, which then stays
-      // for the rest of the run (stabilized_coupling.hpp; slower to build, so not used before it is needed).
-      couple_ = refresh_ = true;
-      const std::string cost = sparse_core_ != nullptr
-                                   ? "one sparse factorization of n + 2m unknowns"
-                                   : "m solves";
-      warnings_.push_back("t = " + std::to_string(t1) + " s: Newton did not converge with the stabilised index-2 "
-                          "form's alternating step; the run continues with its coupled step, which costs " + cost +
-                          " per Newton matrix (n = " + std::to_string(n) + " coordinates, m = " + std::to_string(m) +
-                          " constraint rows)");
+      // A fresh matrix did not converge with the alternating step: once more with the coupled one, which then serves
+      // the next kCoupledSteps steps, twice as many each time it is needed again (stabilized_coupling.hpp; slower to
+      // build, so not used before it is needed).
+      couple_ = refresh_ = coupled_this_step = true;
+      if (!coupled_warned_) {
+        coupled_warned_ = true;
+        const std::string cost = sparse_core_ != nullptr ? "one sparse factorization of n + 2m unknowns" : "m solves";
+        warnings_.push_back("t = " + std::to_string(t1) + " s: Newton did not converge with the stabilised index-2 "
+                            "form's alternating step; such a step is taken with its coupled step, which costs " + cost +
+                            " per Newton matrix (n = " + std::to_string(n) + " coordinates, m = " + std::to_string(m) +
+                            " constraint rows), and so are the " + std::to_string(kCoupledSteps) + " steps after it "
+                            "(twice as many each time it is needed again)");
+      }
       continue;
     }
-    if (!failure.empty()) throw StepFailure(failure);
-    Eigen::Index worst = 0;
-    const Eigen::VectorXd now = system_.constraints(t1, work_.q);
-    if (m > 0) now.cwiseAbs().maxCoeff(&worst);
-    std::ostringstream why;
-    why << "t = " << t1 << " s: Newton did not converge in " << options_.max_iterations
-        << " iterations (largest constraint residual " << (m > 0 ? now.cwiseAbs().maxCoeff() : 0.0) << " in "
-        << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")" << last_state_diagnosis();
-    throw StepFailure(why.str());
+    if (failure.empty()) {
+      Eigen::Index worst = 0;
+      const Eigen::VectorXd now = system_.constraints(t1, work_.q);
+      if (m > 0) now.cwiseAbs().maxCoeff(&worst);
+      std::ostringstream why;
+      why << "t = " << t1 << " s: Newton did not converge in " << options_.max_iterations
+          << " iterations (largest constraint residual " << (m > 0 ? now.cwiseAbs().maxCoeff() : 0.0) << " in "
+          << (m > 0 ? system_.constraint_name(worst) : std::string("none")) << ")" << last_state_diagnosis();
+      failure = why.str();
+    }
+    refresh_ = true;  // the matrix of a failed iterate is not kept
+    // The coupled step did not help either: the halves start with the alternating step again (a bracket pendulum's
+    // coupled step at 16 ms failed down to 0.25 ms pieces, where the alternating one converges).
+    if (coupled_this_step) couple_ = false;
+    return false;
+  }
+  if (coupled_this_step) {  // it rescued this step: it serves the next ones too
+    coupled_backoff_ = std::min(coupled_backoff_ > 0 ? 2 * coupled_backoff_ : kCoupledSteps, kLongestCoupling);
+    coupled_steps_left_ = coupled_backoff_;
   }
   accept(f);
   // A kept matrix slowly goes stale as the bodies rotate away from where it was built: steps then need a third
@@ -297,14 +381,18 @@ void GeneralizedAlpha::attempt_step(double h, double t1) {
   }
   if (!fresh_this_step) extra_iterations_ += std::max(0, iterations_ - 2);  // a fresh matrix is not stale
   if (extra_iterations_ >= kExtraIterationsPerRebuild) refresh_ = true;
+  // The coupled step's turn ends (the scene asked for it throughout: never).
+  if (couple_ && !options_.coupled_from_start && !coupled_this_step && --coupled_steps_left_ <= 0) {
+    couple_ = false;
+    refresh_ = true;
+  }
   total_iterations_ += iterations_;
+  return true;
 }
 
 // The converged iterate becomes the state, after the checks of the model's validity.
 void GeneralizedAlpha::accept(const StepFrame& f) {
   Iterate& w = work_;
-  if (!all_finite(w.q) || !all_finite(w.v) || !all_finite(w.qdd))
-    throw StepFailure("t = " + std::to_string(f.t1) + " s: non-finite state");
   check_deformation(f.t1, w.q);
   check_spin(f.t1, w.q, w.v);
   w.a = (alpha_f_ * qdd_ - alpha_m_ * a_ + (1.0 - alpha_f_) * w.qdd) / (1.0 - alpha_m_);

@@ -26,8 +26,8 @@
 //
 // It costs m solves and m + 1 evaluations of the dynamic residual (G P by forward differences) and three Jacobians
 // each time the Newton matrix is built (a chain of four 10-mode bars, 56 rows: 3.2 ms more per build, 53 % more per
-// step). So generalized-α uses it only after a step failed with a fresh matrix and the alternating step, and from
-// then on (GeneralizedAlpha::couple_), with a line in warnings(). On the slider-crank with a 0.5 kg carriage, where the alternating step
+// step). So generalized-α uses it only for a step that failed with a fresh matrix and the alternating step, and the
+// next 8 steps, twice as many each time it is needed again (GeneralizedAlpha::couple_), with a line in warnings(). On the slider-crank with a 0.5 kg carriage, where the alternating step
 // converges (5.6 iterations per step at h = 1e-3 s, with the matrix kept), the coupled one took 5.1 iterations and
 // 1.5 times as long.
 // The matrix parts (X, Y, Z, the m x m factor) are kept with the Newton matrix: from an older matrix the iteration

@@ -19,6 +19,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -60,8 +61,9 @@ enum class ConstraintForm {
   /// the position constraints by a second multiplier ν that moves the positions off the Newmark update,
   /// q_{n+1} = (Newmark) + W Φ_q(q̂)ᵀ ν (q̂ where the Newton matrix was built), W = diag(scale²)/(m r²) per body
   /// (the coordinates' length scales, divided by each body's m r²; ν → 0 with h). Each Newton iteration first
-  /// alternates (ν, then the dynamic rows); after a step fails that way with a fresh Newton matrix, the run solves δ,
-  /// μ and ν together (a light carriage under a fast slider needs it; runtime/src/integrator/stabilized_coupling.hpp).
+  /// alternates (ν, then the dynamic rows); after a step fails that way with a fresh Newton matrix, that step and the
+  /// next 8 solve δ, μ and ν together (twice as many each time it is needed again; a light carriage under a fast
+  /// slider needs it; runtime/src/integrator/stabilized_coupling.hpp).
   /// Without
   /// the velocity rows the velocities drift off the hidden constraints and, at ρ∞ near 1, a spinning body gains
   /// energy and angular momentum (issue 12: a heavy top at 150 rad/s diverges at ρ∞ = 1, a flipping plate gains
@@ -71,6 +73,9 @@ enum class ConstraintForm {
   /// Cholesky of an m x m matrix), stable for ρ∞ < 1 only on fast spins.
   index3,
 };
+
+/// GeneralizedAlphaOptions::min_step's default: the step divided by this (six halvings).
+inline constexpr double kDefaultSplits = 64.0;
 
 /// The largest GeneralizedAlphaOptions::tolerance accepted: above it the iteration error exceeds the discretisation
 /// error (bench/README.md, "convergence_bench": at 1e-4 the convergence is gone).
@@ -83,6 +88,11 @@ struct GeneralizedAlphaOptions {
   double rho_infinity = 0.9;  ///< spectral radius at infinite frequency, [0, 1]
   double step = 1e-3;         ///< h [s]
   int max_iterations = 25;    ///< Newton iterations per step before the step fails
+  /// A step whose Newton iteration fails (with a fresh matrix, and in the stabilised form with the coupled step) is
+  /// taken again as two halves, each of which may be halved again, down to `min_step` [s] (0: step / kDefaultSplits);
+  /// the steps after it start in half as many pieces each, until they are whole again. Only a failure at min_step
+  /// ends the run. 0 < min_step <= step, or 0.
+  double min_step = 0.0;
   /// Newton's stopping test, dimensionless. Each coordinate's correction is measured in its body's length scale r
   /// (the radius of gyration √(tr J / m)): τ [m] against r, vec(A) as it is (a change δa moves a point at r by
   /// r δa), a field coordinate ξ_f against r / max_i |Ῡ'(i, f)| (the largest nodal displacement it makes). The
@@ -165,8 +175,10 @@ class GeneralizedAlpha {
   GeneralizedAlpha(const System& system, const GeneralizedAlphaOptions& options, double t0 = 0.0);
   GeneralizedAlpha(System&&, const GeneralizedAlphaOptions&, double = 0.0) = delete;  // borrows: would dangle
 
-  /// Advances one step of size h. Throws StepFailure (and leaves the state at the last good step); an exception from
-  /// the scene's own functions (a force's) leaves it there too, and passes through.
+  /// Advances one step of size h, taken in halves where it fails (GeneralizedAlphaOptions::min_step). Throws
+  /// StepFailure when a piece fails at min_step, or the model leaves its range, and leaves the state at the last good
+  /// step; an exception from the scene's own functions (a force's) passes through and leaves the state at the last
+  /// good step or piece of this one.
   void step();
   /// Advances one step that ends exactly at `t_end`, for a run that must end on its end time when that is not a
   /// whole number of steps: 0 < t_end − time() ≤ h + max(kStepToSlack h, 8 ε |t_end|) (the second: the rounding of
@@ -204,6 +216,10 @@ class GeneralizedAlpha {
   [[nodiscard]] int last_iterations() const { return iterations_; }
   [[nodiscard]] long total_iterations() const { return total_iterations_; }
   [[nodiscard]] long factorizations() const { return factorizations_; }  ///< Newton matrices built so far
+  /// Steps (or pieces of steps) that failed and were taken again in halves (GeneralizedAlphaOptions::min_step).
+  [[nodiscard]] long retried_steps() const { return retried_steps_; }
+  /// The smallest step taken so far [s] (infinity before the first).
+  [[nodiscard]] double smallest_step() const { return smallest_step_; }
   /// Whether the reduced Newton matrix is factorized sparse (GeneralizedAlphaOptions::reduced_matrix).
   [[nodiscard]] bool sparse() const { return sparse_; }
   /// Lines about the model's validity, in the order they arose (GeneralizedAlphaOptions::spin_warning): a simulator
@@ -218,7 +234,13 @@ class GeneralizedAlpha {
     bool stabilized = false;
   };
   void advance(double h, double t1);  ///< one step of size h to time t1 (step, step_to)
-  void attempt_step(double h, double t1);  ///< advance's work, which it guards
+  /// advance's work: from t_ to t1 as 2^pieces steps, a failed one in halves down to min_step().
+  void cover(double h, double t1, int pieces, int depth, int& deepest);
+  /// One step with its retries (a fresh matrix, the coupled step): false, the reason in `failure`, when it failed.
+  bool attempt_step(double h, double t1, std::string& failure);
+  [[nodiscard]] double min_step() const;  ///< GeneralizedAlphaOptions::min_step or its default [s]
+  void keep_step_start();     ///< the state before a step that is being taken in pieces
+  void restore_step_start();  ///< back to it when a piece failed at min_step
   void predict(const StepFrame& f);   ///< the Newton iterate's start (generalized_alpha_step.cpp)
   void predict_fields(const StepFrame& f);  ///< a GCMS body's unresolved field components: its last deformation
   void accept(const StepFrame& f);    ///< the converged iterate, checked, becomes the state
@@ -232,7 +254,8 @@ class GeneralizedAlpha {
   void evaluate_residual(const StepFrame& f);  ///< work_.residual at the iterate: (M q̈ − f)/β' + Φ_qᵀ μ
   /// W Φ_q(q_f)ᵀ ν, along the Jacobian of the kept Newton matrix.
   void position_correction(const Eigen::VectorXd& nu, Eigen::VectorXd& out) const;
-  void record_divergence(double t1, const Eigen::VectorXd& phi, std::string& failure) const;
+  /// `growing`: the corrections grew at the last iteration (a divergence, not a singular matrix).
+  void record_divergence(double t1, const Eigen::VectorXd& phi, bool growing, std::string& failure) const;
   void build_solver(double h);        ///< the Newton solver for steps of size h (β', γ'), to be factorized
   /// The sparse coupled stabilised step's Newton matrix at the iterate (ConstantCoreNewton::factor_coupled).
   void build_sparse_coupling(double t1, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
@@ -310,6 +333,22 @@ class GeneralizedAlpha {
   /// a step: bench/README.md "scale_bench"); a kept matrix that serves a step resets it.
   int fresh_starts_ = 0, fresh_start_backoff_ = 0;
   static constexpr int kLongestFreshStarts = 16;
+  /// The next step is taken in 2^split_ pieces: one less than the last step needed, so that a step that had to be
+  /// halved is not first tried whole again, and the step grows back by a factor 2 per step.
+  int split_ = 0;
+  long retried_steps_ = 0;  ///< steps or pieces that failed and were halved
+  double smallest_step_ = std::numeric_limits<double>::infinity();
+  /// The coupled step (couple_) after it rescued a step: the steps it still serves, and how many it served last time
+  /// (doubled each time it is needed again, from kCoupledSteps up to kLongestCoupling).
+  long coupled_steps_left_ = 0, coupled_backoff_ = 0;
+  bool coupled_warned_ = false;
+  static constexpr long kCoupledSteps = 8, kLongestCoupling = 1L << 20;
+  /// The state at the start of a step taken in pieces (keep_step_start).
+  struct StepStart {
+    bool valid = false;
+    double time = 0.0;
+    Eigen::VectorXd q, v, qdd, a, lambda, nu;
+  } step_start_;
 };
 
 }  // namespace flexbody::runtime

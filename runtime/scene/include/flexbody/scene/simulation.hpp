@@ -21,6 +21,10 @@ struct RunSummary {
   long steps = 0;
   long newton_iterations = 0;
   long newton_matrices = 0;  ///< Newton matrices built (factorizations)
+  /// Steps (or pieces of steps) whose Newton iteration failed and that were taken again in halves, and the smallest
+  /// step taken [s] (the integrator's step when none was halved; 0 before the first step).
+  long retried_steps = 0;
+  double smallest_step = 0.0;
   bool sparse = false;       ///< the reduced Newton matrix was factorized sparse (GeneralizedAlpha::sparse)
   double cpu_seconds = 0.0;
   double energy_initial = 0.0, energy_final = 0.0;

@@ -77,7 +77,7 @@ double largest_distance(const Path& a, const Path& reference) {
 // the same step and modes. Measured: 1.64e-4 against 9.2e-5 m at 4 ms, 6.3e-4 against 3.7e-4 at 8 ms (a ratio of
 // 1.7-1.8 at every step from 1 ms: the two formulations' own discretisation errors, since A's nine coordinates and
 // the Euler parameters are not the same coordinates). At 16 ms two or three steps fail whole (the stabilised form's
-// position correction, docs/formulations.md) and are taken in halves and quarters: 2.4e-3 against 1.4e-3 m.
+// position correction, docs/formulations.md) and are taken in halves: 2.4e-3 against 1.4e-3 m.
 TEST(LargeSteps, TheGcmsBracketPendulumRunsWhereTheFfrfDoes) {
   const auto dir = flexbody::test::scratch_dir();
   const flexbody::test::CliRun prep = flexbody::test::run_fbprep(

@@ -122,6 +122,16 @@ TEST(IntegratorCheckpointRefusal, AnotherSystemOrStepIsRefused) {
   } catch (const std::invalid_argument& e) {
     EXPECT_STREQ(e.what(), "checkpoint: missing entry integrator.a");
   }
+  // A checkpoint from before failed steps were halved (issue 47) says why it cannot continue.
+  flexbody::format::CheckpointData old;
+  integrator.save(old);
+  old.numbers.erase("integrator.retries");
+  try {
+    same.restore(old);
+    ADD_FAILURE() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("run the scene again from the start"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -384,7 +384,8 @@ RunSummary Simulation::summary() const {
   RunSummary s = run_->summary;
   s.newton_matrices = run_->integrator->factorizations();
   s.retried_steps = run_->integrator->retried_steps();
-  s.smallest_step = std::isfinite(run_->integrator->smallest_step()) ? run_->integrator->smallest_step() : 0.0;
+  s.smallest_step = std::isfinite(run_->integrator->smallest_step()) ? run_->integrator->smallest_step()
+                                                                      : run_->scene.integrator.step;
   s.wall_seconds = std::chrono::duration<double>(run_->wall).count();
   s.integrator_wall_seconds = std::chrono::duration<double>(run_->in_integrator).count();
   s.energy_drift = run_->largest_change / std::max(run_->exchanged, 1e-300);

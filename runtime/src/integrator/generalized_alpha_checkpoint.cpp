@@ -73,7 +73,7 @@ void GeneralizedAlpha::save(format::CheckpointData& out) const {
   e["integrator.retries"] = {static_cast<double>(split_), static_cast<double>(retried_steps_),
                              std::isfinite(smallest_step_) ? smallest_step_ : 0.0,  // 0: no step yet
                              static_cast<double>(coupled_steps_left_), static_cast<double>(coupled_backoff_),
-                             coupled_warned_ ? 1.0 : 0.0};
+                             coupled_warned_ ? 1.0 : 0.0, static_cast<double>(step_iterations_)};
   e["integrator.times"] = times;
   e["integrator.q"] = values_of(q_);
   e["integrator.v"] = values_of(v_);
@@ -173,13 +173,17 @@ void GeneralizedAlpha::restore(const format::CheckpointData& in) {
   iterations_ = static_cast<int>(counts[kIterations]);
   total_iterations_ = static_cast<long>(counts[kTotalIterations]);
   factorizations_ = static_cast<long>(counts[kFactorizations]);
-  const std::vector<double>& retries = entry(e, "integrator.retries", 6);
+  if (e.find("integrator.retries") == e.end())
+    throw std::invalid_argument("checkpoint: written before failed steps were taken in halves (no entry "
+                                "integrator.retries), which changed the steps: run the scene again from the start");
+  const std::vector<double>& retries = entry(e, "integrator.retries", 7);
   split_ = static_cast<int>(retries[0]);
   retried_steps_ = static_cast<long>(retries[1]);
   smallest_step_ = retries[2] > 0.0 ? retries[2] : std::numeric_limits<double>::infinity();
   coupled_steps_left_ = static_cast<long>(retries[3]);
   coupled_backoff_ = static_cast<long>(retries[4]);
   coupled_warned_ = retries[5] != 0.0;
+  step_iterations_ = static_cast<int>(retries[6]);
 }
 
 }  // namespace flexbody::runtime

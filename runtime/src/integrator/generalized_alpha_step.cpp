@@ -103,7 +103,7 @@ void GeneralizedAlpha::check_spin(double t, const Eigen::VectorXd& q, const Eige
 // Why a step may have failed, from the last converged state (the failed iterate says nothing reliable): the body
 // that turned most per step, and the one closest to the deformation limit.
 std::string GeneralizedAlpha::last_state_diagnosis() const {
-  const double h = options_.step;
+  const double h = solver_step_;  // the step or piece that failed
   int fastest = -1, most_deformed = -1;
   double largest_turn = 0.0, largest_share = 0.0, rms_of_most = 0.0;
   for (int b = 0; b < system_.body_count(); ++b) {
@@ -227,17 +227,17 @@ void GeneralizedAlpha::predict(const StepFrame& f) {
 void GeneralizedAlpha::advance(double h, double t1) {
   step_start_.valid = false;
   if (split_ > 0) keep_step_start();
+  const long iterations_before = total_iterations_;
   try {
     int deepest = 0;
     cover(h, t1, split_, 0, deepest);
     split_ = std::max(deepest - 1, 0);  // the next step in half as many pieces: the step grows back
-  } catch (const StepFailure&) {
-    restore_step_start();  // a failure at min_step: back to the step's start
-    refresh_ = true;
-    throw;
+    step_iterations_ = static_cast<int>(total_iterations_ - iterations_before);
   } catch (...) {
-    // The state is the last good step's, or a piece's of this one (accept() is the only writer); a Newton matrix the
-    // failure may have left half built is not used again.
+    // A failure at min_step, of the model's validity, or a scene function's exception: back to the step's start if
+    // pieces of it were accepted (accept() is the only other writer), so that time and state stay on the step grid;
+    // a Newton matrix the failure may have left half built is not used again.
+    restore_step_start();
     refresh_ = true;
     throw;
   }
@@ -283,7 +283,7 @@ void GeneralizedAlpha::cover(double h, double t1, int pieces, int depth, int& de
   std::string failure;
   if (attempt_step(h, t1, failure)) {
     deepest = std::max(deepest, depth);
-    smallest_step_ = std::min(smallest_step_, h);
+    if (depth > 0) smallest_step_ = std::min(smallest_step_, h);
     return;
   }
   if (!can_split) {
@@ -362,9 +362,13 @@ bool GeneralizedAlpha::attempt_step(double h, double t1, std::string& failure) {
       failure = why.str();
     }
     refresh_ = true;  // the matrix of a failed iterate is not kept
-    // The coupled step did not help either: the halves start with the alternating step again (a bracket pendulum's
-    // coupled step at 16 ms failed down to 0.25 ms pieces, where the alternating one converges).
-    if (coupled_this_step) couple_ = false;
+    // The coupled step did not help either (tried now, or on since it rescued an earlier step): the halves start with
+    // the alternating step again (a bracket pendulum's coupled step at 16 ms failed down to 0.25 ms pieces, where the
+    // alternating one converges), each with the coupled step as its own retry.
+    if (couple_ && !options_.coupled_from_start) {
+      couple_ = false;
+      coupled_steps_left_ = 0;
+    }
     return false;
   }
   if (coupled_this_step) {  // it rescued this step: it serves the next ones too

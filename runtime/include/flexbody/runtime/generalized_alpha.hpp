@@ -176,9 +176,8 @@ class GeneralizedAlpha {
   GeneralizedAlpha(System&&, const GeneralizedAlphaOptions&, double = 0.0) = delete;  // borrows: would dangle
 
   /// Advances one step of size h, taken in halves where it fails (GeneralizedAlphaOptions::min_step). Throws
-  /// StepFailure when a piece fails at min_step, or the model leaves its range, and leaves the state at the last good
-  /// step; an exception from the scene's own functions (a force's) passes through and leaves the state at the last
-  /// good step or piece of this one.
+  /// StepFailure when a piece fails at min_step, or the model leaves its range; that and an exception from the scene's
+  /// own functions (a force's), which passes through, leave the state at the last good step.
   void step();
   /// Advances one step that ends exactly at `t_end`, for a run that must end on its end time when that is not a
   /// whole number of steps: 0 < t_end − time() ≤ h + max(kStepToSlack h, 8 ε |t_end|) (the second: the rounding of
@@ -213,12 +212,13 @@ class GeneralizedAlpha {
   [[nodiscard]] const Eigen::VectorXd& velocities() const { return v_; }
   [[nodiscard]] const Eigen::VectorXd& accelerations() const { return qdd_; }
   [[nodiscard]] const Eigen::VectorXd& multipliers() const { return lambda_; }  ///< λ [N, N m, ...]
-  [[nodiscard]] int last_iterations() const { return iterations_; }
+  /// Newton iterations of the last step (all its pieces, when it was halved).
+  [[nodiscard]] int last_iterations() const { return step_iterations_; }
   [[nodiscard]] long total_iterations() const { return total_iterations_; }
   [[nodiscard]] long factorizations() const { return factorizations_; }  ///< Newton matrices built so far
   /// Steps (or pieces of steps) that failed and were taken again in halves (GeneralizedAlphaOptions::min_step).
   [[nodiscard]] long retried_steps() const { return retried_steps_; }
-  /// The smallest step taken so far [s] (infinity before the first).
+  /// The smallest piece of a step taken in halves so far [s] (infinity when none was).
   [[nodiscard]] double smallest_step() const { return smallest_step_; }
   /// Whether the reduced Newton matrix is factorized sparse (GeneralizedAlphaOptions::reduced_matrix).
   [[nodiscard]] bool sparse() const { return sparse_; }
@@ -322,7 +322,8 @@ class GeneralizedAlpha {
   /// system (ConstantCoreNewton::factor_coupled) instead of StabilizedCoupling's m solves; null otherwise.
   detail::ConstantCoreNewton* sparse_core_ = nullptr;
   double solver_step_ = 0.0;  ///< the step size solver_ was built for (its β' and γ')
-  int iterations_ = 0;
+  int iterations_ = 0;  ///< of the current attempt
+  int step_iterations_ = 0;  ///< of the last step, all its pieces (last_iterations)
   long total_iterations_ = 0, factorizations_ = 0;
   bool refresh_ = true;  ///< build the Newton matrix at the next iteration
   int extra_iterations_ = 0;  ///< iterations beyond two per step since the Newton matrix was built
@@ -337,7 +338,7 @@ class GeneralizedAlpha {
   /// halved is not first tried whole again, and the step grows back by a factor 2 per step.
   int split_ = 0;
   long retried_steps_ = 0;  ///< steps or pieces that failed and were halved
-  double smallest_step_ = std::numeric_limits<double>::infinity();
+  double smallest_step_ = std::numeric_limits<double>::infinity();  ///< the smallest piece of a halved step
   /// The coupled step (couple_) after it rescued a step: the steps it still serves, and how many it served last time
   /// (doubled each time it is needed again, from kCoupledSteps up to kLongestCoupling).
   long coupled_steps_left_ = 0, coupled_backoff_ = 0;

@@ -22,7 +22,7 @@ struct RunSummary {
   long newton_iterations = 0;
   long newton_matrices = 0;  ///< Newton matrices built (factorizations)
   /// Steps (or pieces of steps) whose Newton iteration failed and that were taken again in halves, and the smallest
-  /// step taken [s] (the integrator's step when none was halved; 0 before the first step).
+  /// piece taken [s] (the integrator's step when none was halved).
   long retried_steps = 0;
   double smallest_step = 0.0;
   bool sparse = false;       ///< the reduced Newton matrix was factorized sparse (GeneralizedAlpha::sparse)

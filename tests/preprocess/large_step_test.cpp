@@ -10,27 +10,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
 namespace {
-
-// The numbers of a CSV file written by fbsim (one header line), row by row.
-std::vector<std::vector<double>> read_csv(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::vector<double>> rows;
-  while (std::getline(in, line)) {
-    std::vector<double> row;
-    std::stringstream fields(line);
-    for (std::string field; std::getline(fields, field, ',');) row.push_back(std::stod(field));
-    rows.push_back(row);
-  }
-  return rows;
-}
 
 // bore_3's path over 0.5 s at step h (rows every 16 ms), or the run's error line.
 struct Path {
@@ -53,7 +36,7 @@ Path swing(const std::filesystem::path& dir, const std::string& formulation, int
   const flexbody::test::CliRun run = flexbody::test::run_fbsim(dir, fmt::format("{0}.yaml -o {0}-out --json", name));
   if (run.exit_code != 0) return {{}, run.err};
   const nlohmann::json summary = nlohmann::json::parse(run.out);
-  return {read_csv(dir / (name + "-out") / "bore_3.csv"), {}, summary["retried_steps"].get<long>(),
+  return {flexbody::test::read_csv_numbers(dir / (name + "-out") / "bore_3.csv"), {}, summary["retried_steps"].get<long>(),
           summary["smallest_step_s"].get<double>()};
 }
 

@@ -143,25 +143,6 @@ TEST(ScaleInvariance, SubMillimetreBracket) {
   }
 }
 
-namespace {
-
-// The numbers of a CSV file written by fbsim (one header line), row by row.
-std::vector<std::vector<double>> read_csv(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);  // header
-  std::vector<std::vector<double>> rows;
-  while (std::getline(in, line)) {
-    std::vector<double> row;
-    std::stringstream fields(line);
-    for (std::string field; std::getline(fields, field, ',');) row.push_back(std::stod(field));
-    rows.push_back(row);
-  }
-  return rows;
-}
-
-}  // namespace
-
 // Scenes with the beam at 1 mm, 1 m and 100 m, dynamically similar (same material: times like L, forces like
 // L², gravity like 1/L), give the same motion in units of L and the same modal amplitudes in units of L^5/2
 // (kg^1/2 m). A free beam pushed at its tip by a force that rises from zero (so the initial accelerations are
@@ -242,8 +223,8 @@ TEST(ScaleInvariance, ScenesWithTheBeamScaleExactly) {
       const std::string out = fmt::format("{}-{}-out", scene, name);
       const flexbody::test::CliRun sim = flexbody::test::run_fbsim(dir, fmt::format("{}-{}.yaml -o {} -q", scene, name, out));
       ASSERT_EQ(sim.exit_code, 0) << scene << ": " << sim.err;
-      results[s][scene + "/tip"] = read_csv(dir / out / "tip.csv");
-      results[s][scene + "/modes"] = read_csv(dir / out / "modes.csv");
+      results[s][scene + "/tip"] = flexbody::test::read_csv_numbers(dir / out / "tip.csv");
+      results[s][scene + "/modes"] = flexbody::test::read_csv_numbers(dir / out / "modes.csv");
     }
     // The spun scene without its centre of mass's velocity: the consistent initial velocities give it the same (the
     // rigid velocities close the rows); before, M-nearest over all velocities put part of the root's 165 m/s into the
@@ -257,7 +238,7 @@ TEST(ScaleInvariance, ScenesWithTheBeamScaleExactly) {
       flexbody::test::write_text(dir / "unmoved.yaml", unmoved);
       const flexbody::test::CliRun sim = flexbody::test::run_fbsim(dir, "unmoved.yaml -o unmoved-out -q");
       ASSERT_EQ(sim.exit_code, 0) << sim.err;
-      const auto a = read_csv(dir / "unmoved-out" / "modes.csv"), b = results[1.0]["spun/modes"];
+      const auto a = flexbody::test::read_csv_numbers(dir / "unmoved-out" / "modes.csv"), b = results[1.0]["spun/modes"];
       ASSERT_EQ(a.size(), b.size());
       double largest = 0.0, worst = 0.0;
       for (std::size_t r = 0; r < a.size(); ++r)

@@ -18,6 +18,20 @@ std::string slurp(const std::filesystem::path& path) {
 
 void write_text(const std::filesystem::path& path, const std::string& text) { std::ofstream(path) << text; }
 
+std::vector<std::vector<double>> read_csv_numbers(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);  // the header
+  std::vector<std::vector<double>> rows;
+  while (std::getline(in, line)) {
+    std::vector<double> row;
+    std::stringstream fields(line);
+    for (std::string field; std::getline(fields, field, ',');) row.push_back(std::stod(field));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 namespace {
 
 CliRun run_tool(const std::filesystem::path& dir, const char* executable, const std::string& arguments) {

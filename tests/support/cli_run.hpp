@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace flexbody::test {
 
@@ -19,6 +20,9 @@ struct CliRun {
 
 /// The whole content of a text file.
 [[nodiscard]] std::string slurp(const std::filesystem::path& path);
+
+/// The numbers of a CSV file written by fbsim (one header line), row by row.
+[[nodiscard]] std::vector<std::vector<double>> read_csv_numbers(const std::filesystem::path& path);
 
 /// Writes `text` to a new file (replacing it).
 void write_text(const std::filesystem::path& path, const std::string& text);

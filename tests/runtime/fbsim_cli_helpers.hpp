@@ -61,17 +61,7 @@ inline void expect_scene_error(const std::string& scene, int line, const std::st
 }
 
 inline std::vector<std::vector<double>> csv_numbers(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  std::vector<std::vector<double>> rows;
-  std::string line;
-  std::getline(in, line);  // header
-  while (std::getline(in, line)) {
-    std::vector<double> row;
-    std::stringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) row.push_back(std::stod(cell));
-    rows.push_back(row);
-  }
-  return rows;
+  return flexbody::test::read_csv_numbers(file);
 }
 
 // The t column of an output file.

@@ -242,8 +242,10 @@ class Scene:
         self._document["gravity"] = g
 
     def set_integrator(self, **keys):
-        """step [s] and end [s] (required), rho_inf, tolerance, max_iterations, output_every, deformation_limit, the
-        spin levels, constraints, linear_solver, coupled_step, min_step: the scene file's `integrator` keys."""
+        """step [s] and end [s] (required), rho_inf, tolerance, max_iterations, output_every, output_interval,
+        deformation_limit, the spin levels, constraints, linear_solver, coupled_step, min_step: the scene file's
+        `integrator` keys. step="auto" with error_tolerance [m per step] (and initial_step, max_step) lets the steps
+        follow generalized-alpha's local error estimate; rows then come every output_interval seconds."""
         self._document["integrator"] = _given(keys)
 
     def add_output(self, name, quantities, **keys):

@@ -233,9 +233,19 @@ int main(int argc, char** argv) {
                                (directory / flexbody::scene::kCheckpointFileName).string());
     std::cout << fmt::format("  {} Newton matrices, factorized {}\n", summary.newton_matrices,
                              summary.sparse ? "sparse (KLU)" : "dense");
-    if (summary.retried_steps > 0)
+    if (scene.integrator.error_tolerance > 0.0) {
+      std::cout << fmt::format("  step: auto, error tolerance {:.3g} m per step: steps from {:.3g} to {:.3g} s, {} taken "
+                               "again for their error, {} for Newton\n", scene.integrator.error_tolerance,
+                               summary.smallest_step, summary.largest_step, summary.rejected_steps, summary.retried_steps);
+      if (summary.steps_above_tolerance > 0)
+        std::cout << fmt::format("  {} steps at min_step = {:.3g} s were accepted above the tolerance\n",
+                                 summary.steps_above_tolerance,
+                                 scene.integrator.min_step > 0.0 ? scene.integrator.min_step
+                                                                 : scene.integrator.step / flexbody::runtime::kDefaultSplits);
+    } else if (summary.retried_steps > 0) {
       std::cout << fmt::format("  {} steps failed and were taken again in halves; the smallest step was {:.3g} s\n",
                                summary.retried_steps, summary.smallest_step);
+    }
     if (const int moved = scene.assembly.most_moved(); scene.assembly.iterations > 0 && moved >= 0)
       std::cout << fmt::format("  assembly: joint gaps up to {:.3g} m closed in {} steps; largest move {:.3g} m (body '{}')\n",
                                scene.assembly.largest_gap, scene.assembly.iterations,

@@ -118,6 +118,24 @@ def test_a_run_in_steps_and_pieces(folder):
     assert sim.summary()["steps"] == 50
 
 
+def test_error_control_from_python(folder):
+    """step="auto": the steps follow the error tolerance, rows come by time and land on it, the summary says so."""
+    scene = scene_in_code(folder)
+    scene.set_integrator(rho_inf=0.9, step="auto", error_tolerance=1e-7, end=0.05, output_interval=0.005)
+    sim = scene.simulate()
+    outputs = sim.run()
+    times = outputs["bore_3"].time
+    assert len(times) == 11
+    assert np.allclose(times, 0.005 * np.arange(11), rtol=0, atol=1e-15)  # on each multiple, not a step after it
+    summary = sim.summary()
+    assert summary["error_tolerance_m"] == 1e-7
+    assert summary["smallest_step_s"] <= summary["largest_step_s"] <= 0.005
+    assert summary["steps_above_tolerance"] == 0
+    with pytest.raises(flexbody.SceneError, match="output_every counts steps"):
+        scene.set_integrator(step="auto", error_tolerance=1e-7, end=0.05, output_every=5)
+        scene.simulate()
+
+
 def test_state_and_set_state(folder):
     sim = flexbody.load_scene(folder / "scene.yaml")
     sim.run(0.02)

@@ -158,6 +158,22 @@ TEST(FbsimCli, BadScenesNameTheLine) {
   expect_scene_error(head + "integrator: {step: 1.0e-3, end: 0.01, min_step: 2.0e-3}\n", 3,
                      "integrator min_step 0.002 s is larger than the step 0.001 s");
   expect_scene_error(head + "integrator: {step: 1.0e-3, end: 0.01, min_step: 0}\n", 3, "integrator min_step");
+  // step: auto (error control)
+  expect_scene_error(head + "integrator: {step: auto, end: 0.01}\n", 3, "integrator step: auto needs error_tolerance");
+  expect_scene_error(head + "integrator: {step: 1.0e-3, end: 0.01, error_tolerance: 1.0e-6}\n", 3,
+                     "integrator error_tolerance is for step: auto (error control); this scene's step is fixed");
+  expect_scene_error(head + "integrator: {step: automatic, end: 0.01}\n", 3, "integrator step must be a time in seconds or auto, got 'automatic'");
+  expect_scene_error(head + "integrator: {step: auto, error_tolerance: 0, end: 0.01}\n", 3, "integrator error_tolerance");
+  expect_scene_error(head + "integrator: {step: auto, error_tolerance: 1.0e-6, end: 0.01, output_every: 2}\n", 3,
+                     "integrator output_every counts steps, which step: auto chooses; give output_interval (seconds)");
+  expect_scene_error(head + "integrator: {step: auto, error_tolerance: 1.0e-6, end: 0.01, max_step: 1.0e-3, "
+                            "initial_step: 2.0e-3}\n", 3, "integrator initial_step 0.002 s is larger than max_step 0.001 s");
+  expect_scene_error(head + "integrator: {step: auto, error_tolerance: 1.0e-6, end: 0.01, max_step: 0.1}\n", 3,
+                     "integrator max_step 0.1 s is larger than the end time 0.01 s");
+  expect_scene_error(head + "integrator: {step: auto, error_tolerance: 1.0e-6, end: 0.01, initial_step: 1.0e-3, "
+                            "min_step: 2.0e-3}\n", 3, "integrator min_step 0.002 s is larger than the initial step 0.001 s");
+  expect_scene_error(head + "integrator: {step: auto, error_tolerance: 1.0e-6, end: 0.01}\nparaview: {every: 2}\n", 4,
+                     "paraview every counts steps, which step: auto chooses; give interval (seconds)");
 }
 
 TEST(FbsimCli, RegionDisplacementsStressesAndOrientationsAreWritten) {

@@ -45,8 +45,10 @@ std::string scene_text(const std::string& kind, bool by_time) {
     body = "bar: {file: bar.fbh5, modes: rigid}";
     joint = "pivot: {type: driven-revolute, body: bar, interface: root, to: ground, axis: [0, 0, 1], speed: 3, ramp: 0.01}";
   }
+  // step: auto (error control): the GCMS bar, its steps chosen to keep 1e-9 m per step.
+  const std::string step = kind == "auto" ? "step: auto, error_tolerance: 1.0e-9" : "step: 1.0e-4";
   return "bodies:\n  " + body + "\njoints:\n  " + joint +
-         "\ngravity: [0, -9.81, 0]\nintegrator: {type: generalized-alpha, rho_inf: 0.9, step: 1.0e-4, end: 0.03, " +
+         "\ngravity: [0, -9.81, 0]\nintegrator: {type: generalized-alpha, rho_inf: 0.9, " + step + ", end: 0.03, " +
          (by_time ? "output_interval: 0.0013}" : "output_every: 7}") +
          "\noutputs:\n  tip: {body: bar, interface: tip, quantities: [position, velocity]}\n"
          "  pivot: {joint: pivot, quantities: [reaction_force]}\nmonitors: true\n"
@@ -102,6 +104,22 @@ INSTANTIATE_TEST_SUITE_P(Bodies, SimulationCheckpoint,
                          [](const auto& param_info) {
                            return std::get<0>(param_info.param) + (std::get<1>(param_info.param) ? "_by_time" : "_by_steps");
                          });
+
+// Under error control the resumed run takes the steps the uninterrupted one took (the controller's state, which
+// vibrations its estimate counts, and a_{n−1} are in the checkpoint) and writes its files byte for byte.
+TEST(SimulationCheckpoint, AResumedRunUnderErrorControlWritesTheUninterruptedRunsFiles) {
+  const std::filesystem::path whole = bar_folder() / "ck_whole_auto", part = bar_folder() / "ck_part_auto";
+  const long steps = run("auto", true, whole, 0);
+  EXPECT_GT(steps, 20);
+  const auto expected = files_under(whole);
+  for (const int stop : {3, 11, static_cast<int>(steps) - 2}) {
+    SCOPED_TRACE("stopped after step " + std::to_string(stop));
+    EXPECT_EQ(run("auto", true, part, stop), steps);
+    const auto resumed = files_under(part);
+    ASSERT_EQ(resumed.size(), expected.size());
+    for (const auto& [name, bytes] : expected) EXPECT_TRUE(resumed.at(name) == bytes) << name << " differs";
+  }
+}
 
 // A checkpoint written by the pendulum after 50 steps, in `out`.
 std::filesystem::path stopped_run(const std::filesystem::path& out) {

@@ -340,9 +340,12 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
       }
       scene.paraview.push_back({body, body_stresses});
     }
-    const long steps = static_cast<long>(step_count(scene.end_time, scene.integrator.step));
+    const bool automatic = scene.integrator.error_tolerance > 0.0;  // step: auto: frames by time
+    const long steps = automatic ? 1 : static_cast<long>(step_count(scene.end_time, scene.integrator.step));
     scene.paraview_every = static_cast<int>(std::max(1L, (steps + 99) / 100));
+    if (automatic && !paraview["interval"]) scene.paraview_interval = scene.end_time / kAutoFrames;
     if (const YAML::Node every = paraview["every"]) {
+      if (automatic) r.fail(every, "paraview every counts steps, which step: auto chooses; give interval (seconds)");
       scene.paraview_every = r.count(every, "paraview every");
       if (scene.paraview_every < 1) r.fail(every, "paraview every must be at least 1");
     }

@@ -6,17 +6,47 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
 
 namespace flexbody::scene {
+namespace {
+
+// step: auto (error control): error_tolerance [m] required; initial_step, max_step and min_step [s] defaulted from the
+// end time and the output interval (scene.hpp, kAutoRows).
+void read_error_control(const format::YamlReader& r, const YAML::Node& integrator, Scene& scene) {
+  runtime::GeneralizedAlphaOptions& o = scene.integrator;
+  const YAML::Node tolerance = integrator["error_tolerance"];
+  if (!tolerance)
+    r.fail(integrator["step"], "integrator step: auto needs error_tolerance, the local position error allowed per step "
+                               "in metres (a rotation's counts at the body's radius of gyration)");
+  o.error_tolerance = r.positive(tolerance, "integrator error_tolerance [m]");
+  const double interval = integrator["output_interval"]
+                              ? r.positive(integrator["output_interval"], "integrator output_interval")
+                              : scene.end_time / kAutoRows;
+  o.max_step = scene.end_time / kAutoLongestSteps;
+  if (const YAML::Node longest = integrator["max_step"]) {
+    o.max_step = r.positive(longest, "integrator max_step");
+    if (o.max_step > scene.end_time)
+      r.fail(longest, fmt::format("integrator max_step {} s is larger than the end time {} s", o.max_step, scene.end_time));
+  }
+  o.step = std::min(o.max_step, interval) / kAutoFirstStepDivisor;
+  if (const YAML::Node first = integrator["initial_step"]) {
+    o.step = r.positive(first, "integrator initial_step");
+    if (o.step > o.max_step)
+      r.fail(first, fmt::format("integrator initial_step {} s is larger than max_step {} s", o.step, o.max_step));
+  }
+}
+
+}  // namespace
 
 void read_integrator(const format::YamlReader& r, const YAML::Node& root, const SceneOverrides& overrides,
                      Scene& scene) {
   const YAML::Node integrator = r.required(root, "integrator", "the scene");
   r.expect_map(integrator, "integrator",
-               {"type", "rho_inf", "step", "min_step", "end", "tolerance", "max_iterations", "output_every", "output_interval",
+               {"type", "rho_inf", "step", "min_step", "error_tolerance", "initial_step", "max_step", "end", "tolerance", "max_iterations", "output_every", "output_interval",
                 "deformation_limit",
                 "spin_warning", "spin_limit", "stiffened_spin_warning", "stiffened_spin_limit", "constraints",
                 "linear_solver", "coupled_step"});
@@ -27,8 +57,9 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
     if (scene.integrator.rho_infinity < 0.0 || scene.integrator.rho_infinity > 1.0)
       r.fail(rho, fmt::format("integrator rho_inf must lie in [0, 1], got {}", scene.integrator.rho_infinity));
   }
-  scene.integrator.step = r.positive(r.required(integrator, "step", "integrator"), "integrator step");
-  scene.step_at = r.at(integrator["step"]);
+  const YAML::Node step = r.required(integrator, "step", "integrator");
+  const bool automatic = step.IsScalar() && step.Scalar() == "auto";
+  scene.step_at = r.at(step);
   scene.outputs_at = integrator["output_every"]      ? r.at(integrator["output_every"])
                       : integrator["output_interval"] ? r.at(integrator["output_interval"])
                                                       : key_at(r, root, "integrator");
@@ -36,24 +67,34 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
   if (overrides.end_time) {
     if (!(*overrides.end_time > 0.0) || !std::isfinite(*overrides.end_time))
       throw std::invalid_argument(fmt::format("--end must be a positive time in seconds, got {}", *overrides.end_time));
-    if (scene.integrator.step > *overrides.end_time)
-      throw std::invalid_argument(fmt::format("--end {} s is shorter than the scene's integrator step {} s",
-                                              *overrides.end_time, scene.integrator.step));
     scene.end_time = *overrides.end_time;
   }
-  if (scene.integrator.step > scene.end_time)
-    r.fail(integrator["step"], fmt::format("integrator step {} s is larger than the end time {} s",
-                                           scene.integrator.step, scene.end_time));
-  if (const double steps = step_count(scene.end_time, scene.integrator.step); !(steps <= kMostSteps))
-    r.fail(integrator["step"], fmt::format("integrator step {} s would take {:.3g} steps to the end time {} s{}; at "
-                                           "most {:.0e} are allowed (is the step meant to be that small?)",
-                                           scene.integrator.step, steps, scene.end_time,
-                                           overrides.end_time ? " (--end)" : "", kMostSteps));
+  if (automatic) {
+    read_error_control(r, integrator, scene);
+  } else {
+    for (const char* key : {"error_tolerance", "initial_step", "max_step"})
+      if (const YAML::Node given = integrator[key])
+        r.fail(given, fmt::format("integrator {} is for step: auto (error control); this scene's step is fixed", key));
+    if (step.IsScalar() && !step.Scalar().empty() && std::isalpha(static_cast<unsigned char>(step.Scalar()[0])))
+      r.fail(step, fmt::format("integrator step must be a time in seconds or auto, got '{}'", step.Scalar()));
+    scene.integrator.step = r.positive(step, "integrator step");
+    if (overrides.end_time && scene.integrator.step > *overrides.end_time)
+      throw std::invalid_argument(fmt::format("--end {} s is shorter than the scene's integrator step {} s",
+                                              *overrides.end_time, scene.integrator.step));
+    if (scene.integrator.step > scene.end_time)
+      r.fail(step, fmt::format("integrator step {} s is larger than the end time {} s", scene.integrator.step,
+                               scene.end_time));
+    if (const double steps = step_count(scene.end_time, scene.integrator.step); !(steps <= kMostSteps))
+      r.fail(step, fmt::format("integrator step {} s would take {:.3g} steps to the end time {} s{}; at most {:.0e} are "
+                               "allowed (is the step meant to be that small?)", scene.integrator.step, steps,
+                               scene.end_time, overrides.end_time ? " (--end)" : "", kMostSteps));
+  }
   if (const YAML::Node floor = integrator["min_step"]) {
     scene.integrator.min_step = r.positive(floor, "integrator min_step");
     if (scene.integrator.min_step > scene.integrator.step)
-      r.fail(floor, fmt::format("integrator min_step {} s is larger than the step {} s: it is the smallest piece a "
-                                "failed step is halved into", scene.integrator.min_step, scene.integrator.step));
+      r.fail(floor, fmt::format("integrator min_step {} s is larger than the {}step {} s: it is the smallest step {}",
+                                scene.integrator.min_step, automatic ? "initial " : "", scene.integrator.step,
+                                automatic ? "the error control may take" : "a failed step is halved into"));
   }
   if (const YAML::Node tol = integrator["tolerance"]) {
     scene.integrator.tolerance = r.positive(tol, "integrator tolerance");
@@ -110,6 +151,8 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
   }
   if (const YAML::Node it = integrator["max_iterations"]) scene.integrator.max_iterations = r.count(it, "integrator max_iterations");
   if (const YAML::Node every = integrator["output_every"]) {
+    if (automatic)
+      r.fail(every, "integrator output_every counts steps, which step: auto chooses; give output_interval (seconds)");
     scene.output_every = r.count(every, "integrator output_every");
     if (scene.output_every < 1) r.fail(every, "integrator output_every must be at least 1");
   }
@@ -118,6 +161,7 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
       r.fail(interval, "integrator: output_every (steps) and output_interval (seconds) are both given; give one");
     scene.output_interval = r.positive(interval, "integrator output_interval");
   }
+  if (automatic && !scene.output_interval) scene.output_interval = scene.end_time / kAutoRows;
 }
 
 }  // namespace flexbody::scene

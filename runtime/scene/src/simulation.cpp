@@ -104,10 +104,21 @@ void Simulation::Run::check() {
 }
 
 // One step (to `end` exactly when `to_end`); `last`: the last of a run, recorded and checked whatever the counts say.
+// Under error control (step: auto) one step toward the next row's or frame's time, or `end` when `to_end`: the last
+// is the one that reaches it.
 void Simulation::Run::advance(bool to_end, double end, bool last) {
   const auto start = std::chrono::steady_clock::now();
-  if (to_end) integrator->step_to(end);
-  else integrator->step();
+  if (scene.integrator.error_tolerance > 0.0) {
+    double stop = to_end ? end : std::numeric_limits<double>::infinity();
+    if (scene.output_interval) stop = std::min(stop, next_row);
+    if (scene.paraview_interval) stop = std::min(stop, next_frame);
+    integrator->step_toward(stop);
+    last = last || (to_end && integrator->time() == end);
+  } else if (to_end) {
+    integrator->step_to(end);
+  } else {
+    integrator->step();
+  }
   in_integrator += std::chrono::steady_clock::now() - start;
   written = drawn = false;
   ++count;
@@ -136,7 +147,8 @@ void Simulation::Run::advance(bool to_end, double end, bool last) {
 
 // The CSV files' and the ParaView series' sizes for a run from t = 0 to `end` (output_budget.hpp).
 OutputEstimate Simulation::Run::estimate(double end) const {
-  const double steps = step_count(end, scene.integrator.step);
+  const double steps = scene.integrator.error_tolerance > 0.0 ? std::numeric_limits<double>::infinity()  // by time
+                                                              : step_count(end, scene.integrator.step);
   // Rows at t = 0, every n-th step, and at the end when it is not one of them.
   auto recorded = [steps, end](int every, const std::optional<double>& interval) {
     if (interval) {  // at most one row per step
@@ -331,6 +343,7 @@ bool Simulation::run(double end, const std::function<void(double)>& progress, co
   if (!std::isfinite(end) || end < now - slack)
     throw std::invalid_argument(fmt::format("run to t = {} s: the simulation is at t = {} s already", end, now));
   if (end <= now + slack) return true;
+  if (r.scene.integrator.error_tolerance > 0.0) return r.run_controlled(end, progress, stop);
   // Whole steps, the last one shortened to end on `end` exactly (step_count), at most kMostSteps (scene.hpp).
   if ((end - now) / h > kMostSteps)
     throw std::invalid_argument(fmt::format("run to t = {} s: {:.3g} steps of {} s, more than a run may take ({:.0e})",
@@ -361,6 +374,31 @@ bool Simulation::run(double end, const std::function<void(double)>& progress, co
   return true;
 }
 
+// step: auto: steps toward each row's and frame's time until one ends on `end`.
+bool Simulation::Run::run_controlled(double end, const std::function<void(double)>& progress,
+                                     const std::function<bool()>& stop) {
+  const std::clock_t cpu_start = std::clock();
+  try {
+    for (long k = 1; integrator->time() != end; ++k) {
+      advance(true, end, false);
+      checkpoint_when_due();
+      if (progress && k % 100 == 0) progress(integrator->time());
+      if (stop && integrator->time() != end && stop()) {
+        flush();
+        summary.cpu_seconds += cpu_since(cpu_start);
+        return false;
+      }
+    }
+  } catch (...) {
+    recover();
+    summary.cpu_seconds += cpu_since(cpu_start);
+    throw;
+  }
+  flush();
+  summary.cpu_seconds += cpu_since(cpu_start);
+  return true;
+}
+
 std::filesystem::path Simulation::checkpoint() {
   if (!run_->checkpoint_file) throw std::logic_error("Simulation::checkpoint: the run has no output directory");
   run_->write_checkpoint();
@@ -384,6 +422,10 @@ RunSummary Simulation::summary() const {
   RunSummary s = run_->summary;
   s.newton_matrices = run_->integrator->factorizations();
   s.retried_steps = run_->integrator->retried_steps();
+  s.rejected_steps = run_->integrator->rejected_steps();
+  s.steps_above_tolerance = run_->integrator->steps_above_tolerance();
+  s.largest_step = run_->scene.integrator.error_tolerance > 0.0 ? run_->integrator->largest_step()
+                                                                  : run_->scene.integrator.step;
   s.smallest_step = std::isfinite(run_->integrator->smallest_step()) ? run_->integrator->smallest_step()
                                                                       : run_->scene.integrator.step;
   s.wall_seconds = std::chrono::duration<double>(run_->wall).count();

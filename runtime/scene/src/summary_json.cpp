@@ -18,6 +18,11 @@ std::string summary_json(const Simulation& simulation, const std::string& scene_
   j["newton_matrices"] = summary.newton_matrices;
   j["retried_steps"] = summary.retried_steps;
   j["smallest_step_s"] = summary.smallest_step;
+  j["largest_step_s"] = summary.largest_step;
+  j["rejected_steps"] = summary.rejected_steps;
+  j["steps_above_tolerance"] = summary.steps_above_tolerance;
+  j["error_tolerance_m"] = scene.integrator.error_tolerance > 0.0 ? nlohmann::ordered_json(scene.integrator.error_tolerance)
+                                                                   : nlohmann::ordered_json(nullptr);
   j["linear_solver"] = summary.sparse ? "sparse" : "dense";
   {
     const runtime::AssemblyReport& a = scene.assembly;

@@ -2,6 +2,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
+
 namespace flexbody::runtime::detail {
 
 FieldPredictor::FieldPredictor(const System& system) {
@@ -38,6 +40,35 @@ void FieldPredictor::set_step(double h) {
     body.stiff_from = omega2.size();
     while (body.stiff_from > 0 && omega2(body.stiff_from - 1) * h * h > 1.0) --body.stiff_from;
   }
+}
+
+bool FieldPredictor::splits(Eigen::Index offset) const {
+  return std::any_of(bodies_.begin(), bodies_.end(), [offset](const Body& body) { return body.offset == offset; });
+}
+
+std::vector<const Eigen::VectorXd*> FieldPredictor::frequencies() const {
+  std::vector<const Eigen::VectorXd*> out;
+  for (const Body& body : bodies_) out.push_back(&body.basis->omega2);
+  return out;
+}
+
+double FieldPredictor::displacement(const Eigen::VectorXd& q, const Eigen::VectorXd& x, const Eigen::VectorXd& reach,
+                                    const std::vector<Eigen::Index>& measured) {
+  double largest = 0.0;
+  for (std::size_t k = 0; k < bodies_.size(); ++k) {
+    Body& body = bodies_[k];
+    const Eigen::Index count = measured[k], o = body.offset;
+    if (count == 0) continue;
+    const Eigen::Map<const Eigen::Matrix3d> a(q.data() + o + 3);
+    body.difference.resize(3 * body.fields);
+    Eigen::Map<Eigen::Matrix3Xd> d(body.difference.data(), 3, body.fields);
+    d.noalias() = a.transpose() * Eigen::Map<const Eigen::Matrix3Xd>(x.data() + o + 12, 3, body.fields);
+    body.components.noalias() = body.basis->weighted.topRows(count) * body.difference;
+    body.difference.noalias() = body.basis->vectors.leftCols(count) * body.components;
+    for (Eigen::Index f = 0; f < body.fields; ++f)
+      largest = std::max(largest, d.col(f).norm() / reach(o + 12 + 3 * f));
+  }
+  return largest;
 }
 
 bool FieldPredictor::hold(Body& body, const Eigen::VectorXd& q_n, Eigen::VectorXd& q_pred) {

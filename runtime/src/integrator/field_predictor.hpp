@@ -27,6 +27,16 @@ class FieldPredictor {
   explicit FieldPredictor(const System& system);
   /// The split for steps of size h [s]: the components with ω h > 1 are held.
   void set_step(double h);
+  /// Whether the body whose coordinates start at `offset` is split here (a GCMS body with a definite (K̂, G_ff ⊗ I3)).
+  [[nodiscard]] bool splits(Eigen::Index offset) const;
+  /// The split bodies' components' ω² [1/s²], ascending, one vector per split body in the order of the system.
+  [[nodiscard]] std::vector<const Eigen::VectorXd*> frequencies() const;
+  /// The largest nodal displacement [m] that a change x of the coordinates makes in the first `measured[k]`
+  /// components of the k-th split body (the slowest), over its fields: max over fields f of
+  /// |(V_r V_rᵀ (G ⊗ I3) Âᵀ x_ξ)_f| / reach_f (Â from q; reach_f the field's scale per metre, 1 / max_i |Ῡ'(i, f)|).
+  /// The error control's measure of the fields (local_error.hpp).
+  [[nodiscard]] double displacement(const Eigen::VectorXd& q, const Eigen::VectorXd& x, const Eigen::VectorXd& reach,
+                                    const std::vector<Eigen::Index>& measured);
   /// q_pred (the constant-acceleration predictor of every coordinate) with each GCMS body's unresolved field
   /// components moved to the last step's deformation (q_n's), turned with q_pred's rotation:
   /// ξ ← ξ + Â_p V_s V_sᵀ (G ⊗ I3) (Â_nᵀ ξ_n − Â_p⁻¹ ξ). `moved(first, count)` is called for each range of

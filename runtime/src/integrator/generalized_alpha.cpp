@@ -4,6 +4,8 @@
 
 #include "constraint_projection.hpp"
 #include "field_predictor.hpp"
+#include "local_error.hpp"
+#include "step_controller.hpp"
 #include "newton_solvers.hpp"
 #include "saddle_point.hpp"
 #include "stabilized_coupling.hpp"
@@ -94,6 +96,10 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
     throw std::invalid_argument("generalized-alpha: the step must be positive");
   if (!(options.min_step >= 0.0 && options.min_step <= options.step))
     throw std::invalid_argument("generalized-alpha: min_step must lie in (0, step] (0: step / 64)");
+  if (!(options.error_tolerance >= 0.0) || !std::isfinite(options.error_tolerance) || !(options.max_step >= 0.0) ||
+      (options.max_step > 0.0 && options.max_step < options.step))
+    throw std::invalid_argument("generalized-alpha: error_tolerance must be >= 0 [m] (0: fixed steps) and max_step 0 "
+                                "(none) or at least the step");
   if (options.max_iterations < 1 || !(options.tolerance > 0.0 && options.tolerance <= kLargestTolerance) ||
       !(options.deformation_limit >= 0.0) || !(options.spin_warning >= 0.0) || !(options.spin_limit >= 0.0) ||
       !(options.stiffened_spin_warning >= 0.0) || !(options.stiffened_spin_limit >= 0.0))
@@ -308,6 +314,12 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   projected_ = std::make_unique<detail::ConstraintProjection>(sparse_, std::move(body_columns));
   couple_ = options.coupled_from_start;
   field_predictor_ = std::make_unique<detail::FieldPredictor>(system);
+  if (options.error_tolerance > 0.0) {
+    local_error_ = std::make_unique<detail::LocalError>(system, reach_, beta_ - 0.5 * gamma_ + 1.0 / 12.0, *field_predictor_);
+    controller_ = std::make_unique<detail::StepController>(
+        options.error_tolerance, min_step(), options.max_step > 0.0 ? options.max_step : std::numeric_limits<double>::infinity(),
+        options.step);
+  }
   build_solver(options.step);
 }
 
@@ -324,6 +336,7 @@ void GeneralizedAlpha::build_solver(double h) {
   }
   solver_step_ = h;
   field_predictor_->set_step(h);
+  if (local_error_) local_error_->set_step(h);
   refresh_ = true;
 }
 

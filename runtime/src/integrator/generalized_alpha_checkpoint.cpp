@@ -4,7 +4,9 @@
 // it was before that build (ReducedSolver::restore_history).
 #include "flexbody/runtime/generalized_alpha.hpp"
 
+#include "local_error.hpp"
 #include "newton_solvers.hpp"
+#include "step_controller.hpp"
 
 #include "flexbody/format/checkpoint_file.hpp"
 
@@ -75,6 +77,15 @@ void GeneralizedAlpha::save(format::CheckpointData& out) const {
                              static_cast<double>(coupled_steps_left_), static_cast<double>(coupled_backoff_),
                              coupled_warned_ ? 1.0 : 0.0, static_cast<double>(step_iterations_)};
   e["integrator.times"] = times;
+  if (controller_) {  // error control: the controller's state, the last step's estimate, the largest step
+    std::vector<double> control = controller_->state();
+    control.insert(control.end(), {step_error_, largest_step_, tolerance_warned_ ? 1.0 : 0.0});
+    e["integrator.control"] = control;
+    e["integrator.control.counted"] = local_error_->state();
+    std::vector<double> before{h_before_};
+    if (h_before_ > 0.0) before.insert(before.end(), a_before_.data(), a_before_.data() + a_before_.size());
+    e["integrator.control.before"] = before;
+  }
   e["integrator.q"] = values_of(q_);
   e["integrator.v"] = values_of(v_);
   e["integrator.qdd"] = values_of(qdd_);
@@ -184,6 +195,26 @@ void GeneralizedAlpha::restore(const format::CheckpointData& in) {
   coupled_backoff_ = static_cast<long>(retries[4]);
   coupled_warned_ = retries[5] != 0.0;
   step_iterations_ = static_cast<int>(retries[6]);
+  const bool controlled = e.find("integrator.control") != e.end();
+  if (controlled != (controller_ != nullptr))
+    throw std::invalid_argument(controlled ? "checkpoint: written by a run under error control (integrator.control), "
+                                             "this one takes fixed steps"
+                                           : "checkpoint: written by a run with fixed steps (no integrator.control), "
+                                             "this one is under error control");
+  if (controller_) {
+    const std::vector<double>& control =
+        entry(e, "integrator.control", static_cast<long>(detail::StepController::kStateSize + 3));
+    controller_->restore({control.begin(), control.begin() + detail::StepController::kStateSize});
+    step_error_ = control[detail::StepController::kStateSize];
+    largest_step_ = control[detail::StepController::kStateSize + 1];
+    tolerance_warned_ = control[detail::StepController::kStateSize + 2] != 0.0;
+    local_error_->restore(entry(e, "integrator.control.counted"));
+    const std::vector<double>& before = entry(e, "integrator.control.before");
+    h_before_ = before.empty() ? 0.0 : before[0];
+    if (!(h_before_ >= 0.0) || before.size() != (h_before_ > 0.0 ? static_cast<std::size_t>(n) + 1 : 1))
+      throw std::invalid_argument("checkpoint: integrator.control.before is malformed");
+    if (h_before_ > 0.0) a_before_ = Eigen::Map<const Eigen::VectorXd>(before.data() + 1, n);
+  }
 }
 
 }  // namespace flexbody::runtime

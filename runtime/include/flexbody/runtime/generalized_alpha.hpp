@@ -93,6 +93,16 @@ struct GeneralizedAlphaOptions {
   /// the steps after it start in half as many pieces each, until they are whole again. Only a failure at min_step
   /// ends the run. 0 < min_step <= step, or 0.
   double min_step = 0.0;
+  /// Error control: > 0 lets step() and step_toward() choose each step's size so that generalized-α's local position
+  /// error estimate per step, in metres (a rotation's error at the body's radius of gyration, a field's at its largest
+  /// nodal displacement; vibrations the step does not resolve, ω h > 1, are not measured), stays below it:
+  ///   e = (β − γ/2 + 1/12) h² ‖a_{n+1} − a_n‖,
+  /// with a PI controller (runtime/src/integrator/local_error.hpp, step_controller.hpp). A step above it is taken again,
+  /// shorter; one whose Newton iteration fails, at half its size; min_step is the floor (a step at min_step is
+  /// accepted whatever its error, and counted), `step` the first step. 0: fixed steps of `step`. Not for scenes with
+  /// a full-order body (no modal split of its vibrations).
+  double error_tolerance = 0.0;
+  double max_step = 0.0;  ///< error control's largest step [s] (0: none); at least `step`
   /// Newton's stopping test, dimensionless. Each coordinate's correction is measured in its body's length scale r
   /// (the radius of gyration √(tr J / m)): τ [m] against r, vec(A) as it is (a change δa moves a point at r by
   /// r δa), a field coordinate ξ_f against r / max_i |Ῡ'(i, f)| (the largest nodal displacement it makes). The
@@ -160,6 +170,8 @@ class ConstantCoreNewton;
 class StabilizedCoupling;
 class ConstraintProjection;
 class FieldPredictor;
+class LocalError;
+class StepController;
 }
 
 class GeneralizedAlpha {
@@ -188,6 +200,11 @@ class GeneralizedAlpha {
   /// matrix (reuse_newton_matrix). Later step()s take steps of h from t_end. Throws std::invalid_argument for a
   /// t_end out of that range, and StepFailure as step() does.
   void step_to(double t_end);
+  /// Error control only (GeneralizedAlphaOptions::error_tolerance): one accepted step (after any taken again) toward
+  /// `t_stop`, of the controller's size, except that the steps that reach t_stop are made equal and the last ends on
+  /// it exactly (a CSV row's time); infinity: no stop. Throws std::logic_error without error control,
+  /// std::invalid_argument for a t_stop not ahead of time(), and StepFailure as step() does.
+  void step_toward(double t_stop);
   /// The relative difference of step sizes that step_to() treats as rounding.
   static constexpr double kStepToSlack = 1e-9;
 
@@ -218,8 +235,17 @@ class GeneralizedAlpha {
   [[nodiscard]] long factorizations() const { return factorizations_; }  ///< Newton matrices built so far
   /// Steps (or pieces of steps) that failed and were taken again in halves (GeneralizedAlphaOptions::min_step).
   [[nodiscard]] long retried_steps() const { return retried_steps_; }
-  /// The smallest piece of a step taken in halves so far [s] (infinity when none was).
+  /// The smallest piece of a step taken in halves so far [s] (infinity when none was); under error control the
+  /// smallest step the controller chose (steps shortened to reach a stop time not counted).
   [[nodiscard]] double smallest_step() const { return smallest_step_; }
+  /// Under error control: the largest step taken [s] (0 before the first), the steps taken again because their
+  /// error estimate was above the tolerance, those accepted above it at min_step, the last accepted step's estimate
+  /// [m], and the size the next step will try [s]. Without: 0.
+  [[nodiscard]] double largest_step() const { return largest_step_; }
+  [[nodiscard]] long rejected_steps() const;
+  [[nodiscard]] long steps_above_tolerance() const;
+  [[nodiscard]] double step_error() const { return step_error_; }
+  [[nodiscard]] double next_step() const;
   /// Whether the reduced Newton matrix is factorized sparse (GeneralizedAlphaOptions::reduced_matrix).
   [[nodiscard]] bool sparse() const { return sparse_; }
   /// Lines about the model's validity, in the order they arose (GeneralizedAlphaOptions::spin_warning): a simulator
@@ -244,6 +270,7 @@ class GeneralizedAlpha {
   void predict(const StepFrame& f);   ///< the Newton iterate's start (generalized_alpha_step.cpp)
   void predict_fields(const StepFrame& f);  ///< a GCMS body's unresolved field components: its last deformation
   void accept(const StepFrame& f);    ///< the converged iterate, checked, becomes the state
+  [[nodiscard]] double step_error(const StepFrame& f);  ///< error control's estimate of the converged step [m]
   /// One attempt's Newton iterations from the predictor (generalized_alpha_newton.cpp): true when they converged;
   /// a failure's reason goes to `failure` (the first kept), `fresh` is set when a Newton matrix was built.
   bool iterate(const StepFrame& f, double extent, bool& fresh, std::string& failure);
@@ -276,6 +303,7 @@ class GeneralizedAlpha {
     Eigen::VectorXd shift;  ///< W Φ_q(q_f)ᵀ ν: ν's whole correction in the iterate q (stabilized_index2)
     Eigen::SparseMatrix<double> jacobian;          ///< Φ_q at the iterate (System::sparse_constraint_jacobian)
     Eigen::VectorXd coupled;                       ///< [δ'; Δμ; Δν] of the sparse coupled step
+    Eigen::VectorXd error, error_rhs, error_dx;    ///< the error estimate, M times it, and it filtered (step_error)
   } work_;
   /// ConstraintForm::stabilized_index2: Φ_q W Φ_qᵀ at the Newton matrix's iterate q_f, factorized (dependent rows
   /// show there), and the coupling of ν to δ and μ, kept with the Newton matrix; ν corrects the positions along
@@ -318,6 +346,16 @@ class GeneralizedAlpha {
   } built_at_;
   std::unique_ptr<detail::NewtonSolver> solver_;
   std::unique_ptr<detail::FieldPredictor> field_predictor_;  ///< a GCMS body's unresolved fields' predictor
+  /// Error control (GeneralizedAlphaOptions::error_tolerance > 0; null without): the estimate, the controller, the
+  /// last accepted step's estimate [m] and the largest step taken [s].
+  std::unique_ptr<detail::LocalError> local_error_;
+  std::unique_ptr<detail::StepController> controller_;
+  double step_error_ = 0.0, largest_step_ = 0.0;
+  /// a_{n−1} and h_{n−1}, the step before the last (0: none since the start or set_state): the estimate differences
+  /// a over two steps (local_error.hpp).
+  Eigen::VectorXd a_before_;
+  double h_before_ = 0.0;
+  bool tolerance_warned_ = false;  ///< a step was accepted above the tolerance at min_step (said once)
   /// solver_ when it is the constant core with a sparse reduced matrix: its coupled stabilised step is one sparse
   /// system (ConstantCoreNewton::factor_coupled) instead of StabilizedCoupling's m solves; null otherwise.
   detail::ConstantCoreNewton* sparse_core_ = nullptr;
@@ -347,8 +385,8 @@ class GeneralizedAlpha {
   /// The state at the start of a step taken in pieces (keep_step_start).
   struct StepStart {
     bool valid = false;
-    double time = 0.0;
-    Eigen::VectorXd q, v, qdd, a, lambda, nu;
+    double time = 0.0, h_before = 0.0;
+    Eigen::VectorXd q, v, qdd, a, lambda, nu, a_before;
   } step_start_;
 };
 

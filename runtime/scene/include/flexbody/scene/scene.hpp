@@ -97,6 +97,12 @@ inline constexpr double kMostSteps = 1e9;
   return std::max(1.0, std::ceil(steps - slack));
 }
 
+/// step: auto's defaults: CSV rows (and ParaView frames) at end / kAutoRows (kAutoFrames) apart, steps of at most
+/// end / kAutoLongestSteps, the first step min(max_step, output_interval) / kAutoFirstStepDivisor (the controller
+/// grows it by up to 2 per step, so a first step too small costs about log2 of it in steps), and the floor, min_step,
+/// the first step / kDefaultSplits.
+inline constexpr double kAutoRows = 500.0, kAutoFrames = 100.0, kAutoLongestSteps = 10.0, kAutoFirstStepDivisor = 100.0;
+
 /// What fbsim's command line changes in a scene (nullopt: the scene's own).
 struct SceneOverrides {
   std::optional<double> end_time;  ///< --end [s]: the integrator's end time, checked as the scene's `end` is

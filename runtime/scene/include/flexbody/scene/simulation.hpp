@@ -25,6 +25,11 @@ struct RunSummary {
   /// piece taken [s] (the integrator's step when none was halved).
   long retried_steps = 0;
   double smallest_step = 0.0;
+  /// step: auto (error control): the steps taken again because their local error estimate was above
+  /// error_tolerance, those accepted above it at min_step, and the largest step taken [s] (smallest_step: the smallest
+  /// the controller chose; steps shortened to land on a row's time are not counted). With a fixed step: 0, 0, the step.
+  long rejected_steps = 0, steps_above_tolerance = 0;
+  double largest_step = 0.0;
   bool sparse = false;       ///< the reduced Newton matrix was factorized sparse (GeneralizedAlpha::sparse)
   double cpu_seconds = 0.0;
   double energy_initial = 0.0, energy_final = 0.0;

@@ -239,9 +239,7 @@ int main(int argc, char** argv) {
                                summary.smallest_step, summary.largest_step, summary.rejected_steps, summary.retried_steps);
       if (summary.steps_above_tolerance > 0)
         std::cout << fmt::format("  {} steps at min_step = {:.3g} s were accepted above the tolerance\n",
-                                 summary.steps_above_tolerance,
-                                 scene.integrator.min_step > 0.0 ? scene.integrator.min_step
-                                                                 : scene.integrator.step / flexbody::runtime::kDefaultSplits);
+                                 summary.steps_above_tolerance, simulation->integrator().min_step());
     } else if (summary.retried_steps > 0) {
       std::cout << fmt::format("  {} steps failed and were taken again in halves; the smallest step was {:.3g} s\n",
                                summary.retried_steps, summary.smallest_step);

@@ -14,8 +14,8 @@
 namespace flexbody::scene {
 namespace {
 
-// step: auto (error control): error_tolerance [m] required; initial_step, max_step and min_step [s] defaulted from the
-// end time and the output interval (scene.hpp, kAutoRows).
+// step: auto (error control): error_tolerance [m] required; the output interval, initial_step and max_step [s]
+// defaulted from the end time and the output interval (scene.hpp, kAutoRows), min_step by the integrator.
 void read_error_control(const format::YamlReader& r, const YAML::Node& integrator, Scene& scene) {
   runtime::GeneralizedAlphaOptions& o = scene.integrator;
   const YAML::Node tolerance = integrator["error_tolerance"];
@@ -23,9 +23,8 @@ void read_error_control(const format::YamlReader& r, const YAML::Node& integrato
     r.fail(integrator["step"], "integrator step: auto needs error_tolerance, the local position error allowed per step "
                                "in metres (a rotation's counts at the body's radius of gyration)");
   o.error_tolerance = r.positive(tolerance, "integrator error_tolerance [m]");
-  const double interval = integrator["output_interval"]
-                              ? r.positive(integrator["output_interval"], "integrator output_interval")
-                              : scene.end_time / kAutoRows;
+  if (!scene.output_interval) scene.output_interval = scene.end_time / kAutoRows;  // rows by time
+  const double interval = *scene.output_interval;
   o.max_step = scene.end_time / kAutoLongestSteps;
   if (const YAML::Node longest = integrator["max_step"]) {
     o.max_step = r.positive(longest, "integrator max_step");
@@ -68,6 +67,17 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
     if (!(*overrides.end_time > 0.0) || !std::isfinite(*overrides.end_time))
       throw std::invalid_argument(fmt::format("--end must be a positive time in seconds, got {}", *overrides.end_time));
     scene.end_time = *overrides.end_time;
+  }
+  if (const YAML::Node every = integrator["output_every"]) {
+    if (automatic)
+      r.fail(every, "integrator output_every counts steps, which step: auto chooses; give output_interval (seconds)");
+    scene.output_every = r.count(every, "integrator output_every");
+    if (scene.output_every < 1) r.fail(every, "integrator output_every must be at least 1");
+  }
+  if (const YAML::Node interval = integrator["output_interval"]) {  // [s]: rows at the same times whatever the step
+    if (integrator["output_every"])
+      r.fail(interval, "integrator: output_every (steps) and output_interval (seconds) are both given; give one");
+    scene.output_interval = r.positive(interval, "integrator output_interval");
   }
   if (automatic) {
     read_error_control(r, integrator, scene);
@@ -150,18 +160,6 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
     scene.integrator.coupled_from_start = f == "always";
   }
   if (const YAML::Node it = integrator["max_iterations"]) scene.integrator.max_iterations = r.count(it, "integrator max_iterations");
-  if (const YAML::Node every = integrator["output_every"]) {
-    if (automatic)
-      r.fail(every, "integrator output_every counts steps, which step: auto chooses; give output_interval (seconds)");
-    scene.output_every = r.count(every, "integrator output_every");
-    if (scene.output_every < 1) r.fail(every, "integrator output_every must be at least 1");
-  }
-  if (const YAML::Node interval = integrator["output_interval"]) {  // [s]: rows at the same times whatever the step
-    if (integrator["output_every"])
-      r.fail(interval, "integrator: output_every (steps) and output_interval (seconds) are both given; give one");
-    scene.output_interval = r.positive(interval, "integrator output_interval");
-  }
-  if (automatic && !scene.output_interval) scene.output_interval = scene.end_time / kAutoRows;
 }
 
 }  // namespace flexbody::scene

@@ -343,22 +343,29 @@ bool Simulation::run(double end, const std::function<void(double)>& progress, co
   if (!std::isfinite(end) || end < now - slack)
     throw std::invalid_argument(fmt::format("run to t = {} s: the simulation is at t = {} s already", end, now));
   if (end <= now + slack) return true;
-  if (r.scene.integrator.error_tolerance > 0.0) return r.run_controlled(end, progress, stop);
-  // Whole steps, the last one shortened to end on `end` exactly (step_count), at most kMostSteps (scene.hpp).
-  if ((end - now) / h > kMostSteps)
-    throw std::invalid_argument(fmt::format("run to t = {} s: {:.3g} steps of {} s, more than a run may take ({:.0e})",
-                                            end, (end - now) / h, h, kMostSteps));
+  // Fixed steps: whole steps, the last one shortened to end on `end` exactly (step_count), at most kMostSteps
+  // (scene.hpp). Under error control (step: auto) the controller's steps, toward each row's and frame's time, until
+  // one ends on `end`.
+  const bool controlled = r.scene.integrator.error_tolerance > 0.0;
+  long steps = 0;
+  if (!controlled) {
+    if ((end - now) / h > kMostSteps)
+      throw std::invalid_argument(fmt::format("run to t = {} s: {:.3g} steps of {} s, more than a run may take ({:.0e})",
+                                              end, (end - now) / h, h, kMostSteps));
+    // end − now carries the rounding of both times (8 ε of each, in steps) besides step_count's own slack.
+    const double span = (end - now) / h;
+    const double rounding = 8.0 * std::numeric_limits<double>::epsilon() * (std::abs(now) + std::abs(end)) / h;
+    steps = static_cast<long>(std::min(step_count(end - now, h), std::max(1.0, std::ceil(span - rounding))));
+  }
   const std::clock_t cpu_start = std::clock();
-  // end − now carries the rounding of both times (8 ε of each, in steps) besides step_count's own slack.
-  const double span = (end - now) / h;
-  const double rounding = 8.0 * std::numeric_limits<double>::epsilon() * (std::abs(now) + std::abs(end)) / h;
-  const long steps = static_cast<long>(std::min(step_count(end - now, h), std::max(1.0, std::ceil(span - rounding))));
   try {
-    for (long k = 1; k <= steps; ++k) {
-      r.advance(k == steps, end, k == steps);
+    for (long k = 1;; ++k) {
+      const bool last = !controlled && k == steps;
+      r.advance(controlled || last, end, last);
       r.checkpoint_when_due();
       if (progress && k % 100 == 0) progress(r.integrator->time());
-      if (stop && k < steps && stop()) {
+      if (controlled ? r.integrator->time() == end : last) break;
+      if (stop && stop()) {
         r.flush();
         r.summary.cpu_seconds += cpu_since(cpu_start);
         return false;
@@ -371,31 +378,6 @@ bool Simulation::run(double end, const std::function<void(double)>& progress, co
   }
   r.flush();
   r.summary.cpu_seconds += cpu_since(cpu_start);
-  return true;
-}
-
-// step: auto: steps toward each row's and frame's time until one ends on `end`.
-bool Simulation::Run::run_controlled(double end, const std::function<void(double)>& progress,
-                                     const std::function<bool()>& stop) {
-  const std::clock_t cpu_start = std::clock();
-  try {
-    for (long k = 1; integrator->time() != end; ++k) {
-      advance(true, end, false);
-      checkpoint_when_due();
-      if (progress && k % 100 == 0) progress(integrator->time());
-      if (stop && integrator->time() != end && stop()) {
-        flush();
-        summary.cpu_seconds += cpu_since(cpu_start);
-        return false;
-      }
-    }
-  } catch (...) {
-    recover();
-    summary.cpu_seconds += cpu_since(cpu_start);
-    throw;
-  }
-  flush();
-  summary.cpu_seconds += cpu_since(cpu_start);
   return true;
 }
 

@@ -80,8 +80,6 @@ struct Simulation::Run {
   [[nodiscard]] double next_multiple(double interval, double t) const;
   void reschedule();
   void advance(bool to_end, double end, bool last);
-  /// Simulation::run under error control (step: auto).
-  bool run_controlled(double end, const std::function<void(double)>& progress, const std::function<bool()>& stop);
   void recover();  // after a failed step: the last completed step recorded and drawn
   void start(Scene s, const OutputSinks& sinks, std::function<void(const std::string&)> w,
              const format::CheckpointData* from, const std::filesystem::path& label = {});

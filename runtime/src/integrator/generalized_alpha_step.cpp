@@ -227,13 +227,8 @@ void GeneralizedAlpha::set_state(const IntegratorState& s) {
   check("lambda", s.lambda, m);
   if (s.nu.size() > 0) check("nu", s.nu, m);
   if (!std::isfinite(s.time)) throw std::invalid_argument("generalized-alpha state: the time is not finite");
-  q_ = s.q;
-  v_ = s.v;
-  qdd_ = s.qdd;
-  a_ = s.a;
-  lambda_ = s.lambda;
-  nu_ = s.nu;
-  t_ = t0_ = s.time;
+  load(s);
+  t0_ = s.time;
   steps_ = 0;
   h_before_ = 0.0;  // the error estimate starts over
   split_ = 0;
@@ -331,7 +326,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
 // ω² ≪ β', passes, one it does not is divided by about β h² ω², and an error along a constraint's normal is not
 // an error of the constrained motion. Without it, the bracket pendulum's 2 kHz vibration (6e-8 m after the sudden
 // gravity) reached the rigid motion's estimate through the pivot, and at 1e-8 m the step changed 4 times in 5 steps.
-double GeneralizedAlpha::step_error(const StepFrame& f) {
+double GeneralizedAlpha::estimate_step_error(const StepFrame& f) {
   Iterate& w = work_;
   const Eigen::Index n = q_.size(), m = lambda_.size();
   const bool two = h_before_ > 0.0;
@@ -339,44 +334,49 @@ double GeneralizedAlpha::step_error(const StepFrame& f) {
   a_before_ = a_;
   h_before_ = f.h;
   w.error_rhs = system_.mass_product(w.q, w.error);
-  const Eigen::VectorXd rows = Eigen::VectorXd::Zero(m);
+  w.error_rows.setZero(m);
   if (f.stabilized && coupled_ && sparse_core_ != nullptr) {
-    sparse_core_->solve_coupled(w.q, w.error_rhs, rows, rows, w.coupled);
+    sparse_core_->solve_coupled(w.q, w.error_rhs, w.error_rows, w.error_rows, w.coupled);
     position_correction(w.coupled.tail(m), w.error_dx);
     w.error_dx = w.coupled.head(n) - w.error_dx;
   } else {
-    solver_->solve(w.q, w.error_rhs, rows, w.error_dx);
+    solver_->solve(w.q, w.error_rhs, w.error_rows, w.error_dx);
     w.error_dx.conservativeResize(n);
   }
   // A matrix that cannot filter (not finite) leaves the estimate as it is: larger, never smaller.
   return local_error_->measure(w.q, all_finite(w.error_dx) ? w.error_dx : w.error, *field_predictor_);
 }
 
-void GeneralizedAlpha::keep_step_start() {
+void GeneralizedAlpha::keep_step_start() {  // into the kept vectors: no allocation once their sizes are set
+  IntegratorState& s = step_start_.state;
   step_start_.valid = true;
-  step_start_.time = t_;
-  step_start_.q = q_;
-  step_start_.v = v_;
-  step_start_.qdd = qdd_;
-  step_start_.a = a_;
-  step_start_.lambda = lambda_;
-  step_start_.nu = nu_;
+  s.time = t_;
+  s.q = q_;
+  s.v = v_;
+  s.qdd = qdd_;
+  s.a = a_;
+  s.lambda = lambda_;
+  s.nu = nu_;
   step_start_.a_before = a_before_;
   step_start_.h_before = h_before_;
 }
 
 void GeneralizedAlpha::restore_step_start() {
   if (!step_start_.valid) return;
-  t_ = step_start_.time;
-  q_ = step_start_.q;
-  v_ = step_start_.v;
-  qdd_ = step_start_.qdd;
-  a_ = step_start_.a;
-  lambda_ = step_start_.lambda;
-  nu_ = step_start_.nu;
+  load(step_start_.state);
   a_before_ = step_start_.a_before;
   h_before_ = step_start_.h_before;
   step_start_.valid = false;
+}
+
+void GeneralizedAlpha::load(const IntegratorState& s) {
+  t_ = s.time;
+  q_ = s.q;
+  v_ = s.v;
+  qdd_ = s.qdd;
+  a_ = s.a;
+  lambda_ = s.lambda;
+  nu_ = s.nu;
 }
 
 double GeneralizedAlpha::min_step() const {
@@ -513,7 +513,7 @@ void GeneralizedAlpha::accept(const StepFrame& f) {
   check_deformation(f.t1, w.q);
   check_spin(f.t1, w.q, w.v);
   w.a = (alpha_f_ * qdd_ - alpha_m_ * a_ + (1.0 - alpha_f_) * w.qdd) / (1.0 - alpha_m_);
-  if (local_error_) step_error_ = step_error(f);
+  if (local_error_) step_error_ = estimate_step_error(f);
   q_ = w.q;
   v_ = w.v;
   qdd_ = w.qdd;

@@ -94,10 +94,11 @@ struct GeneralizedAlphaOptions {
   /// ends the run. 0 < min_step <= step, or 0.
   double min_step = 0.0;
   /// Error control: > 0 lets step() and step_toward() choose each step's size so that generalized-α's local position
-  /// error estimate per step, in metres (a rotation's error at the body's radius of gyration, a field's at its largest
-  /// nodal displacement; vibrations the step does not resolve, ω h > 1, are not measured), stays below it:
-  ///   e = (β − γ/2 + 1/12) h² ‖a_{n+1} − a_n‖,
-  /// with a PI controller (runtime/src/integrator/local_error.hpp, step_controller.hpp). A step above it is taken again,
+  /// error estimate per step, in metres, stays below it (runtime/src/integrator/local_error.hpp):
+  ///   e = (β − γ/2 + 1/12) h² (a_{n+1} − a_{n−1}) h / (h + h_{n−1}),
+  /// filtered through the Newton matrix, measured as each body's best-fit rigid motion (a turn at its radius of
+  /// gyration) and the deformation in the vibrations the step resolves; a PI controller sets the steps
+  /// (step_controller.hpp). A step above it is taken again,
   /// shorter; one whose Newton iteration fails, at half its size; min_step is the floor (a step at min_step is
   /// accepted whatever its error, and counted), `step` the first step. 0: fixed steps of `step`. Not for scenes with
   /// a full-order body (no modal split of its vibrations).
@@ -246,6 +247,8 @@ class GeneralizedAlpha {
   [[nodiscard]] long steps_above_tolerance() const;
   [[nodiscard]] double step_error() const { return step_error_; }
   [[nodiscard]] double next_step() const;
+  /// GeneralizedAlphaOptions::min_step, or its default when 0 [s].
+  [[nodiscard]] double min_step() const;
   /// Whether the reduced Newton matrix is factorized sparse (GeneralizedAlphaOptions::reduced_matrix).
   [[nodiscard]] bool sparse() const { return sparse_; }
   /// Lines about the model's validity, in the order they arose (GeneralizedAlphaOptions::spin_warning): a simulator
@@ -264,13 +267,13 @@ class GeneralizedAlpha {
   void cover(double h, double t1, int pieces, int depth, int& deepest);
   /// One step with its retries (a fresh matrix, the coupled step): false, the reason in `failure`, when it failed.
   bool attempt_step(double h, double t1, std::string& failure);
-  [[nodiscard]] double min_step() const;  ///< GeneralizedAlphaOptions::min_step or its default [s]
   void keep_step_start();     ///< the state before a step that is being taken in pieces
   void restore_step_start();  ///< back to it when a piece failed at min_step
+  void load(const IntegratorState& s);  ///< the state's values become the integrator's (set_state, restore_step_start)
   void predict(const StepFrame& f);   ///< the Newton iterate's start (generalized_alpha_step.cpp)
   void predict_fields(const StepFrame& f);  ///< a GCMS body's unresolved field components: its last deformation
   void accept(const StepFrame& f);    ///< the converged iterate, checked, becomes the state
-  [[nodiscard]] double step_error(const StepFrame& f);  ///< error control's estimate of the converged step [m]
+  [[nodiscard]] double estimate_step_error(const StepFrame& f);  ///< error control's estimate of the converged step [m]
   /// One attempt's Newton iterations from the predictor (generalized_alpha_newton.cpp): true when they converged;
   /// a failure's reason goes to `failure` (the first kept), `fresh` is set when a Newton matrix was built.
   bool iterate(const StepFrame& f, double extent, bool& fresh, std::string& failure);
@@ -303,7 +306,8 @@ class GeneralizedAlpha {
     Eigen::VectorXd shift;  ///< W Φ_q(q_f)ᵀ ν: ν's whole correction in the iterate q (stabilized_index2)
     Eigen::SparseMatrix<double> jacobian;          ///< Φ_q at the iterate (System::sparse_constraint_jacobian)
     Eigen::VectorXd coupled;                       ///< [δ'; Δμ; Δν] of the sparse coupled step
-    Eigen::VectorXd error, error_rhs, error_dx;    ///< the error estimate, M times it, and it filtered (step_error)
+    /// The error estimate, M times it, it filtered, and zero constraint rows (estimate_step_error)
+    Eigen::VectorXd error, error_rhs, error_dx, error_rows;
   } work_;
   /// ConstraintForm::stabilized_index2: Φ_q W Φ_qᵀ at the Newton matrix's iterate q_f, factorized (dependent rows
   /// show there), and the coupling of ν to δ and μ, kept with the Newton matrix; ν corrects the positions along
@@ -385,8 +389,9 @@ class GeneralizedAlpha {
   /// The state at the start of a step taken in pieces (keep_step_start).
   struct StepStart {
     bool valid = false;
-    double time = 0.0, h_before = 0.0;
-    Eigen::VectorXd q, v, qdd, a, lambda, nu, a_before;
+    IntegratorState state;
+    Eigen::VectorXd a_before;
+    double h_before = 0.0;
   } step_start_;
 };
 

@@ -1,7 +1,5 @@
 #include "local_error.hpp"
 
-#include <Eigen/Cholesky>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -25,23 +23,10 @@ LocalError::LocalError(const System& system, const Eigen::VectorXd& reach, doubl
       Modes m{o + 7, Eigen::VectorXd(f.modes)};
       for (Eigen::Index k = 0; k < f.modes; ++k) m.omega2(k) = f.modal_stiffness(k, k) / f.modal_mass(k, k);
       modes_.push_back(std::move(m));
-    } else {
-      // τ and A by the rigid motion they make (frame_motion), not entry by entry: A's symmetric part is the body's
-      // affine deformation, whose vibrations the step need not resolve.
-      const Eigen::Index n_f = model.field_count();
-      Frame frame;
-      frame.offset = o;
-      frame.fields = n_f;
-      frame.border = model.mass_matrix.leftCols<4>();  // G(:, 0:4): ∫[1; X; Ῡ] [1, Xᵀ] dm
-      frame.mass = model.mass;
-      frame.first_moment = model.mass_matrix.block<3, 1>(1, 0);
-      frame.inertia = model.mass_matrix.block<3, 3>(1, 1) - frame.first_moment * frame.first_moment.transpose() / model.mass;
-      frame.radius = 1.0 / reach(o + 3);  // the rotation entries' reach is 1 / r
-      frames_.push_back(std::move(frame));
-      weight_.segment(o, 12).setZero();
-      // A field the FieldPredictor splits is measured in its resolved components (FieldPredictor::displacement);
-      // one it could not split is measured in every field.
-      if (!model.rigid() && splitter.splits(o)) weight_.segment(o + 12, n - 12).setZero();
+    } else if (!model.rigid() && splitter.splits(o)) {
+      // Its fields are measured in their resolved components (FieldPredictor::displacement); a GCMS body the
+      // predictor could not split is measured in every field.
+      weight_.segment(o + 12, n - 12).setZero();
     }
   }
 }
@@ -95,23 +80,6 @@ void LocalError::restore(const std::vector<double>& state) {
   stepped_ = true;
 }
 
-// The rigid motion that best fits (least squares over the mass) the displacement field x makes: a translation δc of
-// the centre of mass and a rotation δθ about it, with r(X) = τ + A X + Σ_f Ῡ_f(X) ξ_f (Eq. (61)): ∫ x [1, Xᵀ] dm =
-// D G(:, 0:4), D = [x_τ, x_A, x_ξ], and δθ = I_c⁻¹ ∫ y × x dm with y = A (X − c) and I_c the inertia about c.
-double LocalError::frame_motion(const Frame& frame, const Eigen::VectorXd& q, const Eigen::VectorXd& x) const {
-  const Eigen::Index o = frame.offset;
-  const Eigen::Map<const Eigen::Matrix3Xd> d(x.data() + o, 3, 4 + frame.fields);
-  const Eigen::Matrix<double, 3, 4> s = d * frame.border;  // [∫x dm, ∫x Xᵀ dm]
-  const Eigen::Vector3d shift = s.col(0) / frame.mass;
-  const Eigen::Map<const Eigen::Matrix3d> a(q.data() + o + 3);
-  const Eigen::Matrix3d p = (s.rightCols<3>() - shift * frame.first_moment.transpose()) * a.transpose();  // ∫ x yᵀ dm
-  const Eigen::Vector3d moment(p(2, 1) - p(1, 2), p(0, 2) - p(2, 0), p(1, 0) - p(0, 1));  // ∫ y × x dm
-  const Eigen::Matrix3d j = a * frame.inertia * a.transpose();
-  const Eigen::Matrix3d inertia = j.trace() * Eigen::Matrix3d::Identity() - j;
-  const Eigen::Vector3d turn = inertia.ldlt().solve(moment);
-  return std::max(shift.norm(), frame.radius * turn.norm());
-}
-
 void LocalError::estimate(const Eigen::VectorXd& a_from, const Eigen::VectorXd& a_to, double h, double span,
                           Eigen::VectorXd& out) const {
   out = (coefficient_ * h * h * h / span) * (a_to - a_from);
@@ -120,9 +88,7 @@ void LocalError::estimate(const Eigen::VectorXd& a_from, const Eigen::VectorXd& 
 double LocalError::measure(const Eigen::VectorXd& q, const Eigen::VectorXd& e, FieldPredictor& fields) const {
   if (e.size() == 0) return 0.0;
   const double direct = e.cwiseProduct(weight_).cwiseAbs().maxCoeff();
-  double split = fields.displacement(q, e, reach_, fields_counted_);
-  for (const Frame& frame : frames_) split = std::max(split, frame_motion(frame, q, e));
-  return std::max(direct, split);
+  return std::max(direct, fields.displacement(q, e, reach_, fields_counted_));
 }
 
 }  // namespace flexbody::runtime::detail

@@ -9,19 +9,25 @@
 // decays in generalized-α as (−ρ∞)ⁿ (its roots tend to −ρ∞ as ω h → ∞), alternating from step to step, and the
 // difference over two steps keeps (1 − ρ∞²)/2 of what one step's keeps (0.1 at ρ∞ = 0.9). With one step's, the
 // bracket pendulum's estimate at 1e-8 m jumped by 5x from step to step with its pivot force's alternation (the
-// bracket's 2-8 kHz modes excited at the start), and the controller changed the step at 4 steps in 5.
-// measured here in metres: a body in the GCMS coordinates by the rigid motion that best fits its displacement field
-// (its centre of mass's move, and its turn at the radius of gyration), a floating-frame body's τ and Euler parameters
-// by their reach (the world displacement per unit: 1 for τ, a turn at the radius of gyration), a field component or
-// a mode by its largest nodal displacement; the largest over the bodies. A flexible body's vibrations that the step does not resolve (ω h > 1) are not
-// measured: generalized-α damps them (ρ∞ < 1) and they follow their loads quasi-statically; measuring them would
-// shrink the step until it resolved frequencies the scene does not ask for. So a GCMS body's field components
-// (field_predictor.hpp's eigenvectors of (K̂, G_ff ⊗ I3)) and a floating-frame body's modes (ω² the Rayleigh quotient
-// K_ff(k,k) / M_ff(k,k)) count only while the step resolves them; the full-order body has no such split and is
-// refused. Whether a vibration counts changes with hysteresis, from ω h ≤ 1 at the first step: one that counts stops
-// counting above ω h = 2, one that does not starts below ω h = ½. Without it the step cycled: on the bracket
-// pendulum at 1e-8 m, a component counted below ω h = 1 shrank the step, uncounted above it grew it (306 steps taken
-// again and a Newton matrix for 4 steps in 5).
+// bracket's 2-8 kHz modes excited at the start), and the controller changed the step at 4 steps in 5 (with the
+// two-step difference 2 470 Newton matrices in 3 131 steps; with the filter as well, 236 in 733).
+// GeneralizedAlpha filters that vector through its Newton matrix (estimate_step_error), and it is then
+// measured here in metres, each coordinate by its reach (the world displacement per unit of it, as Newton's stopping
+// test scales it: 1 for τ, A's entries and Euler parameters at the body's radius of gyration, a field component or
+// a mode at its largest nodal displacement), the largest over the coordinates. Measuring a GCMS body's τ and A by
+// the rigid motion that best fits their displacement field instead (A's symmetric part is an affine deformation)
+// made no difference worth its code once the filter was in: the bracket pendulum at 1e-8 m took 733 steps and 236
+// Newton matrices with it, 768 and 270 without, to the same error (9.2e-6 m). A flexible body's vibrations that the step
+// does not resolve are not measured: generalized-α damps them (ρ∞ < 1) and they follow their loads
+// quasi-statically; measuring them would shrink the step until it resolved frequencies the scene does not ask for.
+// So a GCMS body's field components (field_predictor.hpp's eigenvectors of (K̂, G_ff ⊗ I3)) and a floating-frame
+// body's modes (ω² the Rayleigh quotient K_ff(k,k) / M_ff(k,k)) count only while the step resolves them; the
+// full-order body has no such split and is refused. Whether a vibration counts changes with hysteresis, from
+// ω h ≤ 1 at the first step: one that counts stops counting above ω h = 2, one that does not starts below ω h = ½,
+// so that a step near a component's ω h = 1 does not flip between counting it (shrinking) and not (growing); that
+// reason is an argument, not a measurement. The filter already divides what the step does not resolve by about
+// β (ω h)², so the split adds little: counting every component and mode took the bracket pendulum at 1e-8 m 752
+// steps with the GCMS (768 with the split) and 803 with the FFRF (692 with it), to the same error.
 
 #include "field_predictor.hpp"
 
@@ -39,7 +45,8 @@ class LocalError {
   /// `splitter`: the integrator's field predictor, whose split of the GCMS bodies' fields is used. Throws
   /// std::invalid_argument for a full-order body.
   LocalError(const System& system, const Eigen::VectorXd& reach, double coefficient, const FieldPredictor& splitter);
-  /// The floating-frame modes measured at steps of size h [s] (the GCMS fields follow FieldPredictor::set_step).
+  /// The vibrations counted at steps of size h [s] (floating-frame modes and GCMS field components), with the
+  /// hysteresis the header describes.
   void set_step(double h);
   /// Which vibrations count (they depend on the steps taken so far), for a checkpoint; restore() takes it back.
   [[nodiscard]] std::vector<double> state() const;
@@ -62,17 +69,6 @@ class LocalError {
   Eigen::VectorXd reach_;
   Eigen::VectorXd weight_;  ///< per coordinate: 1 / reach where measured directly, 0 where not (or split elsewhere)
   std::vector<Modes> modes_;
-  struct Frame {  ///< a body in the GCMS coordinates (τ, A, ξ): rigid or flexible
-    Eigen::Index offset = 0, fields = 0;
-    Eigen::MatrixXd border;  ///< G(:, 0:4), (4 + n_f) x 4
-    double mass = 0.0, radius = 0.0;  ///< m [kg]; the radius of gyration r [m]
-    Eigen::Vector3d first_moment;  ///< ∫X dm = m c
-    Eigen::Matrix3d inertia;  ///< ∫(X − c)(X − c)ᵀ dm
-  };
-  std::vector<Frame> frames_;
-  /// The larger of the translation and the rotation (at the body's radius of gyration) [m] of the rigid motion that
-  /// best fits the displacement field x makes on the body.
-  [[nodiscard]] double frame_motion(const Frame& frame, const Eigen::VectorXd& q, const Eigen::VectorXd& x) const;
   std::vector<const Eigen::VectorXd*> field_frequencies_;  ///< per body FieldPredictor splits, its ω², ascending
   std::vector<Eigen::Index> fields_counted_;  ///< per such body, how many of its slowest components count
   bool stepped_ = false;  ///< set_step was called

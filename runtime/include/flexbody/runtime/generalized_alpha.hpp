@@ -96,9 +96,9 @@ struct GeneralizedAlphaOptions {
   /// Error control: > 0 lets step() and step_toward() choose each step's size so that generalized-α's local position
   /// error estimate per step, in metres, stays below it (runtime/src/integrator/local_error.hpp):
   ///   e = (β − γ/2 + 1/12) h² (a_{n+1} − a_{n−1}) h / (h + h_{n−1}),
-  /// filtered through the Newton matrix, measured as each body's best-fit rigid motion (a turn at its radius of
-  /// gyration) and the deformation in the vibrations the step resolves; a PI controller sets the steps
-  /// (step_controller.hpp). A step above it is taken again,
+  /// filtered through the Newton matrix, each coordinate measured by the world displacement it makes (a rotation at the
+  /// body's radius of gyration, a field at its largest nodal displacement), the deformation only in the vibrations the
+  /// step resolves; a PI controller sets the steps (step_controller.hpp). A step above it is taken again,
   /// shorter; one whose Newton iteration fails, at half its size; min_step is the floor (a step at min_step is
   /// accepted whatever its error, and counted), `step` the first step. 0: fixed steps of `step`. Not for scenes with
   /// a full-order body (no modal split of its vibrations).

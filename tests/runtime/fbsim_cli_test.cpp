@@ -172,6 +172,9 @@ TEST(FbsimCli, BadScenesNameTheLine) {
                      "integrator max_step 0.1 s is larger than the end time 0.01 s");
   expect_scene_error(head + "integrator: {step: auto, error_tolerance: 1.0e-6, end: 0.01, initial_step: 1.0e-3, "
                             "min_step: 2.0e-3}\n", 3, "integrator min_step 0.002 s is larger than the initial step 0.001 s");
+  expect_scene_error("bodies:\n  bar: {file: bar.fbh5, modes: full}\n"
+                     "integrator: {step: auto, error_tolerance: 1.0e-6, end: 0.01}\n", 2,
+                     "body 'bar' is modes: full, which step: auto cannot measure");
   expect_scene_error(head + "integrator: {step: auto, error_tolerance: 1.0e-6, end: 0.01}\nparaview: {every: 2}\n", 4,
                      "paraview every counts steps, which step: auto chooses; give interval (seconds)");
 }

@@ -244,6 +244,13 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
   if (const YAML::Node g = root["gravity"]) scene.system.set_gravity(r.vector3(g, "gravity"));
 
   read_integrator(r, root, overrides, scene);
+  if (scene.integrator.error_tolerance > 0.0)  // refused at its line here; the integrator refuses it too, without one
+    for (int b = 0; b < scene.system.body_count(); ++b)
+      if (scene.system.model(b).sparse)
+        r.fail(root["bodies"][scene.system.body_name(b)]["modes"],
+               fmt::format("body '{}' is modes: full, which step: auto cannot measure (its error estimate counts the "
+                           "vibrations a step resolves, and the full-order model has no modal split); give the scene a "
+                           "fixed step", scene.system.body_name(b)));
   if (const YAML::Node monitors = root["monitors"]) scene.monitors = r.truth(monitors, "monitors");
 
   if (const YAML::Node outputs = root["outputs"]) {

@@ -72,7 +72,9 @@ TEST(ErrorControl, TheSpringMassErrorFollowsTheTolerance) {
     const Outcome& r = runs.back();
     SCOPED_TRACE("tolerance " + std::to_string(e));
     EXPECT_LT(r.error, static_cast<double>(r.steps) * e);
-    EXPECT_LE(r.rejected, r.steps / 10);  // a smooth motion: few steps taken again
+    // A smooth motion whose error changes slowly: the PI controller's proposal seldom overshoots (measured: 0, 0, 0
+    // and 2 of 172 ... 13 102 steps); a tenth of the steps would be a controller that oscillates.
+    EXPECT_LE(r.rejected, r.steps / 10);
   }
   for (std::size_t k = 1; k < runs.size(); ++k) {
     EXPECT_GT(runs[k - 1].error / runs[k].error, 10.0) << "tolerance step " << k;
@@ -96,6 +98,7 @@ TEST(ErrorControl, StepWithoutAStopIsTheControllers) {
   fr::GeneralizedAlpha integrator(s.system, options);
   for (int i = 0; i < 50; ++i) integrator.step();
   EXPECT_GT(integrator.time(), 50.0 * options.step);  // the steps grew
+  // 50 local errors of at most 1e-8 m: within 5e-7 m of the exact motion; 1e-6 leaves a factor 2.
   EXPECT_NEAR(integrator.coordinates()(0), 0.1 * std::cos(s.omega * integrator.time()), 1e-6);
 }
 

@@ -101,7 +101,8 @@ Chain chain(const fr::BodyModel& model, int n, const std::string& a, const std::
   const double rho = 0.9, h = 1e-3;
   const double alpha_m = (2 * rho - 1) / (rho + 1), alpha_f = rho / (rho + 1), gamma = 0.5 + alpha_f - alpha_m;
   const double beta = 0.25 * (gamma + 0.5) * (gamma + 0.5);
-  fr::detail::ConstantCoreNewton newton(c.system, (1 - alpha_m) / (beta * h * h * (1 - alpha_f)), gamma / (beta * h), true);
+  fr::detail::CoreInverses cores;
+  fr::detail::ConstantCoreNewton newton(c.system, (1 - alpha_m) / (beta * h * h * (1 - alpha_f)), gamma / (beta * h), true, cores);
   // A generic state, so that no entry is zero by accident: every body turned by 0.01 rad about (1, 2, 3) (the chain
   // starts along the axes, where A = I zeroes many products) and random multipliers (the reference rows' curvature).
   Eigen::VectorXd q = q0;

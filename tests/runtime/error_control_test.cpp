@@ -64,16 +64,19 @@ Outcome run_spring(double tolerance) {
 TEST(ErrorControl, TheSpringMassErrorFollowsTheTolerance) {
   // Second order: the local error e ~ h³ sets h ∝ E^(1/3), and the error after a fixed time ~ h² ∝ E^(2/3): a factor
   // 100 in E should give about 21 in the error; at least 10 is asked (the target). The error after two
-  // periods is the sum of about `steps` local errors of at most E, so it is below steps × E (measured: 0.36, 0.59,
-  // 0.75 and 0.85 of it at E = 1e-5 ... 1e-11; the ratios of the errors 16, 18 and 19).
+  // periods is the sum of about `steps` local errors, each estimated at most E; the estimate is the local error's
+  // leading term, so the sum may pass steps × E by the terms it leaves out: 1.5 × steps × E is asked (measured: 0.44,
+  // 0.67, 0.85 and 1.01 of steps × E at E = 1e-5 ... 1e-11, the steps kept equal between the stops and so nearer the
+  // tolerance than the controller aims; the ratios of the errors 17, 18 and 19).
   std::vector<Outcome> runs;
   for (const double e : {1e-5, 1e-7, 1e-9, 1e-11}) {
     runs.push_back(run_spring(e));
     const Outcome& r = runs.back();
     SCOPED_TRACE("tolerance " + std::to_string(e));
-    EXPECT_LT(r.error, static_cast<double>(r.steps) * e);
-    // A smooth motion whose error changes slowly: the PI controller's proposal seldom overshoots (measured: 0, 0, 0
-    // and 2 of 172 ... 13 102 steps); a tenth of the steps would be a controller that oscillates.
+    EXPECT_LT(r.error, 1.5 * static_cast<double>(r.steps) * e);
+    // A smooth motion whose error changes slowly: few steps are taken again (measured: 4, 4, 16 and 41 of 161 ...
+    // 12 666, where a step kept equal up to its stop passes the tolerance); a tenth of the steps would be a controller
+    // that oscillates.
     EXPECT_LE(r.rejected, r.steps / 10);
   }
   for (std::size_t k = 1; k < runs.size(); ++k) {

@@ -47,8 +47,9 @@ TEST(SparseNewton, SolvesAgreeWithTheDenseOnesOnRandomMechanisms) {
     Eigen::SparseMatrix<double> jacobian;
     system->sparse_constraint_jacobian(0.1, q0, jacobian);
     fr::detail::DenseNewton dense(*system, beta_prime, gamma_prime);
-    fr::detail::ConstantCoreNewton core_dense(*system, beta_prime, gamma_prime, false);
-    fr::detail::ConstantCoreNewton core_sparse(*system, beta_prime, gamma_prime, true);
+    fr::detail::CoreInverses cores;  // one core for both: the reduced solve is what differs
+    fr::detail::ConstantCoreNewton core_dense(*system, beta_prime, gamma_prime, false, cores);
+    fr::detail::ConstantCoreNewton core_sparse(*system, beta_prime, gamma_prime, true, cores);
     Eigen::VectorXd x_dense, x_core, x_sparse;
     for (fr::detail::NewtonSolver* solver : {static_cast<fr::detail::NewtonSolver*>(&dense),
                                              static_cast<fr::detail::NewtonSolver*>(&core_dense),
@@ -75,7 +76,8 @@ TEST(SparseNewton, AnalysesItsPatternOnceAndRefactorizes) {
   const Eigen::VectorXd q0 = system->initial_coordinates();
   const Eigen::Index n = q0.size(), m = system->constraint_count();
   const double h = 1e-3, beta_prime = 1.0 / (0.3 * h * h), gamma_prime = 0.6 / (0.3 * h);
-  fr::detail::ConstantCoreNewton core(*system, beta_prime, gamma_prime, true);
+  fr::detail::CoreInverses cores;
+  fr::detail::ConstantCoreNewton core(*system, beta_prime, gamma_prime, true, cores);
   Eigen::SparseMatrix<double> jacobian;
   const auto& klu = dynamic_cast<const fr::detail::SparseReducedSolver&>(core.reduced());
   // Eight nearby states, as the Newton matrices of successive steps. The pattern is the union of the nonzeros: the

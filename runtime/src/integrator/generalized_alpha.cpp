@@ -330,7 +330,8 @@ void GeneralizedAlpha::build_solver(double h) {
   if (options_.newton_matrix == NewtonMatrix::dense) {
     solver_ = std::make_unique<detail::DenseNewton>(system_, beta_prime, gamma_prime);
   } else {
-    auto core = std::make_unique<detail::ConstantCoreNewton>(system_, beta_prime, gamma_prime, sparse_);
+    if (!cores_) cores_ = std::make_unique<detail::CoreInverses>();
+    auto core = std::make_unique<detail::ConstantCoreNewton>(system_, beta_prime, gamma_prime, sparse_, *cores_);
     if (sparse_) sparse_core_ = core.get();
     solver_ = std::move(core);
   }

@@ -77,9 +77,10 @@ void GeneralizedAlpha::save(format::CheckpointData& out) const {
                              static_cast<double>(coupled_steps_left_), static_cast<double>(coupled_backoff_),
                              coupled_warned_ ? 1.0 : 0.0, static_cast<double>(step_iterations_)};
   e["integrator.times"] = times;
-  if (controller_) {  // error control: the controller's state, the last step's estimate, the largest step
+  if (controller_) {  // error control: the controller's state, the last step's estimate, the largest step, the plan
     std::vector<double> control = controller_->state();
-    control.insert(control.end(), {step_error_, largest_step_, tolerance_warned_ ? 1.0 : 0.0});
+    control.insert(control.end(), {step_error_, largest_step_, tolerance_warned_ ? 1.0 : 0.0, plan_stop_, plan_size_,
+                                   static_cast<double>(plan_growth_)});
     e["integrator.control"] = control;
     e["integrator.control.counted"] = local_error_->state();
     std::vector<double> before{h_before_};
@@ -203,11 +204,17 @@ void GeneralizedAlpha::restore(const format::CheckpointData& in) {
                                              "this one is under error control");
   if (controller_) {
     const std::vector<double>& control =
-        entry(e, "integrator.control", static_cast<long>(detail::StepController::kStateSize + 3));
+        entry(e, "integrator.control", static_cast<long>(detail::StepController::kStateSize + 6));
     controller_->restore({control.begin(), control.begin() + detail::StepController::kStateSize});
     step_error_ = control[detail::StepController::kStateSize];
     largest_step_ = control[detail::StepController::kStateSize + 1];
     tolerance_warned_ = control[detail::StepController::kStateSize + 2] != 0.0;
+    const double* plan = control.data() + detail::StepController::kStateSize + 3;  // stop, size, growth count
+    if (!std::isfinite(plan[0]) || !(plan[1] >= 0.0 && std::isfinite(plan[1])) || !(plan[2] >= 0.0 && plan[2] <= 1e9))
+      throw std::invalid_argument("checkpoint: integrator.control's step plan is malformed");
+    plan_stop_ = plan[0];
+    plan_size_ = plan[1];
+    plan_growth_ = static_cast<int>(plan[2]);
     local_error_->restore(entry(e, "integrator.control.counted"));
     const std::vector<double>& before = entry(e, "integrator.control.before");
     h_before_ = before.empty() ? 0.0 : before[0];

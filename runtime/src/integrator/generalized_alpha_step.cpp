@@ -158,12 +158,33 @@ void GeneralizedAlpha::step_toward(double t_stop) {
     for (;;) {
       const double proposal = controller_->proposal();
       double h = proposal, t1 = t_ + proposal;
-      if (remaining <= proposal * (1.0 + kStepToSlack)) {
-        h = remaining;
-        t1 = t_stop;
-      } else if (std::isfinite(remaining)) {
-        h = remaining / std::ceil(remaining / proposal - 1e-6);  // a whole number of steps to t_stop, up to rounding
-        t1 = t_ + h;
+      if (std::isfinite(remaining)) {
+        // The steps to a stop are equal, a whole number of them in what remains, and keep their size while they can:
+        // between two stops unless a step is taken again (its error above the tolerance, or its iteration failed)
+        // or the proposal is twice the size or more after two steps in a row (the first steps' growth; one small
+        // estimate, where the error's leading term changes sign, is not enough); from one stop to the next while
+        // the proposal is within [kKeepBelow, kKeepAbove] times it (kKeepBelow = 0.9: an estimate at the controller's
+        // aim, 0.73 E, is then at most E for the kept size; kKeepAbove = 1.3: at most 30 % more steps than asked).
+        // A size that changes is the largest whole fraction of what remains that the proposal allows. So sizes
+        // recur and change seldom, and each size's Newton cores are computed once (core_inverses.hpp); a smaller
+        // step the controller asks for between two stops waits for the stop or for a step above the tolerance.
+        constexpr double kKeepBelow = 0.9, kKeepAbove = 1.3;
+        const bool keep = plan_size_ > 0.0 && !controller_->after_rejection() &&
+                          (plan_stop_ == t_stop ? !(plan_growth_ >= 2 && proposal >= 2.0 * plan_size_)
+                                                : proposal >= kKeepBelow * plan_size_ && proposal <= kKeepAbove * plan_size_);
+        const double count = keep ? remaining / plan_size_ : 0.0;  // a whole number of kept steps, up to rounding
+        const double size = count > 0.5 && std::abs(count - std::round(count)) < 1e-6
+                                ? plan_size_
+                                : remaining / std::ceil(remaining / proposal - 1e-6);
+        if (size != plan_size_) plan_growth_ = 0;
+        plan_stop_ = t_stop;
+        plan_size_ = size;
+        h = size;
+        t1 = t_ + size;
+        if (remaining <= size * (1.0 + kStepToSlack)) {
+          h = remaining;
+          t1 = t_stop;
+        }
       }
       std::string failure;
       if (!attempt_step(h, t1, failure)) {  // nothing was accepted: the state is the step's start
@@ -178,6 +199,7 @@ void GeneralizedAlpha::step_toward(double t_stop) {
         continue;
       }
       if (controller_->judge(h, step_error_)) {
+        plan_growth_ = controller_->proposal() >= 2.0 * plan_size_ ? plan_growth_ + 1 : 0;
         if (h >= 0.5 * proposal) {  // the controller's choice, not a remainder before a stop
           smallest_step_ = std::min(smallest_step_, h);
           largest_step_ = std::max(largest_step_, h);
@@ -199,6 +221,8 @@ void GeneralizedAlpha::step_toward(double t_stop) {
   } catch (...) {
     restore_step_start();
     refresh_ = true;
+    plan_size_ = 0.0;
+    plan_growth_ = 0;
     throw;
   }
   step_start_.valid = false;
@@ -231,6 +255,8 @@ void GeneralizedAlpha::set_state(const IntegratorState& s) {
   t0_ = s.time;
   steps_ = 0;
   h_before_ = 0.0;  // the error estimate starts over
+  plan_size_ = 0.0;  // and step_toward's steps are fitted anew
+  plan_growth_ = 0;
   split_ = 0;
   refresh_ = true;  // the kept Newton matrix belongs to another state
   fresh_starts_ = fresh_start_backoff_ = 0;

@@ -86,46 +86,31 @@ void DenseNewton::solve(const Eigen::VectorXd&, const Eigen::VectorXd& residual,
   dx = lu_.solve(rhs);
 }
 
-ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime, bool sparse)
+ConstantCoreNewton::ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime, bool sparse,
+                                       CoreInverses& cores)
     : system_(system), beta_prime_(beta_prime), gamma_prime_(gamma_prime),
+      inverses_(cores.get(system, beta_prime, gamma_prime)),
       reduced_(sparse ? std::unique_ptr<ReducedSolver>(std::make_unique<SparseReducedSolver>())
                       : std::make_unique<DenseReducedSolver>()) {
-  SharedMatrices shared;  // copies of one part share one C⁻¹ (equal cores give bitwise-equal inverses)
   for (int b = 0; b < system.body_count(); ++b) {
     const BodyModel& model = system.model(b);
-    const Eigen::Index n_f = model.floating() ? 0 : model.field_count();
-    const std::string not_definite = "body '" + system.body_name(b) + "': the constant Newton core G_ff x I3 + "
-                                     "(K_hat + gamma' D_hat)/beta' is not positive definite";
-    inverses_.emplace_back();
     sparse_cores_.emplace_back();
-    if (model.sparse) {  // the full-order body: C = M_s ⊗ I3 + K̄/β', factorized sparse (no damping)
-      std::vector<Eigen::Triplet<double>> entries;
-      const Eigen::SparseMatrix<double>& m_s = model.sparse->mass;
-      for (Eigen::Index k = 0; k < m_s.outerSize(); ++k)
-        for (Eigen::SparseMatrix<double>::InnerIterator it(m_s, k); it; ++it)
-          for (int d = 0; d < 3; ++d) entries.emplace_back(3 * it.row() + d, 3 * it.col() + d, it.value());
-      Eigen::SparseMatrix<double> core(3 * n_f, 3 * n_f);
-      core.setFromTriplets(entries.begin(), entries.end());
-      core += (1.0 + gamma_prime * model.sparse->stiffness_damping) / beta_prime * model.sparse->stiffness;  // K̄ + γ' β K̄
-      auto factor = std::make_unique<Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>>(core);
-      if (factor->info() != Eigen::Success) throw std::runtime_error(not_definite);
-      sparse_cores_.back() = std::move(factor);
-      continue;
-    }
-    if (n_f == 0) continue;
-    // C = G_ff ⊗ I3 + (K̂ + γ' D̂) / β' (FORMULATION.md section 5).
-    Eigen::MatrixXd core = model.stiffness / beta_prime;
-    if (model.damping.size() > 0) core += gamma_prime / beta_prime * model.damping;
-    for (Eigen::Index f = 0; f < n_f; ++f)
-      for (Eigen::Index g = 0; g < n_f; ++g) core.block<3, 3>(3 * f, 3 * g).diagonal().array() += model.mass_matrix(4 + f, 4 + g);
-    const Eigen::LLT<Eigen::MatrixXd> factor(core);
-    if (factor.info() != Eigen::Success) throw std::runtime_error(not_definite);
-    // C⁻¹ explicitly: one matrix-vector product per solve instead of two triangular solves, which Eigen runs
-    // several times slower (measured: bench/README.md). C is symmetric positive definite and well conditioned
-    // (G_ff = I for a body file's M_s-orthonormal fields, so cond C ≤ 1 + λ_max(K̂ + γ'D̂)/β', with λ_max(K̂) the
-    // stiffest shape of the 3 n_f-dimensional field space, above the kept modes' ω²), so the inverse loses only
-    // about cond(C)·ε.
-    inverses_.back() = shared.get(factor.solve(Eigen::MatrixXd::Identity(3 * n_f, 3 * n_f)));
+    if (!model.sparse) continue;
+    // The full-order body: C = M_s ⊗ I3 + K̄/β', factorized sparse (no damping).
+    const Eigen::Index n_f = model.field_count();
+    std::vector<Eigen::Triplet<double>> entries;
+    const Eigen::SparseMatrix<double>& m_s = model.sparse->mass;
+    for (Eigen::Index k = 0; k < m_s.outerSize(); ++k)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(m_s, k); it; ++it)
+        for (int d = 0; d < 3; ++d) entries.emplace_back(3 * it.row() + d, 3 * it.col() + d, it.value());
+    Eigen::SparseMatrix<double> core(3 * n_f, 3 * n_f);
+    core.setFromTriplets(entries.begin(), entries.end());
+    core += (1.0 + gamma_prime * model.sparse->stiffness_damping) / beta_prime * model.sparse->stiffness;  // K̄ + γ' β K̄
+    auto factor = std::make_unique<Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>>(core);
+    if (factor->info() != Eigen::Success)
+      throw std::runtime_error("body '" + system.body_name(b) + "': the constant Newton core M_s x I3 + K_bar/beta' "
+                               "is not positive definite");
+    sparse_cores_.back() = std::move(factor);
   }
   eliminated_.resize(static_cast<std::size_t>(system.body_count()));
   for (int b = 0; b < system.body_count(); ++b) {

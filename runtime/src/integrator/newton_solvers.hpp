@@ -15,6 +15,7 @@
 #include "flexbody/runtime/system.hpp"
 
 #include "../kernels/dense_product.hpp"
+#include "core_inverses.hpp"
 #include "reduced_solver.hpp"
 
 #include <Eigen/Cholesky>
@@ -74,8 +75,9 @@ class DenseNewton final : public NewtonSolver {
 
 class ConstantCoreNewton final : public NewtonSolver {
  public:
-  /// `sparse`: factorize the reduced matrix with KLU (SparseReducedSolver) instead of its dense inverse.
-  ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime, bool sparse);
+  /// `sparse`: factorize the reduced matrix with KLU (SparseReducedSolver) instead of its dense inverse. The cores'
+  /// inverses come from `cores` (computed there, or kept from an earlier step of the same size).
+  ConstantCoreNewton(const System& system, double beta_prime, double gamma_prime, bool sparse, CoreInverses& cores);
   void factor(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a,
               const Eigen::VectorXd& mu, const Eigen::SparseMatrix<double>& jacobian) override;
   void solve(const Eigen::VectorXd& q, const Eigen::VectorXd& residual, const Eigen::VectorXd& phi,

@@ -10,7 +10,6 @@ namespace {
 constexpr double kSafety = 0.9;                  // aim at 0.9³ ≈ 0.73 of the tolerance
 constexpr double kIntegral = 0.7 / 3.0, kProportional = 0.4 / 3.0;  // Hairer & Wanner II, Eq. (2.43c), order 2 (k = 3)
 constexpr double kLeastFactor = 0.2, kMostFactor = 2.0;
-constexpr double kKeepBelow = 1.25, kKeepAbove = 0.95;  // an accepted step keeps its size within these factors
 
 }  // namespace
 
@@ -41,8 +40,7 @@ bool StepController::judge(double h, double error) {
   const double e = std::max(ratio * std::pow(proposal_ / h, 3.0), 1e-10);  // a free flight's 0 grows the most
   double factor = kSafety * std::pow(e, -kIntegral) * std::pow(previous_ratio_, kProportional);
   factor = std::clamp(factor, kLeastFactor, after_rejection_ ? 1.0 : kMostFactor);
-  // A changed step costs a Newton matrix: the proposal changes only when the controller asks for a clearly other one.
-  if (factor < kKeepAbove || factor > kKeepBelow) proposal_ = std::clamp(proposal_ * factor, min_step_, max_step_);
+  proposal_ = std::clamp(proposal_ * factor, min_step_, max_step_);
   previous_ratio_ = e;
   after_rejection_ = false;
   return true;

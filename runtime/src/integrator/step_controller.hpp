@@ -6,8 +6,8 @@
 // at E; the PI controller of Gustafsson (1991) in the form of Hairer & Wanner (Solving ODEs II, IV.2, Eq. (2.43c))
 // also weighs the last accepted error, which damps the step's oscillation where the error changes fast:
 //   h_new = h · 0.9 · (E / e_n)^(0.7/3) · (e_{n−1} / E)^(0.4/3),   growth within [0.2, 2], none right after a rejection.
-// A changed step costs a new Newton matrix (β' and γ' of the constant core change with h), so an accepted step keeps
-// its size unless the controller asks for less than 0.95 or more than 1.25 times it.
+// The proposal follows every accepted step (a PI controller's small changes add up); how often the step taken changes
+// is GeneralizedAlpha::step_toward's choice (a changed step costs new Newton cores: core_inverses.hpp).
 
 #include <vector>
 
@@ -24,6 +24,8 @@ class StepController {
   bool judge(double h, double error);
   /// After a step of size h whose Newton iteration failed: the proposal halves (not below min_step).
   void failed(double h);
+  /// Whether the last attempt was rejected or failed (the next step is fitted anew).
+  [[nodiscard]] bool after_rejection() const { return after_rejection_; }
   [[nodiscard]] long rejected() const { return rejected_; }  ///< steps redone because their error was too large
   /// Steps accepted at min_step with an error estimate above the tolerance.
   [[nodiscard]] long above_tolerance() const { return above_tolerance_; }

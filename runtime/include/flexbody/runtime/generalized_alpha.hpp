@@ -168,6 +168,7 @@ class StepFailure : public std::runtime_error {
 namespace detail {
 class NewtonSolver;
 class ConstantCoreNewton;
+class CoreInverses;
 class StabilizedCoupling;
 class ConstraintProjection;
 class FieldPredictor;
@@ -202,9 +203,12 @@ class GeneralizedAlpha {
   /// t_end out of that range, and StepFailure as step() does.
   void step_to(double t_end);
   /// Error control only (GeneralizedAlphaOptions::error_tolerance): one accepted step (after any taken again) toward
-  /// `t_stop`, of the controller's size, except that the steps that reach t_stop are made equal and the last ends on
-  /// it exactly (a CSV row's time); infinity: no stop. Throws std::logic_error without error control,
-  /// std::invalid_argument for a t_stop not ahead of time(), and StepFailure as step() does.
+  /// `t_stop`, the last ending on it exactly (a CSV row's time); infinity: no stop, a step of the controller's size.
+  /// The steps to a stop are equal, the largest whole fraction of what remains that the controller's proposal
+  /// allows, and keep their size while they can (until a step is taken again; from one stop to the next while the
+  /// proposal is within 0.9 to 1.3 times it), so that step sizes recur and their Newton cores are computed once.
+  /// Throws std::logic_error without error control, std::invalid_argument for a t_stop not ahead of time(), and
+  /// StepFailure as step() does.
   void step_toward(double t_stop);
   /// The relative difference of step sizes that step_to() treats as rounding.
   static constexpr double kStepToSlack = 1e-9;
@@ -349,6 +353,7 @@ class GeneralizedAlpha {
     Eigen::VectorXd q, shift, nu, v, qdd, mu;
   } built_at_;
   std::unique_ptr<detail::NewtonSolver> solver_;
+  std::unique_ptr<detail::CoreInverses> cores_;  ///< the constant cores' inverses of recent step sizes
   std::unique_ptr<detail::FieldPredictor> field_predictor_;  ///< a GCMS body's unresolved fields' predictor
   /// Error control (GeneralizedAlphaOptions::error_tolerance > 0; null without): the estimate, the controller, the
   /// last accepted step's estimate [m] and the largest step taken [s].
@@ -359,6 +364,10 @@ class GeneralizedAlpha {
   /// a over two steps (local_error.hpp).
   Eigen::VectorXd a_before_;
   double h_before_ = 0.0;
+  /// step_toward's steps: the stop they are fitted to, their size [s] (0: none yet, or fitted anew at the next), and
+  /// how many accepted steps in a row the controller proposed twice that size or more
+  double plan_stop_ = 0.0, plan_size_ = 0.0;
+  int plan_growth_ = 0;
   bool tolerance_warned_ = false;  ///< a step was accepted above the tolerance at min_step (said once)
   /// solver_ when it is the constant core with a sparse reduced matrix: its coupled stabilised step is one sparse
   /// system (ConstantCoreNewton::factor_coupled) instead of StabilizedCoupling's m solves; null otherwise.

@@ -1,10 +1,11 @@
 #!/usr/bin/python3
-"""Work-precision diagrams of the improved GCMS and the FFRF on scenes with large rotations (issue 14).
+"""Work-precision diagrams of the improved GCMS and the FFRF on scenes with large rotations, with fixed steps and
+under error control (step: auto).
 
 Runs build/bin/work_precision_bench for each scene (or re-reads its CSV with --replot), then writes
 bench/results/work_precision_<scene>.csv, work_precision_<scene>.png (error against CPU time per simulated second,
-log-log, both formulations), work_precision.png (the headline: every scene's tip error) and work_precision.md (the
-tables, stamped with the machine and the commit).
+log-log, both formulations; error control's runs dashed), work_precision.png (the headline: every scene's tip error)
+and work_precision.md (the tables, stamped with the machine and the commit).
 
     /usr/bin/python3 bench/work_precision.py                # every scene, ~25 min on 2 cores
     /usr/bin/python3 bench/work_precision.py --quick        # 2 modes x 2 steps per formulation, a smoke run
@@ -71,6 +72,11 @@ def read(path):
         return list(csv.DictReader(f))
 
 
+def is_auto(row):
+    """A run under error control (its step_s is the mean step)."""
+    return float(row.get("error_tolerance_m") or 0) > 0
+
+
 def pareto(points):
     """The points no other point beats in both cost and error, by increasing cost."""
     front, best = [], float("inf")
@@ -86,13 +92,19 @@ def plot_scene(ax, rows, column, label, floor=None):
         ax.axhline(floor, color="0.4", linestyle="--", linewidth=1, label="the reference's own error")
     for formulation, (name, colour, marker) in STYLE.items():
         mine = [r for r in rows if r["formulation"] == formulation and r["failed"] == "0" and float(r[column]) > 0]
-        if not mine:
+        fixed = [r for r in mine if not is_auto(r)]
+        if not fixed:
             continue
-        for modes in sorted({int(r["modes"]) for r in mine}):
-            series = sorted((float(r["cpu_s_per_simulated_s"]), float(r[column])) for r in mine if int(r["modes"]) == modes)
+        for modes in sorted({int(r["modes"]) for r in fixed}):
+            series = sorted((float(r["cpu_s_per_simulated_s"]), float(r[column])) for r in fixed if int(r["modes"]) == modes)
             ax.plot(*zip(*series), color=colour, marker=marker, markersize=2 + modes ** 0.5, linewidth=0.6, alpha=0.45)
-        front = pareto([(float(r["cpu_s_per_simulated_s"]), float(r[column])) for r in mine])
+        front = pareto([(float(r["cpu_s_per_simulated_s"]), float(r[column])) for r in fixed])
         ax.plot(*zip(*front), color=colour, linewidth=2.2, label=name + " (best of the sweep)")
+        controlled = sorted((float(r["cpu_s_per_simulated_s"]), float(r[column]), int(r["modes"])) for r in mine if is_auto(r))
+        if controlled:
+            ax.plot([c for c, _, _ in controlled], [e for _, e, _ in controlled], color=colour, linestyle="--",
+                    marker="D", markerfacecolor="white", markersize=5, linewidth=1.4,
+                    label=f"{name}, step: auto ({controlled[0][2]} modes)")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("CPU time per simulated second [s]")
@@ -101,13 +113,19 @@ def plot_scene(ax, rows, column, label, floor=None):
 
 
 def table(rows):
-    out = ["| formulation | modes | coordinates | step [s] | CPU s / sim. s | iterations / step | tip error [m] | "
-           "tip error / travel | joint reaction error |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    out = ["| formulation | modes | coordinates | step [s] | error tolerance [m] | steps (again) | CPU s / sim. s | "
+           "iterations / step | tip error [m] | tip error / travel | joint reaction error |",
+           "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         failed = r["failed"] == "1"
-        out.append("| {} | {} | {} | {:.4g} | {:.4g} | {:.2f} | {} | {} | {} |".format(
-            r["formulation"], r["modes"] or "-", r["coordinates"], float(r["step_s"]), float(r["cpu_s_per_simulated_s"]),
-            float(r["iterations_per_step"]), "failed" if failed else "{:.3g}".format(float(r["tip_error_m"])),
+        auto = is_auto(r)
+        out.append("| {} | {} | {} | {} | {} | {} | {:.4g} | {:.2f} | {} | {} | {} |".format(
+            r["formulation"], r["modes"] or "-", r["coordinates"],
+            "{:.4g}{}".format(float(r["step_s"]), " (mean)" if auto else ""),
+            "{:g}".format(float(r["error_tolerance_m"])) if auto else "-",
+            "{} ({})".format(r["steps"], r["rejected_steps"]) if auto else r.get("steps", "-"),
+            float(r["cpu_s_per_simulated_s"]), float(r["iterations_per_step"]),
+            "failed" if failed else "{:.3g}".format(float(r["tip_error_m"])),
             "failed" if failed else "{:.3g}".format(float(r["tip_error_relative"])),
             "failed" if failed else "{:.3g}".format(float(r["reaction_error_relative"]))))
     return "\n".join(out)

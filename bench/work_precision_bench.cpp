@@ -11,7 +11,9 @@
 //   reaction: the joint's reaction force averaged over each sample interval (the impulse over the interval divided by
 //        its length: the ringing of modes no model resolves is not a quantity of interest), largest difference
 //        relative to the reference's largest.
-// Every run uses the integrator's defaults but the step (ρ∞ 0.9, Newton tolerance 1e-6, stabilised index 2).
+// Every run uses the integrator's defaults but the step (ρ∞ 0.9, Newton tolerance 1e-6, stabilised index 2). The GCMS
+// and the mean-axis FFRF at the scene's largest number of modes run also under error control (step: auto) at each of
+// the scene's tolerances; their step_s is the mean step.
 #include "work_precision_scenes.hpp"
 
 #include "flexbody/runtime/generalized_alpha.hpp"
@@ -29,9 +31,15 @@ using namespace work_precision;
 
 namespace {
 
-History run(const Scene& scene, Built& b, double step) {
+// One run: fixed steps of `step`, or under error control (tolerance > 0 [m per step]) from a first step of `step`
+// with max_step end / 10 (fbsim's defaults for a scene with a row every `sample`), each sample's time reached exactly.
+History run(const Scene& scene, Built& b, double step, double tolerance = 0.0) {
   fr::GeneralizedAlphaOptions options;
   options.step = step;
+  if (tolerance > 0.0) {
+    options.error_tolerance = tolerance;
+    options.max_step = scene.end / 10.0;
+  }
   History h;
   const std::clock_t start = std::clock();
   try {
@@ -44,18 +52,27 @@ History run(const Scene& scene, Built& b, double step) {
     };
     Eigen::Vector3d previous = reaction();
     for (long j = 1; j <= samples; ++j) {
+      const double t_sample = static_cast<double>(j) * scene.sample;
       Eigen::Vector3d impulse = Eigen::Vector3d::Zero();
-      for (long k = 0; k < per_sample; ++k) {
-        integrator.step();
+      auto advance = [&] {
+        const double before = integrator.time();
+        if (tolerance > 0.0) integrator.step_toward(t_sample);
+        else integrator.step();
         const Eigen::Vector3d now = reaction();
-        impulse += 0.5 * step * (previous + now);
+        impulse += 0.5 * (integrator.time() - before) * (previous + now);
         previous = now;
-      }
+        ++h.steps;
+      };
+      if (tolerance > 0.0)
+        while (integrator.time() < t_sample) advance();
+      else
+        for (long k = 0; k < per_sample; ++k) advance();
       h.tip.push_back(fr::marker_position(b.tip, b.system.body_coordinates(integrator.coordinates(), b.body)));
       h.reaction.push_back(impulse / scene.sample);
     }
-    h.iterations_per_step = static_cast<double>(integrator.total_iterations()) / static_cast<double>(samples * per_sample);
-    h.factorizations_per_step = static_cast<double>(integrator.factorizations()) / static_cast<double>(samples * per_sample);
+    h.iterations_per_step = static_cast<double>(integrator.total_iterations()) / static_cast<double>(h.steps);
+    h.factorizations_per_step = static_cast<double>(integrator.factorizations()) / static_cast<double>(h.steps);
+    h.rejected = integrator.rejected_steps();
   } catch (const std::exception& e) {
     h.failed = true;
     h.why = e.what();
@@ -83,8 +100,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::ofstream csv(argv[2]);
-  csv << "scene,formulation,modes,coordinates,step_s,cpu_s_per_simulated_s,iterations_per_step,tip_error_m,"
-         "tip_error_relative,reaction_error_relative,failed\n";
+  csv << "scene,formulation,modes,coordinates,step_s,error_tolerance_m,steps,rejected_steps,cpu_s_per_simulated_s,"
+         "iterations_per_step,matrices_per_step,tip_error_m,tip_error_relative,reaction_error_relative,failed\n";
 
   const auto reference_built = scene.build(Kind::full_order, 0);
   const History reference = run(scene, *reference_built, scene.reference_step);
@@ -118,31 +135,41 @@ int main(int argc, char** argv) {
               reference.cpu_seconds, reference.iterations_per_step, reference.factorizations_per_step, travel);
   std::printf("  its own error (|x(2h) - x(h)| / 3): tip %.3g m = %.3g of the travel, reaction %.3g of the largest\n",
               reference_tip, reference_tip / travel, largest_reaction > 0.0 ? reference_reaction / largest_reaction : 0.0);
-  csv << scene.name << ",full_order,," << coordinates << ',' << scene.reference_step << ','
-      << reference.cpu_seconds / scene.end << ',' << reference.iterations_per_step << ',' << reference_tip << ','
+  csv << scene.name << ",full_order,," << coordinates << ',' << scene.reference_step << ",0,"
+      << std::lround(scene.end / scene.reference_step) << ",0," << reference.cpu_seconds / scene.end << ','
+      << reference.iterations_per_step << ',' << reference.factorizations_per_step << ',' << reference_tip << ','
       << reference_tip / travel << ',' << (largest_reaction > 0.0 ? reference_reaction / largest_reaction : 0.0)
       << ",0\n";
-  std::printf("%-10s %5s %10s %14s %10s %12s %12s %12s\n", "model", "modes", "step [s]", "CPU s / sim s", "iter/step",
-              "tip [m]", "tip (rel)", "reaction");
-  for (const Kind kind : scene.kinds)
-    for (const int modes : scene.modes)
-      for (const double step : scene.steps) {
-        const auto built = scene.build(kind, modes);
-        const History h = run(scene, *built, step);
-        double tip = 0.0, reaction = 0.0;
-        if (!h.failed)
-          for (std::size_t j = 0; j < h.tip.size(); ++j) {
-            tip = std::max(tip, (h.tip[j] - reference.tip[j]).norm());
-            reaction = std::max(reaction, (h.reaction[j] - reference.reaction[j]).norm());
-          }
-        const double reaction_relative = largest_reaction > 0.0 ? reaction / largest_reaction : 0.0;
-        std::printf("%-10s %5d %10.3g %14.4g %10.2f %12.3g %12.3g %12.3g%s\n", name_of(kind), modes, step,
-                    h.cpu_seconds / scene.end, h.iterations_per_step, tip, tip / travel, reaction_relative,
-                    h.failed ? ("  FAILED: " + h.why.substr(0, 80)).c_str() : "");
-        csv << scene.name << ',' << name_of(kind) << ',' << modes << ',' << built->system.coordinate_count() << ','
-            << step << ',' << h.cpu_seconds / scene.end << ',' << h.iterations_per_step << ',' << tip << ','
-            << tip / travel << ',' << reaction_relative << ',' << (h.failed ? 1 : 0) << '\n';
-        std::fflush(stdout);
+  std::printf("%-10s %5s %10s %9s %14s %10s %8s %12s %12s %12s\n", "model", "modes", "step [s]", "", "CPU s / sim s",
+              "iter/step", "mat/step", "tip [m]", "tip (rel)", "reaction");
+  // A run's row: step_s is the mean step under error control (tolerance > 0).
+  auto record = [&](Kind kind, int modes, double step, double tolerance) {
+    const auto built = scene.build(kind, modes);
+    const History h = run(scene, *built, step, tolerance);
+    double tip = 0.0, reaction = 0.0;
+    if (!h.failed)
+      for (std::size_t j = 0; j < h.tip.size(); ++j) {
+        tip = std::max(tip, (h.tip[j] - reference.tip[j]).norm());
+        reaction = std::max(reaction, (h.reaction[j] - reference.reaction[j]).norm());
       }
+    const double reaction_relative = largest_reaction > 0.0 ? reaction / largest_reaction : 0.0;
+    const double mean_step = tolerance > 0.0 && h.steps > 0 ? scene.end / static_cast<double>(h.steps) : step;
+    std::printf("%-10s %5d %10.3g %9s %14.4g %10.2f %8.3f %12.3g %12.3g %12.3g%s\n", name_of(kind), modes, mean_step,
+                tolerance > 0.0 ? (std::to_string(h.rejected) + " again").c_str() : "", h.cpu_seconds / scene.end,
+                h.iterations_per_step, h.factorizations_per_step, tip, tip / travel, reaction_relative,
+                h.failed ? ("  FAILED: " + h.why.substr(0, 80)).c_str() : "");
+    if (tolerance > 0.0) std::printf("%-10s %5s (step: auto, error_tolerance %.3g m)\n", "", "", tolerance);
+    csv << scene.name << ',' << name_of(kind) << ',' << modes << ',' << built->system.coordinate_count() << ','
+        << mean_step << ',' << tolerance << ',' << h.steps << ',' << h.rejected << ',' << h.cpu_seconds / scene.end
+        << ',' << h.iterations_per_step << ',' << h.factorizations_per_step << ',' << tip << ',' << tip / travel << ','
+        << reaction_relative << ',' << (h.failed ? 1 : 0) << '\n';
+    std::fflush(stdout);
+  };
+  for (const Kind kind : scene.kinds) {
+    for (const int modes : scene.modes)
+      for (const double step : scene.steps) record(kind, modes, step, 0.0);
+    if (kind == Kind::ffrf_interface) continue;  // error control on the GCMS and the mean-axis FFRF
+    for (const double tolerance : scene.tolerances) record(kind, scene.modes.back(), scene.sample / 100.0, tolerance);
+  }
   return 0;
 }

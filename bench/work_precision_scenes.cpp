@@ -139,6 +139,7 @@ Scene scene_pendulum(bool quick) {
   s.reference_step = quick ? 3.125e-4 : 7.8125e-5;
   s.modes = quick ? std::vector<int>{2, 8} : std::vector<int>{2, 4, 8, 16, 32};
   s.kinds = {Kind::gcms, Kind::ffrf_mean_axis, Kind::ffrf_interface};
+  s.tolerances = quick ? std::vector<double>{1e-6, 1e-8} : std::vector<double>{1e-5, 1e-6, 1e-7, 1e-8, 1e-9};
   s.build = [](Kind kind, int modes) {
     auto b = std::make_unique<Built>();
     const fr::BodyModel model = model_of(part, &data, kind, modes, 1e-4);
@@ -252,6 +253,7 @@ Scene scene_slider_crank(bool quick) {
   s.reference_step = quick ? 1.25e-4 : 3.125e-5;
   s.modes = quick ? std::vector<int>{7, 12} : std::vector<int>{7, 8, 12, 20, 32};
   s.kinds = {Kind::gcms, Kind::ffrf_mean_axis, Kind::ffrf_interface};
+  s.tolerances = quick ? std::vector<double>{1e-6, 1e-8} : std::vector<double>{1e-5, 1e-6, 1e-7, 1e-8, 1e-9};
   s.build = [cb](Kind kind, int modes) {
     constexpr double r = 0.15, length = 0.6;
     auto b = std::make_unique<Built>();
@@ -333,6 +335,7 @@ Scene scene_plate(bool quick) {
   s.reference_step = quick ? 3.125e-4 : 1e-5;
   s.modes = quick ? std::vector<int>{2, 8} : std::vector<int>{2, 4, 8, 16, 32};
   s.kinds = {Kind::gcms, Kind::ffrf_mean_axis};
+  s.tolerances = quick ? std::vector<double>{1e-6, 1e-8} : std::vector<double>{1e-5, 1e-6, 1e-7, 1e-8, 1e-9};
   s.build = [](Kind kind, int modes) {
     auto b = std::make_unique<Built>();
     fr::BodyState state;
@@ -385,6 +388,7 @@ Scene scene_rotor(bool quick) {
   s.reference_step = quick ? 2.5e-4 : 3.125e-5;
   s.modes = quick ? std::vector<int>{2, 8} : std::vector<int>{2, 4, 8, 16, 32};
   s.kinds = {Kind::gcms, Kind::ffrf_mean_axis, Kind::ffrf_interface};
+  s.tolerances = quick ? std::vector<double>{1e-6, 1e-8} : std::vector<double>{1e-5, 1e-6, 1e-7, 1e-8, 1e-9};
   s.build = [](Kind kind, int modes) {
     auto b = std::make_unique<Built>();
     Eigen::Vector3d center = Eigen::Vector3d::Zero();  // the root face's centre, body frame

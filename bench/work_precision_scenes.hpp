@@ -43,6 +43,8 @@ struct Scene {
   double end = 0.0, sample = 0.0, reference_step = 0.0;
   std::vector<double> steps;
   std::vector<int> modes;
+  /// Error control's runs (step: auto), at the largest of `modes`: their tolerances [m per step].
+  std::vector<double> tolerances;
   std::vector<Kind> kinds;
   std::function<std::unique_ptr<Built>(Kind, int)> build;
 };
@@ -51,6 +53,7 @@ struct Scene {
 struct History {
   std::vector<Eigen::Vector3d> tip, reaction;
   double cpu_seconds = 0.0, iterations_per_step = 0.0, factorizations_per_step = 0.0;
+  long steps = 0, rejected = 0;  ///< accepted steps; under error control, steps taken again for their error
   bool failed = false;
   std::string why;
 };

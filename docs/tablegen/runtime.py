@@ -1,5 +1,6 @@
 """The tables of the runtime benchmarks: cost per step, accuracy against step size and references, the improved GCMS
 against the FFRF, scenes of many bodies (docs/tables.py's library)."""
+import math
 import statistics
 
 from .common import integer, markdown, num, pct, rows_of, sci, sig, slope, table
@@ -135,9 +136,19 @@ def work_rows(scene):
     return rows_of(f"work_precision_{scene}.csv")
 
 
+def is_auto(row):
+    """A run under error control (step: auto); its step_s is the mean step."""
+    return (num(row.get("error_tolerance_m") or "0") or 0.0) > 0.0
+
+
+def fixed_rows(scene):
+    """The runs with fixed steps (and the full-order reference)."""
+    return [r for r in work_rows(scene) if not is_auto(r)]
+
+
 def work_precision(scene):
     """Tip error / travel and CPU s per simulated s, for each formulation, number of modes and step."""
-    rows = work_rows(scene)
+    rows = fixed_rows(scene)
     runs = [r for r in rows if r["formulation"] != "full_order"]
     steps = sorted({r["step_s"] for r in runs}, key=float, reverse=True)
     by = {(r["formulation"], r["modes"], r["step_s"]): r for r in runs}
@@ -171,7 +182,7 @@ def work_precision_cost_ratio():
     """CPU time of the GCMS over the mean-axis FFRF's, at equal modes and step (runs that did not fail)."""
     out = []
     for scene in WORK_SCENES:
-        by = {(r["formulation"], r["modes"], r["step_s"]): r for r in work_rows(scene)}
+        by = {(r["formulation"], r["modes"], r["step_s"]): r for r in fixed_rows(scene)}
         ratios = []
         for (formulation, modes, h), r in by.items():
             other = by.get(("ffrf", modes, h))
@@ -182,6 +193,51 @@ def work_precision_cost_ratio():
                     f"{statistics.median(r for r, _, _ in ratios):.2f}",
                     f"{high[0]:.1f} ({high[1]} modes, h = {float(high[2]) * 1e3:g} ms)"])
     return markdown(["scene", "pairs", "least", "median", "most"], out, "lrrrr")
+
+
+def fixed_cost_at(rows, formulation, modes, error):
+    """The CPU time per simulated second fixed steps need for a tip error (relative) of `error`, interpolated log-log
+    between the two steps of the sweep whose errors bracket it, and those steps [s]; the cheapest step when every step
+    of the sweep is more accurate; None when none is as accurate."""
+    series = sorted(((float(r["step_s"]), num(r["tip_error_relative"]), num(r["cpu_s_per_simulated_s"]))
+                     for r in rows if not is_auto(r) and r["formulation"] == formulation and r["modes"] == modes
+                     and r["failed"] == "0"), reverse=True)
+    if not series or min(e for _, e, _ in series) > error:
+        return None
+    if series[0][1] <= error:
+        return series[0][2], (series[0][0],)
+    for (h0, e0, c0), (h1, e1, c1) in zip(series, series[1:]):
+        if e0 >= error >= e1 and e0 > e1:
+            w = math.log(e0 / error) / math.log(e0 / e1)
+            return math.exp((1 - w) * math.log(c0) + w * math.log(c1)), (h0, h1)
+    return min(c for _, e, c in series if e <= error), ()
+
+
+@table("work_precision_auto", *[f"work_precision_{s}.csv" for s in WORK_SCENES])
+def work_precision_auto():
+    """Each run under error control against fixed steps of the same formulation and modes at its tip error: the CPU
+    time per simulated second they need, interpolated log-log between the two swept steps whose errors bracket it."""
+    out = []
+    for scene in WORK_SCENES:
+        rows = work_rows(scene)
+        for r in (r for r in rows if is_auto(r)):
+            label = [scene, FORMULATIONS[r["formulation"]], r["modes"], sci(num(r["error_tolerance_m"]), 1)]
+            if r["failed"] != "0":
+                out.append(label + ["failed", "", "", ""])
+                continue
+            error, cpu = num(r["tip_error_relative"]), num(r["cpu_s_per_simulated_s"])
+            fixed = fixed_cost_at(rows, r["formulation"], r["modes"], error)
+            if fixed is None:
+                where, ratio = "none as accurate", "-"
+            else:
+                cost, steps = fixed
+                between = " to ".join(f"{h * 1e3:g}" for h in steps)
+                where = f"{sig(cost, 2)} (h = {between} ms)" if steps else f"{sig(cost, 2)}"
+                ratio = f"{cpu / cost:.2f}"
+            out.append(label + [f'{sig(num(r["step_s"]) * 1e3, 2)} ms, {r["steps"]} ({r["rejected_steps"]})',
+                                f"{sci(error, 2)} / {sig(cpu, 2)}", where, ratio])
+    return markdown(["scene", "formulation", "modes", "E [m]", "mean step, steps (again)", "error / CPU",
+                     "fixed steps' CPU at that error", "ratio"], out, "lllrrrrr")
 
 
 # --- many bodies ---------------------------------------------------------------------------------------------------

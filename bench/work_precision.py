@@ -7,7 +7,7 @@ bench/results/work_precision_<scene>.csv, work_precision_<scene>.png (error agai
 log-log, both formulations; error control's runs dashed), work_precision.png (the headline: every scene's tip error)
 and work_precision.md (the tables, stamped with the machine and the commit).
 
-    /usr/bin/python3 bench/work_precision.py                # every scene, ~25 min on 2 cores
+    /usr/bin/python3 bench/work_precision.py                # every scene, ~12 min on 2 cores
     /usr/bin/python3 bench/work_precision.py --quick        # 2 modes x 2 steps per formulation, a smoke run
     /usr/bin/python3 bench/work_precision.py --scenes plate --replot
 """

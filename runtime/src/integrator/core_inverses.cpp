@@ -46,9 +46,21 @@ std::vector<PaddedMatrix> CoreInverses::get(const System& system, double beta_pr
     }
   std::vector<PaddedMatrix> inverses = compute(system, beta_prime, gamma_prime);
   ++built_;
-  if (kept_.size() == kKept)
+  std::vector<const double*> distinct;
+  std::size_t bytes = 0;
+  for (const PaddedMatrix& c : inverses)
+    if (c.rows() > 0 && std::find(distinct.begin(), distinct.end(), c.storage()) == distinct.end()) {
+      distinct.push_back(c.storage());
+      bytes += sizeof(double) * static_cast<std::size_t>(c.rows() * c.cols());
+    }
+  auto total = [&] {
+    std::size_t sum = 0;
+    for (const Kept& k : kept_) sum += k.bytes;
+    return sum;
+  };
+  while (!kept_.empty() && (kept_.size() >= kKept || total() + bytes > kKeptBytes))
     kept_.erase(std::min_element(kept_.begin(), kept_.end(), [](const Kept& a, const Kept& b) { return a.used < b.used; }));
-  kept_.push_back({beta_prime, gamma_prime, inverses, asked_});
+  kept_.push_back({beta_prime, gamma_prime, inverses, asked_, bytes});
   return inverses;
 }
 

@@ -24,15 +24,19 @@ class CoreInverses {
   /// factorizes itself). Bodies with bitwise-equal cores share one matrix. Throws std::runtime_error naming a body
   /// whose core is not positive definite.
   [[nodiscard]] std::vector<PaddedMatrix> get(const System& system, double beta_prime, double gamma_prime);
-  /// Step sizes kept; the least recently used is dropped (the memory: kKept × (3 n_f)² doubles per distinct part).
+  /// Step sizes kept; the least recently used is dropped first. The memory is (3 n_f)² doubles per distinct part and
+  /// size: sizes beyond kKeptBytes in all are dropped too (a part of 600 fields, 3 n_f = 1 800, keeps 10 sizes in 256
+  /// MiB), but the size just asked for is always kept.
   static constexpr std::size_t kKept = 8;
+  static constexpr std::size_t kKeptBytes = std::size_t{256} << 20;
   [[nodiscard]] long built() const { return built_; }  ///< cores computed so far (not taken from those kept)
 
  private:
   struct Kept {
     double beta_prime, gamma_prime;
     std::vector<PaddedMatrix> inverses;
-    long used;  ///< when it was last asked for (the count of get()s)
+    long used;          ///< when it was last asked for (the count of get()s)
+    std::size_t bytes;  ///< of the distinct matrices in `inverses`
   };
   std::vector<Kept> kept_;
   long asked_ = 0, built_ = 0;

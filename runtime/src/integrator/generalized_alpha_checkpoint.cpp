@@ -203,6 +203,11 @@ void GeneralizedAlpha::restore(const format::CheckpointData& in) {
                                            : "checkpoint: written by a run with fixed steps (no integrator.control), "
                                              "this one is under error control");
   if (controller_) {
+    const auto saved = e.find("integrator.control");
+    if (saved->second.size() == detail::StepController::kStateSize + 3)
+      throw std::invalid_argument("checkpoint: integrator.control has no step plan: it was written by an fbsim from "
+                                  "before error control kept its step sizes, whose run this one cannot continue bit for "
+                                  "bit; run from the start");
     const std::vector<double>& control =
         entry(e, "integrator.control", static_cast<long>(detail::StepController::kStateSize + 6));
     controller_->restore({control.begin(), control.begin() + detail::StepController::kStateSize});

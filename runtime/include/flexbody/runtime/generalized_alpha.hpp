@@ -196,9 +196,9 @@ class GeneralizedAlpha {
   /// Advances one step that ends exactly at `t_end`, for a run that must end on its end time when that is not a
   /// whole number of steps: 0 < t_end − time() ≤ h + max(kStepToSlack h, 8 ε |t_end|) (the second: the rounding of
   /// the time far from zero). A step size that differs from the one the Newton solver was built for by more than
-  /// kStepToSlack rebuilds it (a factorization of the constant core; generalized-α takes a change of h between
+  /// 1e-6 of it rebuilds it (a factorization of the constant core; generalized-α takes a change of h between
   /// steps, its a ≈ q̈(t + (α_m − α_f) h) then lags by O(h) for one step, a local error of O(h³) that keeps second
-  /// order); a difference below that (t_end a whole number of steps, up to rounding) keeps it, as a modified Newton
+  /// order); a smaller difference (t_end a whole number of steps, up to rounding) keeps it, as a modified Newton
   /// matrix (reuse_newton_matrix). Later step()s take steps of h from t_end. Throws std::invalid_argument for a
   /// t_end out of that range, and StepFailure as step() does.
   void step_to(double t_end);

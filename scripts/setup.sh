@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # Installs what flexbody needs on Debian 12, and nothing twice: packages already present are skipped.
-# Run as root (or with sudo). Idempotent: a second run installs nothing. Usage: setup.sh [--with-slepc]
+# Run as root (or with sudo). Idempotent: a second run installs nothing. Usage: setup.sh [--with-slepc | --quick]
 set -euo pipefail
 
+# What fbprep and fbsim need (the quick start, --quick).
 packages=(
-  build-essential cmake pkg-config git
+  build-essential cmake pkg-config
   libeigen3-dev          # dense and sparse linear algebra everywhere
   libhdf5-dev            # the body file (*.fbh5)
   libgmsh-dev            # CAD import (OpenCASCADE: STEP/IGES/BREP) and tetrahedral meshing
-  gmsh                   # the gmsh command (meshes/make_bracket_cad.sh, looking at meshes)
   libsuitesparse-dev     # CHOLMOD: the sparse Cholesky factorization behind shift-invert
   libarpack2-dev         # ARPACK: the default eigensolver
   libspectra-dev         # Spectra: the second eigensolver backend
@@ -19,6 +19,11 @@ packages=(
   libfmt-dev             # formatting of reports and messages
   nlohmann-json3-dev     # --json output
   libssl-dev             # SHA-256 of the source file (provenance in the body file)
+)
+# Everything else: the tests, the Python package, the benchmarks and the examples.
+full=(
+  git
+  gmsh                   # the gmsh command (meshes/make_bracket_cad.sh, looking at meshes)
   libgtest-dev           # the test suite
   calculix-ccx           # independent FE code the tests compare against
   pybind11-dev python3-dev python3-numpy   # the Python package flexbody (python/)
@@ -27,13 +32,13 @@ packages=(
   freecad-common gmsh-doc           # public CAD parts for the corpus test and bench (FreeCAD's Idf models, gmsh's demos)
 )
 # --with-slepc: also what the optional slepc eigensolver backend needs (-DFLEXBODY_WITH_SLEPC=ON); the test
-# suite builds it. PETSc brings Open MPI (mpirun) and MUMPS.
-if [[ "${1:-}" == "--with-slepc" ]]; then
-  packages+=(libslepc-real-dev libpetsc-real-dev)
-elif [[ -n "${1:-}" ]]; then
-  echo "setup: unknown option '$1' (only --with-slepc)" >&2
-  exit 2
-fi
+# suite builds it. PETSc brings Open MPI (mpirun) and MUMPS. --quick: only fbprep's and fbsim's.
+case "${1:-}" in
+  "") packages+=("${full[@]}") ;;
+  --with-slepc) packages+=("${full[@]}" libslepc-real-dev libpetsc-real-dev) ;;
+  --quick) ;;
+  *) echo "setup: unknown option '$1' (--with-slepc or --quick)" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do

@@ -25,8 +25,8 @@ class CoreInverses {
   /// whose core is not positive definite.
   [[nodiscard]] std::vector<PaddedMatrix> get(const System& system, double beta_prime, double gamma_prime);
   /// Step sizes kept; the least recently used is dropped first. The memory is (3 n_f)² doubles per distinct part and
-  /// size: sizes beyond kKeptBytes in all are dropped too (a part of 600 fields, 3 n_f = 1 800, keeps 10 sizes in 256
-  /// MiB), but the size just asked for is always kept.
+  /// size (26 MB at 3 n_f = 1 800): sizes beyond kKeptBytes in all are dropped too (at 3 n_f = 6 000, 288 MB a size,
+  /// only the one in use is kept), but the size just asked for is always kept.
   static constexpr std::size_t kKept = 8;
   static constexpr std::size_t kKeptBytes = std::size_t{256} << 20;
   [[nodiscard]] long built() const { return built_; }  ///< cores computed so far (not taken from those kept)

@@ -64,6 +64,7 @@ double FieldPredictor::displacement(const Eigen::VectorXd& q, const Eigen::Vecto
     Eigen::Map<Eigen::Matrix3Xd> d(body.difference.data(), 3, body.fields);
     d.noalias() = a.transpose() * Eigen::Map<const Eigen::Matrix3Xd>(x.data() + o + 12, 3, body.fields);
     body.components.noalias() = body.basis->weighted.topRows(count) * body.difference;
+    // d views body.difference: from here on it holds the projection onto the measured components.
     body.difference.noalias() = body.basis->vectors.leftCols(count) * body.components;
     for (Eigen::Index f = 0; f < body.fields; ++f)
       largest = std::max(largest, d.col(f).norm() / reach(o + 12 + 3 * f));

@@ -2,7 +2,6 @@
 # found here by header and library (ARPACK through its arpack.pc) and wrapped in imported targets.
 find_package(PkgConfig REQUIRED)
 find_package(OpenMP REQUIRED COMPONENTS CXX)
-find_package(OpenSSL REQUIRED COMPONENTS Crypto)
 
 # Spectra 1.0 (header only; Debian installs no config file for it).
 find_path(SPECTRA_INCLUDE_DIR Spectra/SymGEigsShiftSolver.h REQUIRED)

@@ -18,11 +18,11 @@ packages=(
   libyaml-cpp-dev        # body specs (fbprep body.yaml) and fbsim scenes
   libfmt-dev             # formatting of reports and messages
   nlohmann-json3-dev     # --json output
-  libssl-dev             # SHA-256 of the source file (provenance in the body file)
 )
 # Everything else: the tests, the Python package, the benchmarks and the examples.
 full=(
   git
+  clang-format           # scripts/check_format.sh: the layout of changed C++ lines (a test)
   gmsh                   # the gmsh command (meshes/make_bracket_cad.sh, looking at meshes)
   libgtest-dev           # the test suite
   calculix-ccx           # independent FE code the tests compare against

@@ -1,5 +1,6 @@
 // body_file_seal.cpp: the integrity seal in the user block of a body file (body_file_seal.hpp, SCHEMA.md "Seal").
 #include "body_file_seal.hpp"
+#include "posix_file.hpp"
 
 #include "sha256.hpp"
 
@@ -75,23 +76,6 @@ std::optional<Recorded> parse_block(const Block& block) {
   if (seal_block(recorded.hdf5_bytes, recorded.hex) != block) return std::nullopt;
   return recorded;
 }
-
-/// A POSIX file descriptor closed on scope exit.
-class FileDescriptor {
- public:
-  explicit FileDescriptor(int fd) noexcept : fd_(fd) {}
-  ~FileDescriptor() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  FileDescriptor(const FileDescriptor&) = delete;
-  FileDescriptor& operator=(const FileDescriptor&) = delete;
-  [[nodiscard]] int get() const noexcept { return fd_; }
-
- private:
-  int fd_;
-};
-
-std::string last_error() { return std::generic_category().message(errno); }
 
 /// Reads up to `size` bytes at `offset`, retrying interrupted and short reads; fewer only at the end.
 /// Returns -1 on a read error (errno set).

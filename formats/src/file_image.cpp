@@ -1,5 +1,6 @@
 // file_image.cpp: read_file_image() (file_image.hpp).
 #include "file_image.hpp"
+#include "posix_file.hpp"
 
 #include "flexbody/format/body_file.hpp"
 
@@ -13,8 +14,6 @@
 namespace flexbody::format::detail {
 namespace {
 
-std::string last_error() { return std::generic_category().message(errno); }
-
 /// What a file that is not a regular file is, for the message.
 std::string kind_of(mode_t mode) {
   if (S_ISDIR(mode)) return "a directory";
@@ -23,20 +22,6 @@ std::string kind_of(mode_t mode) {
   if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
   return "not a regular file";
 }
-
-class FileDescriptor {
- public:
-  explicit FileDescriptor(int fd) noexcept : fd_(fd) {}
-  ~FileDescriptor() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  FileDescriptor(const FileDescriptor&) = delete;
-  FileDescriptor& operator=(const FileDescriptor&) = delete;
-  [[nodiscard]] int get() const noexcept { return fd_; }
-
- private:
-  int fd_;
-};
 
 }  // namespace
 

@@ -1,6 +1,7 @@
 #include "block_lanczos.hpp"
 
 #include "../linalg/blas_gemm.hpp"
+#include "lanczos_basis_limit.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
@@ -20,7 +21,7 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 
 // The basis V (n x k) is read in every step; its products with thin blocks run on the BLAS (linalg/blas_gemm.hpp).
-constexpr double kMaxBasisBytes = 4.0 * (1ull << 30);  // the basis' limit, as ARPACK's (free_free_modes.cpp)
+using detail::kMaxLanczosBasisBytes;
 
 // C = Aᵀ B for column-major A (n x k) and B (n x m) with leading dimension n; C is k x m.
 MatrixXd transposed_product(const double* a, Index k, const double* b, Index m, Index n) {
@@ -120,7 +121,7 @@ MatrixXd orthonormalize(const Block& block, Index basis_size, MatrixXd& scratch)
 
 Index block_lanczos_basis_limit(int nev, Index block, Index n) {
   const Index wanted = std::max<Index>(20 * static_cast<Index>(nev), 8 * block);
-  const auto affordable = static_cast<Index>(kMaxBasisBytes / (8.0 * static_cast<double>(n)));
+  const auto affordable = static_cast<Index>(kMaxLanczosBasisBytes / (8.0 * static_cast<double>(n)));
   const Index limit = std::min({wanted + block - 1, affordable, n - 6});
   return limit / block * block;
 }

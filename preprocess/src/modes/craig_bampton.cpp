@@ -5,6 +5,8 @@
 #include "flexbody/preprocess/free_free_modes.hpp"
 #include "flexbody/preprocess/rigid_body_modes.hpp"
 
+#include "../linalg/skew.hpp"
+
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
@@ -34,11 +36,7 @@ SparseMatrix upper_submatrix(const SparseMatrix& upper, const std::vector<std::i
   return sub;
 }
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
+using detail::skew;
 
 }  // namespace
 

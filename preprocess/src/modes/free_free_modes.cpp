@@ -4,6 +4,8 @@
 #include "flexbody/preprocess/eigen_residual.hpp"
 #include "flexbody/preprocess/rigid_body_modes.hpp"
 
+#include "lanczos_basis_limit.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -18,8 +20,7 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 // a real part is 1e5 times less stiff than a bar only as a mechanism (f below 1e-5 f_ref, i.e. below
 // 0.03 Hz for a 1 m steel part, where a real first mode is tens of Hz or more).
 constexpr double kZeroEnergyFraction = 1e-10;
-// The Lanczos basis may take at most this much memory (it is n x ncv doubles besides the factor).
-constexpr double kMaxBasisBytes = 4.0 * (1ull << 30);
+using detail::kMaxLanczosBasisBytes;
 // K̄ r for the six rigid-body fields cancels terms of size ||K|| ||r||; more than this is an assembly error.
 constexpr double kMaxRigidBodyResidual = 1e-10;
 
@@ -67,14 +68,16 @@ FreeFreeModes free_free_modes(const RowMatrixX3d& nodes, const SparseMatrix& sti
   const Eigen::Index n = stiffness_upper.rows();
   const int available = static_cast<int>(n - 6 - 2);  // the solvers need nev < ncv <= n - 6
   if (available < 1) throw std::invalid_argument("free-free modes: the mesh has too few nodes");
-  // Largest nev whose Lanczos basis (about 2 nev + 1 vectors of n doubles) fits in kMaxBasisBytes.
-  const auto affordable = static_cast<int>(std::max<long>(1, (static_cast<long>(kMaxBasisBytes / (8.0 * n)) - 1) / 2));
+  // Largest nev whose Lanczos basis (about 2 nev + 1 vectors of n doubles) fits in kMaxLanczosBasisBytes.
+  const auto affordable =
+      static_cast<int>(std::max<long>(1, (static_cast<long>(kMaxLanczosBasisBytes / (8.0 * n)) - 1) / 2));
   const int limit = std::min(available, affordable);
   if (options.modes > limit)
     throw std::invalid_argument(fmt::format(
         "--modes {}: at most {} modes for this mesh ({})", options.modes, limit,
-        limit == available ? fmt::format("{} DOFs less the 6 rigid-body modes and 2", n)
-                           : fmt::format("their Lanczos basis would exceed {:.0f} GiB", kMaxBasisBytes / (1ull << 30))));
+        limit == available
+            ? fmt::format("{} DOFs less the 6 rigid-body modes and 2", n)
+            : fmt::format("their Lanczos basis would exceed {:.0f} GiB", kMaxLanczosBasisBytes / (1ull << 30))));
 
   FreeFreeModes result;
   const Eigen::MatrixXd rigid = rigid_body_modes(nodes, scalar_mass_upper);

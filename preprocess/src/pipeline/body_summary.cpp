@@ -1,5 +1,7 @@
 #include "flexbody/preprocess/body_summary.hpp"
 
+#include "report_text.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -17,7 +19,7 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-std::string vector3(const Eigen::Vector3d& v) { return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", v(0), v(1), v(2)); }
+using detail::vector3;
 
 // Lowest and highest sqrt(λ)/2π of K̂ (λ clipped at 0: K̂ is positive semi-definite up to round-off).
 std::pair<double, double> stiffness_frequency_range(const Eigen::MatrixXd& k_hat) {

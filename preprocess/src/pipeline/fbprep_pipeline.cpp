@@ -3,13 +3,14 @@
 #include "refinement_pass.hpp"
 
 #include "flexbody/format/body_file.hpp"
+#include "flexbody/format/file_digest.hpp"
 #include "flexbody/preprocess/assembly.hpp"
 #include "flexbody/preprocess/craig_bampton.hpp"
 #include "flexbody/preprocess/eigensolver.hpp"
 #include "flexbody/preprocess/gcms_constants.hpp"
 #include "flexbody/preprocess/geometric_stiffness.hpp"
-#include "flexbody/preprocess/rigid_body_modes.hpp"
 #include "flexbody/preprocess/mass_properties.hpp"
+#include "flexbody/preprocess/rigid_body_modes.hpp"
 #include "flexbody/preprocess/stress_recovery.hpp"
 #include "flexbody/preprocess/tet10_assembly.hpp"
 
@@ -111,7 +112,7 @@ PrepSummary run_pass(const PrepOptions& options, std::shared_ptr<const MeshSizeF
   GmshImportOptions mesh_options = options.mesh;
   mesh_options.progress = options.progress;
   ImportedMesh imported = import_tet_mesh(options.input, mesh_options);
-  summary.input_sha256 = sha256_of_file(options.input);
+  summary.input_sha256 = format::sha256_of_file(options.input);
   summary.format = imported.format;
   summary.unit = std::string(to_string(imported.unit));
   summary.unit_reason = imported.unit_reason;

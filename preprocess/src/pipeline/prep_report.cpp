@@ -4,6 +4,8 @@
 
 #include "flexbody/preprocess/eigen_residual.hpp"
 
+#include "report_text.hpp"
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
@@ -15,7 +17,7 @@
 namespace flexbody::preprocess {
 namespace {
 
-std::string vector3(const Eigen::Vector3d& v) { return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", v(0), v(1), v(2)); }
+using detail::vector3;
 
 std::vector<double> to_std(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 

@@ -1,5 +1,7 @@
 #include "flexbody/preprocess/interfaces.hpp"
 
+#include "../linalg/skew.hpp"
+
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
@@ -13,11 +15,7 @@
 namespace flexbody::preprocess {
 namespace {
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
+using detail::skew;
 
 double default_tolerance(double tolerance, const RowMatrixX3d& nodes) {
   if (tolerance > 0.0) return tolerance;

@@ -204,9 +204,6 @@ struct PrepSummary {
 /// std::runtime_error when the input cannot be read or a computation fails.
 [[nodiscard]] PrepSummary run_fbprep(const PrepOptions& options);
 
-/// SHA-256 of a file's bytes, lowercase hex.
-[[nodiscard]] std::string sha256_of_file(const std::filesystem::path& path);
-
 /// The process' memory high-water mark (VmHWM) in MB.
 [[nodiscard]] double peak_memory_mb();
 

@@ -158,6 +158,17 @@ TEST(FbsimCli, BadScenesNameTheLine) {
   expect_scene_error(head + "integrator: {step: 1.0e-3, end: 0.01, min_step: 2.0e-3}\n", 3,
                      "integrator min_step 0.002 s is larger than the step 0.001 s");
   expect_scene_error(head + "integrator: {step: 1.0e-3, end: 0.01, min_step: 0}\n", 3, "integrator min_step");
+  // Ranges the integrator checks itself (check_options), reported at the key's line.
+  expect_scene_error(head + "integrator:\n  step: 1.0e-3\n  end: 0.01\n  rho_inf: 1.5\n", 6,
+                     "integrator rho_inf must lie in [0, 1], got 1.5");
+  expect_scene_error(head + "integrator:\n  step: 1.0e-3\n  end: 0.01\n  max_iterations: 0\n", 6,
+                     "integrator max_iterations must be at least 1, got 0");
+  expect_scene_error(head + "integrator:\n  step: 1.0e-3\n  spin_limit: -1\n  end: 0.01\n", 5,
+                     "integrator spin_limit must be >= 0 (a multiple of the lowest elastic frequency; 0: no check), "
+                     "got -1");
+  expect_scene_error(
+      head + "integrator: {step: 1.0e-3, end: 0.01, deformation_limit: -0.1}\n", 3,
+      "integrator deformation_limit must be >= 0 (a fraction of the body's size; 0: no check), got -0.1");
   // step: auto (error control)
   expect_scene_error(head + "integrator: {step: auto, end: 0.01}\n", 3, "integrator step: auto needs error_tolerance");
   expect_scene_error(head + "integrator: {step: 1.0e-3, end: 0.01, error_tolerance: 1.0e-6}\n", 3,

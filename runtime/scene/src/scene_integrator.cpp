@@ -8,6 +8,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -51,11 +52,7 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
                 "linear_solver", "coupled_step"});
   if (const YAML::Node t = integrator["type"]; t && r.text(t, "integrator type") != "generalized-alpha")
     r.fail(t, fmt::format("integrator type '{}' is unknown; use generalized-alpha", t.Scalar()));
-  if (const YAML::Node rho = integrator["rho_inf"]) {
-    scene.integrator.rho_infinity = r.number(rho, "integrator rho_inf");
-    if (scene.integrator.rho_infinity < 0.0 || scene.integrator.rho_infinity > 1.0)
-      r.fail(rho, fmt::format("integrator rho_inf must lie in [0, 1], got {}", scene.integrator.rho_infinity));
-  }
+  if (const YAML::Node rho = integrator["rho_inf"]) scene.integrator.rho_infinity = r.number(rho, "integrator rho_inf");
   const YAML::Node step = r.required(integrator, "step", "integrator");
   const bool automatic = step.IsScalar() && step.Scalar() == "auto";
   scene.step_at = r.at(step);
@@ -99,37 +96,18 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
                                "allowed (is the step meant to be that small?)", scene.integrator.step, steps,
                                scene.end_time, overrides.end_time ? " (--end)" : "", kMostSteps));
   }
-  if (const YAML::Node floor = integrator["min_step"]) {
+  if (const YAML::Node floor = integrator["min_step"])
     scene.integrator.min_step = r.positive(floor, "integrator min_step");
-    if (scene.integrator.min_step > scene.integrator.step)
-      r.fail(floor, fmt::format("integrator min_step {} s is larger than the {}step {} s: it is the smallest step {}",
-                                scene.integrator.min_step, automatic ? "initial " : "", scene.integrator.step,
-                                automatic ? "the error control may take" : "a failed step is halved into"));
-  }
-  if (const YAML::Node tol = integrator["tolerance"]) {
+  if (const YAML::Node tol = integrator["tolerance"])
     scene.integrator.tolerance = r.positive(tol, "integrator tolerance");
-    if (scene.integrator.tolerance > runtime::kLargestTolerance)
-      r.fail(tol, fmt::format("integrator tolerance {} is above {}: it is relative to each step's predictor-corrector "
-                              "distance (the step's local error), and above that the iteration error exceeds it",
-                              scene.integrator.tolerance, runtime::kLargestTolerance));
-  }
-  const std::pair<const char*, double*> spin_levels[] = {
+  const std::pair<const char*, double*> levels[] = {
       {"spin_warning", &scene.integrator.spin_warning},
       {"spin_limit", &scene.integrator.spin_limit},
       {"stiffened_spin_warning", &scene.integrator.stiffened_spin_warning},
-      {"stiffened_spin_limit", &scene.integrator.stiffened_spin_limit}};
-  for (const auto& [key, level] : spin_levels)
-    if (const YAML::Node ratio = integrator[key]) {
-      const double value = r.number(ratio, fmt::format("integrator {}", key));
-      if (value < 0.0) r.fail(ratio, fmt::format("integrator {} must be >= 0 (a multiple of the lowest elastic frequency; 0: "
-                                                 "no check), got {}", key, value));
-      *level = value;
-    }
-  if (const YAML::Node limit = integrator["deformation_limit"]) {
-    scene.integrator.deformation_limit = r.number(limit, "integrator deformation_limit");
-    if (scene.integrator.deformation_limit < 0.0)
-      r.fail(limit, "integrator deformation_limit must be >= 0 (0: no check)");
-  }
+      {"stiffened_spin_limit", &scene.integrator.stiffened_spin_limit},
+      {"deformation_limit", &scene.integrator.deformation_limit}};
+  for (const auto& [key, level] : levels)
+    if (const YAML::Node given = integrator[key]) *level = r.number(given, fmt::format("integrator {}", key));
   if (const YAML::Node form = integrator["constraints"]) {
     const std::string f = r.text(form, "integrator constraints");
     if (f == "stabilized-index2")
@@ -160,6 +138,14 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
     scene.integrator.coupled_from_start = f == "always";
   }
   if (const YAML::Node it = integrator["max_iterations"]) scene.integrator.max_iterations = r.count(it, "integrator max_iterations");
+  // The options' ranges, as the integrator checks them (check_options), at the line of the key that is out of range:
+  // under step: auto the step is the initial_step (or a default from the end time: then the line of step).
+  if (const std::optional<runtime::OptionProblem> problem = runtime::check_options(scene.integrator)) {
+    const char* key =
+        problem->option == "step" && automatic && integrator["initial_step"] ? "initial_step" : problem->option.c_str();
+    const YAML::Node given = integrator[key];
+    r.fail(given ? given : integrator, "integrator " + problem->message);
+  }
 }
 
 }  // namespace flexbody::scene

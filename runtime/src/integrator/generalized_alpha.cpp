@@ -90,22 +90,9 @@ void append_scales(const BodyModel& model, Eigen::VectorXd& scales, Eigen::Index
 
 GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaOptions& options, double t0)
     : system_(system), options_(options), t0_(t0), t_(t0), coupling_(std::make_unique<detail::StabilizedCoupling>()) {
+  if (const std::optional<OptionProblem> problem = check_options(options))
+    throw std::invalid_argument("generalized-alpha: " + problem->message);
   const double rho = options.rho_infinity;
-  if (!(rho >= 0.0 && rho <= 1.0)) throw std::invalid_argument("generalized-alpha: rho_inf must lie in [0, 1]");
-  if (!(options.step > 0.0) || !std::isfinite(options.step))
-    throw std::invalid_argument("generalized-alpha: the step must be positive");
-  if (!(options.min_step >= 0.0 && options.min_step <= options.step))
-    throw std::invalid_argument("generalized-alpha: min_step must lie in (0, step] (0: step / 64)");
-  if (!(options.error_tolerance >= 0.0) || !std::isfinite(options.error_tolerance) || !(options.max_step >= 0.0) ||
-      (options.max_step > 0.0 && options.max_step < options.step))
-    throw std::invalid_argument("generalized-alpha: error_tolerance must be >= 0 [m] (0: fixed steps) and max_step 0 "
-                                "(none) or at least the step");
-  if (options.max_iterations < 1 || !(options.tolerance > 0.0 && options.tolerance <= kLargestTolerance) ||
-      !(options.deformation_limit >= 0.0) || !(options.spin_warning >= 0.0) || !(options.spin_limit >= 0.0) ||
-      !(options.stiffened_spin_warning >= 0.0) || !(options.stiffened_spin_limit >= 0.0))
-    throw std::invalid_argument("generalized-alpha: max_iterations >= 1, 0 < tolerance <= 1e-3 (relative to each step's "
-                                "predictor-corrector distance), and deformation_limit and the spin levels (spin_warning, "
-                                "spin_limit, stiffened_spin_warning, stiffened_spin_limit) >= 0 are required");
   alpha_m_ = (2.0 * rho - 1.0) / (rho + 1.0);
   alpha_f_ = rho / (rho + 1.0);
   gamma_ = 0.5 + alpha_f_ - alpha_m_;

@@ -21,6 +21,7 @@
 
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -147,6 +148,18 @@ struct GeneralizedAlphaOptions {
   double stiffened_spin_warning = 2.0;  ///< Ω/ω₁: the end of the range verified against the rotating beam
   double stiffened_spin_limit = 3.0;    ///< Ω/ω₁: where the GCMS's in-plane error was first measured (10 %)
 };
+
+/// An option out of its range: its name, as a scene's `integrator` key names it (rho_inf, step, min_step, ...), and
+/// why, in words that name it ("rho_inf must lie in [0, 1], got 1.5").
+struct OptionProblem {
+  std::string option;
+  std::string message;
+};
+
+/// The first of `options` out of its range, or nothing: the one check of the options, which GeneralizedAlpha's
+/// constructor throws as std::invalid_argument("generalized-alpha: " + message) and a scene's reader (fbsim, Python)
+/// reports at the key's line. Ranges that need the scene (a step beyond the end time) are the reader's.
+[[nodiscard]] std::optional<OptionProblem> check_options(const GeneralizedAlphaOptions& options);
 
 /// The integrator's state between steps: what a restart or a user's controller reads and sets.
 struct IntegratorState {

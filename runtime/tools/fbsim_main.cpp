@@ -249,8 +249,8 @@ int main(int argc, char** argv) {
                                scene.assembly.largest_gap, scene.assembly.iterations,
                                scene.assembly.moves[static_cast<std::size_t>(moved)], scene.system.body_name(moved));
     if (const auto& d = scene.assembly.deformations; !d.empty()) {
-      // A closed loop that rigid moves could not close deformed its flexible bodies (runtime/assembly.hpp); a share
-      // below 1e-3 of the largest move is the ε-share of a gap closed rigidly, not worth a line.
+      // A closed loop that rigid moves could not close deformed its flexible bodies (runtime/initial_assembly.hpp); a
+      // share below 1e-3 of the largest move is the ε-share of a gap closed rigidly, not worth a line.
       const auto most = std::max_element(d.begin(), d.end());
       const double largest_move = *std::max_element(scene.assembly.moves.begin(), scene.assembly.moves.end());
       if (*most > 1e-3 * largest_move)

@@ -2,8 +2,8 @@
 // translation normal to its plane and the two tilts of its axes); System::remove_redundant_constraints leaves them
 // out of the last joint, as Adams does, and the linkage runs. Its reactions are checked against the statics of the
 // plane (free-body diagrams of the three links, solved here), and its motion against what the removed rows held.
-#include "flexbody/runtime/assembly.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
+#include "flexbody/runtime/initial_assembly.hpp"
 #include "flexbody/runtime/system.hpp"
 
 #include <Eigen/Dense>
@@ -191,12 +191,12 @@ TEST(RedundantConstraints, ALoopThatDoesNotCloseIsRefusedByTheAssembly) {
   std::vector<fr::BodyModel> models;
   fr::System system = four_bar(models, false, 2e-3);
   ASSERT_EQ(system.remove_redundant_constraints(0.0, system.initial_coordinates()).size(), 3u);
-  fr::AssemblyOptions options;
+  fr::InitialAssemblyOptions options;
   options.tolerance = 1e-3;
   try {
-    fr::assemble(system, options);
+    fr::initial_assembly(system, options);
     ADD_FAILURE() << "an inconsistent redundant row was accepted";
-  } catch (const fr::AssemblyError& e) {
+  } catch (const fr::InitialAssemblyError& e) {
     EXPECT_EQ(e.joint, 3u);
     EXPECT_EQ(std::string(e.what()).rfind("joint 'D': its redundant row (translation along z) is off by 0.002 m", 0), 0u)
         << e.what();
@@ -207,7 +207,7 @@ TEST(RedundantConstraints, ALoopThatDoesNotCloseIsRefusedByTheAssembly) {
   const std::vector<fr::RemovedConstraint> removed = slightly.remove_redundant_constraints(0.0, slightly.initial_coordinates());
   ASSERT_EQ(removed.size(), 3u);
   EXPECT_NEAR(removed[0].gap, 1e-5, 1e-15);
-  EXPECT_NO_THROW(fr::assemble(slightly, options));
+  EXPECT_NO_THROW(fr::initial_assembly(slightly, options));
 }
 
 TEST(RedundantConstraints, AJointWithEveryRowRemovedRunsOnTheDenseNewtonMatrix) {

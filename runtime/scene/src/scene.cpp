@@ -18,7 +18,7 @@ void remove_redundant(Scene& scene, const Eigen::VectorXd& q) {
 
 }  // namespace
 
-void finish_scene(Scene& scene, const runtime::AssemblyOptions& assembly) {
+void finish_scene(Scene& scene, const runtime::InitialAssemblyOptions& assembly) {
   runtime::System& system = scene.system;
   // Found before the assembly, whose Newton matrix they would make singular too, and again after it (rows dependent
   // only once the gaps are closed).
@@ -39,8 +39,8 @@ void finish_scene(Scene& scene, const runtime::AssemblyOptions& assembly) {
   scene.conserves.angular_momentum = scene.conserves.energy && !joints_to_ground && !springs_to_ground;
 
   // Close the joints' gaps (an interface's point comes from a mesh, micrometres off the CAD's nominal position) by
-  // the least mass-weighted move of the bodies (runtime/assembly.hpp).
-  scene.assembly = runtime::assemble(system, assembly);
+  // the least mass-weighted move of the bodies (runtime/initial_assembly.hpp).
+  scene.assembly = runtime::initial_assembly(system, assembly);
   if (scene.assembly.iterations > 0) {
     const Eigen::VectorXd q = system.initial_coordinates();
     for (runtime::RemovedConstraint& c : scene.removed) {  // the rows removed before: their gaps once assembled

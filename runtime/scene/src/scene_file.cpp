@@ -386,8 +386,9 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
   }
 
   // assembly: {tolerance: fraction of a body's size}: close the joints' gaps (an interface's point comes from a mesh,
-  // micrometres off the CAD's nominal position) by the least mass-weighted move of the bodies (runtime/assembly.hpp).
-  runtime::AssemblyOptions assembly;
+  // micrometres off the CAD's nominal position) by the least mass-weighted move of the bodies
+  // (runtime/initial_assembly.hpp).
+  runtime::InitialAssemblyOptions assembly;
   const YAML::Node assembly_node = root["assembly"];
   if (assembly_node) {
     r.expect_map(assembly_node, "assembly", {"tolerance"});
@@ -399,7 +400,7 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
   }
   try {
     finish_scene(scene, assembly);
-  } catch (const runtime::AssemblyError& e) {
+  } catch (const runtime::InitialAssemblyError& e) {
     r.fail(e.joint < joint_nodes.size() ? joint_nodes[e.joint] : root, e.what());
   } catch (const std::invalid_argument& e) {
     r.fail(root["bodies"], e.what());  // a degenerate body file

@@ -25,7 +25,7 @@ std::string summary_json(const Simulation& simulation, const std::string& scene_
                                                                    : nlohmann::ordered_json(nullptr);
   j["linear_solver"] = summary.sparse ? "sparse" : "dense";
   {
-    const runtime::AssemblyReport& a = scene.assembly;
+    const runtime::InitialAssemblyReport& a = scene.assembly;
     nlohmann::ordered_json assembly;
     assembly["iterations"] = a.iterations;
     assembly["largest_gap_m"] = a.largest_gap;

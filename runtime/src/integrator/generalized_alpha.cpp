@@ -150,8 +150,9 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   const Eigen::VectorXd phi = system.constraints(t_, q_);
   for (Eigen::Index k = 0; k < m; ++k)
     if (std::abs(phi(k)) > 1e-8)
-      throw std::invalid_argument("initial state violates " + system.constraint_name(k) + " by " + std::to_string(phi(k)) +
-                                  " (runtime::assemble closes the joints' gaps; assembly.hpp)");
+      throw std::invalid_argument("initial state violates " + system.constraint_name(k) + " by " +
+                                  std::to_string(phi(k)) +
+                                  " (runtime::initial_assembly closes the joints' gaps; initial_assembly.hpp)");
   // [M Φ_qᵀ; Φ_q 0], sparse: M is block diagonal and the full-order body's blocks have the mesh's sparsity.
   Eigen::SparseMatrix<double> jac;
   system.sparse_constraint_jacobian(t_, q_, jac);

@@ -70,7 +70,8 @@ Joint make_joint(const std::string& name, JointType type, Marker first, Marker s
   if (type == JointType::prismatic) {
     j.offset = {gap.dot(a2 * j.normal_a), gap.dot(a2 * j.normal_b)};
   }
-  // Markers apart are the assembly's to close (assembly.hpp); GeneralizedAlpha refuses a state that violates a row.
+  // Markers apart are the assembly's to close (initial_assembly.hpp); GeneralizedAlpha refuses a state that violates a
+  // row.
   return j;
 }
 

@@ -1,6 +1,6 @@
-// System: adding bodies, joints, forces and springs, and the scene's coordinates (assembly.cpp closes its joints;
-// system_dynamics.cpp evaluates masses and forces, system_constraints.cpp the constraint rows, system_outputs.cpp
-// what a run reports).
+// System: adding bodies, joints, forces and springs, and the scene's coordinates (initial_assembly.cpp closes its
+// joints; system_dynamics.cpp evaluates masses and forces, system_constraints.cpp the constraint rows,
+// system_outputs.cpp what a run reports).
 #include "flexbody/runtime/system.hpp"
 
 #include "../kernels/dense_product.hpp"

@@ -133,8 +133,8 @@ class System {
   [[nodiscard]] Eigen::VectorXd initial_coordinates() const;
   /// One body's slice of initial_coordinates() (empty for kGround), without forming the whole vector.
   [[nodiscard]] Eigen::VectorXd initial_body_coordinates(int body) const;
-  /// Replaces every body's initial position, orientation and deformation by those of q (assembly.hpp); the initial
-  /// velocities stay. Throws std::invalid_argument for an orientation that is not a rotation to 1e-9.
+  /// Replaces every body's initial position, orientation and deformation by those of q (initial_assembly.hpp); the
+  /// initial velocities stay. Throws std::invalid_argument for an orientation that is not a rotation to 1e-9.
   void set_initial_coordinates(const Eigen::VectorXd& q);
   [[nodiscard]] Eigen::VectorXd initial_velocities() const;
   /// The coordinates of one body (a copy); empty for kGround.
@@ -222,8 +222,8 @@ class System {
   /// repeat carry their reactions: the removed rows' reaction components are reported by the joints they repeat,
   /// and a joint with removed rows reports none along them (Adams's convention). The test is at (t, q): rows that
   /// are dependent only in that configuration (a linkage at a dead point) are removed too, so call it with the
-  /// assembled initial coordinates (runtime::assemble refuses removed rows that the closed loop leaves off by more
-  /// than its tolerance), and before a GeneralizedAlpha is built on the system: the row count changes. Rows once
+  /// assembled initial coordinates (runtime::initial_assembly refuses removed rows that the closed loop leaves off by
+  /// more than its tolerance), and before a GeneralizedAlpha is built on the system: the row count changes. Rows once
   /// removed stay removed. Throws std::invalid_argument when a body's own reference rows are dependent, or a driven
   /// joint's angle row is (leaving it out would drop the drive).
   std::vector<RemovedConstraint> remove_redundant_constraints(double t, const Eigen::VectorXd& q);

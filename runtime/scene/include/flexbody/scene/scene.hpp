@@ -3,8 +3,8 @@
 // outputs, read into a runtime System. Every error is one "<scene>:<line>: <problem>" line.
 
 #include "flexbody/format/yaml_reader.hpp"
-#include "flexbody/runtime/assembly.hpp"
 #include "flexbody/runtime/generalized_alpha.hpp"
+#include "flexbody/runtime/initial_assembly.hpp"
 #include "flexbody/runtime/scene_builder.hpp"
 #include "flexbody/runtime/system.hpp"
 #include "flexbody/scene/output_budget.hpp"
@@ -79,7 +79,7 @@ struct Scene {
   std::string source_sha256;
   std::vector<std::filesystem::path> body_files;
   std::vector<std::string> body_sha256;
-  runtime::AssemblyReport assembly;  ///< how the initial assembly moved the bodies
+  runtime::InitialAssemblyReport assembly;          ///< how the initial assembly moved the bodies
   std::vector<runtime::RemovedConstraint> removed;  ///< joint rows left out as redundant (System::remove_redundant_constraints)
 };
 
@@ -116,9 +116,9 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
 
 /// What a scene needs once its bodies, joints, forces and springs are in: the joint rows that repeat others left
 /// out (Scene::removed, System::remove_redundant_constraints), the conservation laws its motion must obey
-/// (Scene::conserves), and the initial assembly (Scene::assembly, runtime::assemble). Throws runtime::AssemblyError
-/// naming the joint whose gap is too large, std::invalid_argument for a degenerate body.
-void finish_scene(Scene& scene, const runtime::AssemblyOptions& assembly = {});
+/// (Scene::conserves), and the initial assembly (Scene::assembly, runtime::initial_assembly). Throws
+/// runtime::InitialAssemblyError naming the joint whose gap is too large, std::invalid_argument for a degenerate body.
+void finish_scene(Scene& scene, const runtime::InitialAssemblyOptions& assembly = {});
 
 /// Reads and assembles a scene; body files are read relative to the scene's directory.
 [[nodiscard]] Scene read_scene(const std::filesystem::path& file, const SceneOverrides& overrides = {});

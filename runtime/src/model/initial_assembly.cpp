@@ -1,4 +1,4 @@
-#include "flexbody/runtime/assembly.hpp"
+#include "flexbody/runtime/initial_assembly.hpp"
 
 #include "flexbody/runtime/ffrf_dynamics.hpp"
 #include "flexbody/runtime/ffrf_model.hpp"
@@ -27,7 +27,8 @@ constexpr double kRigidPreference = 1e-6;
 Eigen::Index rigid_count(const BodyModel& model) { return model.floating() ? 7 : 12; }
 
 Eigen::Matrix3d orientation_at(const BodyModel& model, const Eigen::VectorXd& q, Eigen::Index o) {
-  return model.floating() ? euler_rotation(q.segment<4>(o + 3).normalized()) : Eigen::Matrix3d(Eigen::Map<const Eigen::Matrix3d>(q.data() + o + 3));
+  return model.floating() ? euler_rotation(q.segment<4>(o + 3).normalized())
+                          : Eigen::Matrix3d(Eigen::Map<const Eigen::Matrix3d>(q.data() + o + 3));
 }
 
 // The largest distance of a point of the body from its centre of mass [m].
@@ -129,7 +130,8 @@ struct Unknowns {
 // deformation_scale, with their Tisserand rows.
 Unknowns choose_unknowns(const System& system, const std::vector<bool>& deformable) {
   Unknowns u;
-  const auto n = static_cast<std::size_t>(system.coordinate_count()), m = static_cast<std::size_t>(system.constraint_count());
+  const auto n = static_cast<std::size_t>(system.coordinate_count()),
+             m = static_cast<std::size_t>(system.constraint_count());
   u.column_of.assign(n, -1);
   u.row_of.assign(m, -1);
   u.checked.assign(m, false);
@@ -157,11 +159,13 @@ Unknowns choose_unknowns(const System& system, const std::vector<bool>& deformab
 
 // The metric's entries over the unknowns: M(q), plus each deforming body's strain-energy Hessian ∂²U/∂ξ² = Â K̂ Âᵀ
 // (Eq. 96; GCMS) or K_ff (floating frame), times its weight.
-void add_metric(const System& system, const Unknowns& u, const Eigen::VectorXd& q, std::vector<Eigen::Triplet<double>>& entries) {
+void add_metric(const System& system, const Unknowns& u, const Eigen::VectorXd& q,
+                std::vector<Eigen::Triplet<double>>& entries) {
   const Eigen::SparseMatrix<double> mass = system.sparse_mass_matrix(q);
   for (Eigen::Index c = 0; c < mass.outerSize(); ++c)
     for (Eigen::SparseMatrix<double>::InnerIterator it(mass, c); it; ++it) {
-      const Eigen::Index r = u.column_of[static_cast<std::size_t>(it.row())], k = u.column_of[static_cast<std::size_t>(it.col())];
+      const Eigen::Index r = u.column_of[static_cast<std::size_t>(it.row())],
+                         k = u.column_of[static_cast<std::size_t>(it.col())];
       if (r >= 0 && k >= 0) entries.emplace_back(r, k, it.value());
     }
   for (int b = 0; b < system.body_count(); ++b) {
@@ -220,9 +224,9 @@ double largest_deformation(const BodyModel& model, const Eigen::MatrixX3d& chang
 
 enum class Outcome { converged, singular, not_converged };
 
-// Gauss-Newton on the linearised rows, each step the correction of least metric norm (assembly.hpp), until the
+// Gauss-Newton on the linearised rows, each step the correction of least metric norm (initial_assembly.hpp), until the
 // checked rows are at `converged` [m] (the rounding of the positions they compare).
-Outcome gauss_newton(const System& system, const Unknowns& u, const AssemblyOptions& options, double converged,
+Outcome gauss_newton(const System& system, const Unknowns& u, const InitialAssemblyOptions& options, double converged,
                      Eigen::VectorXd& q, int& iterations) {
   for (int iteration = 0; iteration <= options.max_iterations; ++iteration) {
     const Eigen::VectorXd phi = system.constraints(0.0, q);
@@ -238,7 +242,8 @@ Outcome gauss_newton(const System& system, const Unknowns& u, const AssemblyOpti
     add_metric(system, u, q, entries);
     for (Eigen::Index c = 0; c < jacobian.outerSize(); ++c)
       for (Eigen::SparseMatrix<double>::InnerIterator it(jacobian, c); it; ++it) {
-        const Eigen::Index r = u.row_of[static_cast<std::size_t>(it.row())], k = u.column_of[static_cast<std::size_t>(it.col())];
+        const Eigen::Index r = u.row_of[static_cast<std::size_t>(it.row())],
+                           k = u.column_of[static_cast<std::size_t>(it.col())];
         if (r >= 0 && k >= 0 && it.value() != 0.0) {
           entries.emplace_back(u.columns + r, k, it.value());
           entries.emplace_back(k, u.columns + r, it.value());
@@ -268,12 +273,12 @@ double body_size(const BodyModel& model) {
   return 2.0 * std::sqrt(3.0 * std::max(trace, 0.0) / model.mass);  // a cube's diagonal for its radius of gyration
 }
 
-int AssemblyReport::most_moved() const {
+int InitialAssemblyReport::most_moved() const {
   if (moves.empty()) return -1;
   return static_cast<int>(std::max_element(moves.begin(), moves.end()) - moves.begin());
 }
 
-AssemblyReport assemble(System& system, const AssemblyOptions& options) {
+InitialAssemblyReport initial_assembly(System& system, const InitialAssemblyOptions& options) {
   if (!(options.tolerance > 0.0) || options.max_iterations < 1)
     throw std::invalid_argument("assembly: tolerance > 0 and max_iterations >= 1 are required");
   const int n_b = system.body_count();
@@ -281,21 +286,24 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
   Eigen::VectorXd q = q0;
   // Converged when the rows are at the rounding of the positions they compare.
   double extent = 1.0;
-  for (int b = 0; b < n_b; ++b) extent = std::max(extent, q0.segment<3>(system.offset(b)).norm() + body_size(system.model(b)));
+  for (int b = 0; b < n_b; ++b)
+    extent = std::max(extent, q0.segment<3>(system.offset(b)).norm() + body_size(system.model(b)));
   for (const Joint& j : system.joints())
     for (const Marker* m : {&j.first, &j.second})
       if (m->body == kGround) extent = std::max(extent, m->ground_point.norm());
   const double converged = 64.0 * std::numeric_limits<double>::epsilon() * extent;
-  AssemblyReport report;
+  InitialAssemblyReport report;
   report.moves.assign(static_cast<std::size_t>(n_b), 0.0);
   report.deformations.assign(static_cast<std::size_t>(n_b), 0.0);
   const Eigen::VectorXd phi0 = system.constraints(0.0, q0);
-  report.largest_gap = system.joints().empty() ? 0.0 : phi0.tail(system.constraint_count() - system.joint_row(0)).cwiseAbs().maxCoeff();
+  report.largest_gap =
+      system.joints().empty() ? 0.0 : phi0.tail(system.constraint_count() - system.joint_row(0)).cwiseAbs().maxCoeff();
   // The joint whose gap is largest against its bodies' sizes: the one a refusal names.
   if (system.joints().empty()) {  // only the bodies' own rows: a body whose orientation is not a rotation
     Eigen::Index row = 0;
     if (phi0.size() > 0 && phi0.cwiseAbs().maxCoeff(&row) > 1e-8)
-      throw std::invalid_argument("assembly: " + system.constraint_name(row) + " is violated by " + std::to_string(phi0(row)));
+      throw std::invalid_argument("assembly: " + system.constraint_name(row) + " is violated by " +
+                                  std::to_string(phi0(row)));
     return report;
   }
   auto smaller_size = [&](const Joint& j) {  // of the joint's bodies [m]
@@ -324,16 +332,19 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
       break;
     case Outcome::singular: {
       const std::size_t k = worst_joint();
-      throw AssemblyError("assembly: joint '" + system.joints()[k].name + "' cannot be closed: the joints' rows are "
-                          "dependent where the bodies are (a redundant joint or a singular position)", k);
+      throw InitialAssemblyError("assembly: joint '" + system.joints()[k].name +
+                                     "' cannot be closed: the joints' rows are "
+                                     "dependent where the bodies are (a redundant joint or a singular position)",
+                                 k);
     }
     case Outcome::not_converged: {
       const std::size_t k = worst_joint();
       const Joint& j = system.joints()[k];
       std::ostringstream why;
-      why << "assembly: joint '" << j.name << "' cannot be closed in " << options.max_iterations << " steps: its markers "
-          << j.first.name << " and " << j.second.name << " are too far apart for the mechanism to reach";
-      throw AssemblyError(why.str(), k);
+      why << "assembly: joint '" << j.name << "' cannot be closed in " << options.max_iterations
+          << " steps: its markers " << j.first.name << " and " << j.second.name
+          << " are too far apart for the mechanism to reach";
+      throw InitialAssemblyError(why.str(), k);
     }
   }
   for (int b = 0; b < n_b; ++b) {  // a rigidly moved GCMS body's ξ (global axes) turns with it: its ξ̄ = Aᵀ ξ stays
@@ -341,14 +352,17 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
     if (model.floating() || model.rigid() || unknowns.stiffness_weight[static_cast<std::size_t>(b)] > 0.0) continue;
     const Eigen::Index o = system.offset(b);
     const Eigen::Matrix3d turn = orientation_at(model, q, o) * orientation_at(model, q0, o).transpose();
-    for (Eigen::Index f = 0; f < model.field_count(); ++f) q.segment<3>(o + 12 + 3 * f) = turn * q0.segment<3>(o + 12 + 3 * f);
+    for (Eigen::Index f = 0; f < model.field_count(); ++f)
+      q.segment<3>(o + 12 + 3 * f) = turn * q0.segment<3>(o + 12 + 3 * f);
   }
-  for (int b = 0; b < n_b; ++b) {  // the largest displacement of a point: |Δτ| + |ΔA| times the body's radius, plus its deformation's
+  for (int b = 0; b < n_b;
+       ++b) {  // the largest displacement of a point: |Δτ| + |ΔA| times the body's radius, plus its deformation's
     const BodyModel& model = system.model(b);
     const Eigen::Index o = system.offset(b);
     const auto i = static_cast<std::size_t>(b);
     if (unknowns.stiffness_weight[i] > 0.0)
-      report.deformations[i] = largest_deformation(model, deformation_coefficients(system, b, q) - deformation_coefficients(system, b, q0));
+      report.deformations[i] =
+          largest_deformation(model, deformation_coefficients(system, b, q) - deformation_coefficients(system, b, q0));
     const double turn = (orientation_at(model, q, o) - orientation_at(model, q0, o)).norm();
     report.moves[i] = (q - q0).segment<3>(o).norm() + turn * body_radius(model) + report.deformations[i];
     if (report.moves[i] > options.tolerance * body_size(model)) {
@@ -360,7 +374,7 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
           << " m apart; closing them moves body '" << system.body_name(b) << "' by " << report.moves[i]
           << " m, more than the assembly tolerance (" << 100.0 * options.tolerance << " % of its size, "
           << body_size(model) << " m): the scene must start nearly assembled";
-      throw AssemblyError(why.str(), k);
+      throw InitialAssemblyError(why.str(), k);
     }
   }
   if (unknowns.deforms()) {
@@ -383,7 +397,7 @@ AssemblyReport assemble(System& system, const AssemblyOptions& options) {
       why << "joint '" << j.name << "': its redundant row (" << joint_row_meaning(j, row, q1, q2) << ") is off by "
           << std::abs(all(row)) << (length ? " m" : "") << " once the other joints are closed, more than the assembly "
           << "tolerance: the parts do not fit (an inconsistent redundant constraint)";
-      throw AssemblyError(why.str(), k);
+      throw InitialAssemblyError(why.str(), k);
     }
   }
   system.set_initial_coordinates(q);

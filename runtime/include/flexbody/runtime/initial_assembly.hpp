@@ -1,7 +1,7 @@
 #pragma once
-// flexbody/runtime/assembly.hpp: the initial assembly of a scene. An interface's reference point comes from a mesh,
-// so a part placed at its CAD's nominal position is micrometres off its neighbour's; Adams, Simpack and Exudyn close
-// such gaps before the first step, and so does this.
+// flexbody/runtime/initial_assembly.hpp: the initial assembly of a scene. An interface's reference point comes from a
+// mesh, so a part placed at its CAD's nominal position is micrometres off its neighbour's; Adams, Simpack and Exudyn
+// close such gaps before the first step, and so does this.
 //
 // Among the rigid coordinates (τ and a = vec(A) of a GCMS body, τ and p of a floating-frame one; deformations stay as
 // they are in the body's frame: a GCMS body's ξ turns with A), at the time t = 0 of driven joints, the correction Δq
@@ -36,7 +36,7 @@
 
 namespace flexbody::runtime {
 
-struct AssemblyOptions {
+struct InitialAssemblyOptions {
   /// The largest move a body may make, as a fraction of its size (the bounding-box diagonal of its mesh, or
   /// 2√3 times its radius of gyration for a body without one). A gap that needs more is a modelling error, not
   /// a mesh's rounding, and is refused.
@@ -44,31 +44,31 @@ struct AssemblyOptions {
   int max_iterations = 20;  ///< Gauss-Newton steps before the assembly fails
 };
 
-struct AssemblyReport {
+struct InitialAssemblyReport {
   std::vector<double> moves;  ///< per body: the largest displacement of a point of it [m], deformation included
   /// per body: the largest displacement of a point by the deformation the assembly gave it [m] (zero but in a closed
   /// loop whose rigid moves could not close it)
   std::vector<double> deformations;
-  double strain_energy = 0.0;  ///< the elastic energy the assembly added to the bodies [J]
-  int iterations = 0;         ///< Gauss-Newton steps taken (0: the scene was assembled)
-  double largest_gap = 0.0;   ///< the largest joint position residual before [m]
+  double strain_energy = 0.0;            ///< the elastic energy the assembly added to the bodies [J]
+  int iterations = 0;                    ///< Gauss-Newton steps taken (0: the scene was assembled)
+  double largest_gap = 0.0;              ///< the largest joint position residual before [m]
   [[nodiscard]] int most_moved() const;  ///< the body with the largest move (−1 if none)
 };
 
 /// A scene that cannot be assembled; `joint` is the index of the joint its message names (System::joints()).
-class AssemblyError : public std::invalid_argument {
+class InitialAssemblyError : public std::invalid_argument {
  public:
-  AssemblyError(const std::string& what, std::size_t which) : std::invalid_argument(what), joint(which) {}
+  InitialAssemblyError(const std::string& what, std::size_t which) : std::invalid_argument(what), joint(which) {}
   std::size_t joint;
 };
 
 /// Moves the system's initial state onto Φ(q, 0) = 0 as above and stores it (System::set_initial_coordinates).
-/// Throws AssemblyError (a std::invalid_argument) with one line naming the joint whose gap is largest against its bodies' sizes when a
-/// body must move more than tolerance × its size, or when the iteration does not converge (a joint that cannot
-/// close: its markers farther apart than the mechanism reaches).
-AssemblyReport assemble(System& system, const AssemblyOptions& options = {});
+/// Throws InitialAssemblyError (a std::invalid_argument) with one line naming the joint whose gap is largest against
+/// its bodies' sizes when a body must move more than tolerance × its size, or when the iteration does not converge (a
+/// joint that cannot close: its markers farther apart than the mechanism reaches).
+InitialAssemblyReport initial_assembly(System& system, const InitialAssemblyOptions& options = {});
 
-/// A body's size for AssemblyOptions::tolerance [m].
+/// A body's size for InitialAssemblyOptions::tolerance [m].
 [[nodiscard]] double body_size(const BodyModel& model);
 
 }  // namespace flexbody::runtime

@@ -164,4 +164,10 @@ class Simulation {
 /// `scene_file`.
 [[nodiscard]] std::string summary_json(const Simulation& simulation, const std::string& scene_file);
 
+/// The run summary as fbsim prints it (lines of text, each ending in a newline): steps, iterations and CPU time, the
+/// steps' control, the initial assembly, redundant rows, time per step, energy and constraints, the files written;
+/// `directory` is the run's output folder, `end_checkpoint` whether a checkpoint was written at the end.
+[[nodiscard]] std::string summary_text(const Simulation& simulation, const std::filesystem::path& directory,
+                                       bool end_checkpoint);
+
 }  // namespace flexbody::scene

@@ -159,8 +159,9 @@ Eigen::Vector3d heavy_top_reference(double t_end) {
 
 // ---------- flexible pendulum ----------
 // Rayleigh damping β = 1e-5 s: ζ = 0.05 in the first mode (1.6 kHz), overdamped above 32 kHz. The generalized basis
-// of the improved GCMS holds fields up to ~1e5 Hz (FORMULATION.md section 6), which the sudden release excites; no
-// step here resolves them, and undamped their response converges erratically (measured: orders −1.2 to 3.4).
+// of the improved GCMS holds fields up to ~1e5 Hz (formulations.md, "The Method": the fields' spectrum), which the
+// sudden release excites; no step here resolves them, and undamped their response converges erratically (measured:
+// orders −1.2 to 3.4).
 constexpr double kBeamRayleighBeta = 1e-5;
 const fr::BodyModel& flexible_beam() {
   static const fr::BodyModel model = [] {

@@ -1,6 +1,6 @@
 // runtime_bench: cost per time step of the improved-GCMS runtime against the number of modes, with the
-// constant-core Newton solve (FORMULATION.md section 5) and with the dense Newton matrix, and for a chain of
-// flexible bodies. Prints a table and writes CSV for bench/runtime_plot.py.
+// constant-core Newton solve (formulations.md, "The Method": the constant core) and with the dense Newton matrix, and
+// for a chain of flexible bodies. Prints a table and writes CSV for bench/runtime_plot.py.
 //
 //   runtime_bench OUTPUT.csv [WORK_DIR]
 //

@@ -1,6 +1,6 @@
 // The GCMS constants: G and K̂ against a dense computation, the rotational Tisserand rows against
-// nodal sums (Eq. 78), the removal of linearly dependent fields on the square beam (FORMULATION.md
-// section 7), and prefix truncation.
+// nodal sums (Eq. 78), the removal of linearly dependent fields on the square beam (formulations.md, "The Method":
+// dependent fields), and prefix truncation.
 #include "flexbody/preprocess/assembly.hpp"
 #include "flexbody/preprocess/free_free_modes.hpp"
 #include "flexbody/preprocess/gcms_matrices.hpp"
@@ -76,7 +76,7 @@ TEST(GcmsMatrices, EqualADenseComputation) {
   const Eigen::MatrixXd g_scale = y.cwiseAbs().transpose() * ms.cwiseAbs() * y.cwiseAbs();
   EXPECT_LT(((g - g_dense).array() / g_scale.array()).abs().maxCoeff(), 1e-12);
   EXPECT_LT(((k_hat - k_hat_dense).array() / k_hat_scale.array()).abs().maxCoeff(), 1e-12);
-  // The blocks FORMULATION.md section 2 names: mass, zero first moment (centre of mass), Tisserand
+  // The blocks formulations.md, "The Method": nodal fields names: mass, zero first moment (centre of mass), Tisserand
   // translation rows zero (modes M-orthogonal to translations), orthonormal fields.
   const double mass = Eigen::VectorXd(r.model.scalar_mass.selfadjointView<Eigen::Upper>() *
                                      Eigen::VectorXd::Ones(n_n)).sum();
@@ -133,8 +133,8 @@ TEST(GcmsMatrices, SpectralConditionOfAGradedMatrix) {
 }
 
 TEST(GeneralizedFields, SquareBeamDependencyIsRemoved) {
-  // The must-pass case of FORMULATION.md section 7: the square beam's bending pairs make the fields
-  // nearly dependent, and the cross-components of each mode are decades smaller than its main one.
+  // The must-pass case of formulations.md, "The Method": dependent fields: the square beam's bending pairs make the
+  // fields nearly dependent, and the cross-components of each mode are decades smaller than its main one.
   const Reduced r = reduce(flexbody::test::square_beam(), 8);
   const Eigen::MatrixXd& ups = r.upsilon;
   const auto& ms = r.model.scalar_mass;

@@ -211,8 +211,8 @@ TEST(FlexibleBody, TheShortMassProductGivesTheSameMotion) {
 // beam is pinned at a corner about z and released horizontal; the error is that of the far corner at t = 0.25 s
 // against the same model at a quarter of the smallest step with a Newton tolerance 1e-3 of the default. Rayleigh
 // damping β = 1e-5 s (ζ = 0.05 in the first mode, 1.6 kHz) overdamps the generalized basis' fields above 32 kHz
-// (FORMULATION.md section 6), which the sudden release excites and no step here resolves: undamped, their response
-// converges erratically (bench/README.md, "Convergence").
+// (formulations.md, "The Method": the fields' spectrum), which the sudden release excites and no step here resolves:
+// undamped, their response converges erratically (bench/README.md, "Convergence").
 TEST(FlexibleBody, APendulumAtDefaultSettingsConvergesAtSecondOrder) {
   fr::BodyModel model = fr::make_body_model(beam(), std::nullopt, "beam");
   model.damping = fr::rayleigh_damping(model, 0.0, 1e-5);
@@ -365,8 +365,9 @@ TEST(FlexibleBody, SpinUpBeyondTheFirstBendingFrequencyIsReported) {
   const SpinResult slow = spin_up(0.2);
   EXPECT_FALSE(slow.failed) << slow.message;
   EXPECT_LT(slow.largest_rms, 0.005);
-  // Beyond it a linear corotational model has no centrifugal stiffening (FORMULATION.md section 8): the
-  // deformation grows without bound. The run must stop with that diagnosis, its state finite, never NaN.
+  // Beyond it a linear corotational model has no centrifugal stiffening (formulations.md, "The Method": what a linear
+  // model leaves out): the deformation grows without bound. The run must stop with that diagnosis, its state finite,
+  // never NaN.
   const SpinResult fast = spin_up(1.5);
   ASSERT_TRUE(fast.failed) << "largest RMS displacement " << fast.largest_rms << " m";
   EXPECT_NE(fast.message.find("body 'beam' left the small-deformation range of its linear model"), std::string::npos)

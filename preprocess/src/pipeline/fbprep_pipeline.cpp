@@ -331,7 +331,8 @@ PrepSummary run_pass(const PrepOptions& options, std::shared_ptr<const MeshSizeF
   }
   modes_timer.stop();
 
-  // 4. The constant blocks of the improved GCMS: fields, G, K̂ (FORMULATION.md sections 2 and 7).
+  // 4. The constant blocks of the improved GCMS: fields, G, K̂ (formulations.md, "The Method": nodal fields and
+  // dependent fields).
   StageTimer reduce_timer(summary, "gcms");
   if (options.progress) options.progress("GCMS constants (G, K_hat)");
   body.modes.upsilon = upsilon_from_modes(mode_vectors);

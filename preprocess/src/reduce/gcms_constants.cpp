@@ -16,7 +16,8 @@ format::Gcms gcms_constants(const SparseMatrix& stiffness_upper, const SparseMat
                             const RowMatrixX3d& nodes, const Eigen::MatrixXd& upsilon,
                             const GeneralizedFieldOptions& options) {
   format::Gcms gcms;
-  // Before: the modes' own fields (FORMULATION.md section 7 measured 7e7 ... 7e8 on a square beam).
+  // Before: the modes' own fields (formulations.md, "The Method": dependent fields measured 7e7 ... 7e8 on a square
+  // beam).
   const Eigen::MatrixXd mass_upsilon = symmetric_product(full_from_upper(scalar_mass_upper), upsilon);
   // The Gram matrix's entries all carry the same unit (1, for M-orthonormal modes): its condition does not
   // depend on the part's size. G's blocks carry kg, kg m^2 and 1: the Jacobi-scaled figures are the ones that

@@ -16,7 +16,7 @@ std::vector<PaddedMatrix> compute(const System& system, double beta_prime, doubl
     const BodyModel& model = system.model(b);
     if (model.sparse || model.floating() || model.field_count() == 0) continue;
     const Eigen::Index n_f = model.field_count();
-    // C = G_ff ⊗ I3 + (K̂ + γ' D̂) / β' (FORMULATION.md section 5).
+    // C = G_ff ⊗ I3 + (K̂ + γ' D̂) / β' (formulations.md, "The Method": the constant core).
     Eigen::MatrixXd core = model.stiffness / beta_prime;
     if (model.damping.size() > 0) core += gamma_prime / beta_prime * model.damping;
     for (Eigen::Index f = 0; f < n_f; ++f)

@@ -1,7 +1,7 @@
 #pragma once
 // core_inverses.hpp (private): the inverse of each reduced body's constant Newton core,
 //
-//   C = G_ff ⊗ I3 + (K̂ + γ' D̂) / β'   (FORMULATION.md section 5; β', γ' of the step size h),
+//   C = G_ff ⊗ I3 + (K̂ + γ' D̂) / β'   (formulations.md, "The Method": the constant core; β', γ' of the step size h),
 //
 // kept for the last few step sizes. A change of h needs new cores, and building them (an LLT and an inverse, both
 // O((3 n_f)³), of each distinct part) costs as much as several steps: on the work-precision pendulum at 32 modes

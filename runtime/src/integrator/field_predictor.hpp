@@ -2,13 +2,13 @@
 // The predictor of GCMS bodies' fields at steps that do not resolve them (GeneralizedAlpha::predict; not installed).
 //
 // generalized-α's predictor q̈_{n+1} = q̈_n carries a field component of frequency ω by about (ω h)² times its
-// oscillation's amplitude, and a GCMS body's generalized basis reaches far above its kept modes (FORMULATION.md
-// section 6: 1e5 Hz for a beam whose modes end at 2 kHz). The Newton matrix built at such a predictor couples the
-// rotation to the fields through K̂ ξ̄ (Eq. (86)) as if the body were deformed thousands of times more than it is.
-// Here each body's field space is split by the eigenvectors of (K̂, G_ff ⊗ I3): the components the step resolves,
-// ω h ≤ 1, keep the constant-acceleration predictor (second order: starting them elsewhere left a resolved vibration
-// two iterations whose stopping test misjudged, and its energy error grew 500-fold); those it does not keep the
-// deformation of the last step, seen in the body frame (ξ̄ held, turned with the predicted rotation). Full-order
+// oscillation's amplitude, and a GCMS body's generalized basis reaches far above its kept modes (formulations.md, "The
+// Method": the fields' spectrum: 1e5 Hz for a beam whose modes end at 2 kHz). The Newton matrix built at such a
+// predictor couples the rotation to the fields through K̂ ξ̄ (Eq. (86)) as if the body were deformed thousands of times
+// more than it is. Here each body's field space is split by the eigenvectors of (K̂, G_ff ⊗ I3): the components the step
+// resolves, ω h ≤ 1, keep the constant-acceleration predictor (second order: starting them elsewhere left a resolved
+// vibration two iterations whose stopping test misjudged, and its energy error grew 500-fold); those it does not keep
+// the deformation of the last step, seen in the body frame (ξ̄ held, turned with the predicted rotation). Full-order
 // bodies keep the constant-acceleration predictor (their K̄ has no eigenbasis at this cost).
 
 #include "flexbody/runtime/system.hpp"

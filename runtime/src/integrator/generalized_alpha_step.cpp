@@ -64,8 +64,8 @@ void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) con
         why << "Its model is linear in the deformation (its geometric stiffening covers the prestress, not large "
             << "deformation): a load beyond linear elasticity, or a spin beyond the stiffened model's range";
       else
-        why << "The model has no geometric stiffening for it (FORMULATION.md section 8): a spin above the first "
-            << "bending frequency, or a load beyond linear elasticity";
+        why << "The model has no geometric stiffening for it (docs/formulations.md, Geometric Stiffening): "
+            << "a spin above the first bending frequency, or a load beyond linear elasticity";
       throw StepFailure(why.str());
     }
   }
@@ -89,13 +89,14 @@ void GeneralizedAlpha::check_spin(double t, const Eigen::VectorXd& q, const Eige
     what << "t = " << t << " s: body '" << system_.body_name(b) << "' spins at " << spin << " rad/s = " << ratio
          << " of its lowest elastic frequency (" << model.lowest_frequency_hz << " Hz); ";
     if (stiffened) {
-      what << "its geometric stiffening was verified up to 2 times that frequency (a rotating cantilever within "
-           << "0.12 %); beyond, the fixed modes and the terms still left out (large deformation, the modes' change with "
-           << "the speed) limit it, and the improved GCMS showed a spurious mode in the plane of rotation at 3-4 times "
-           << "it (FORMULATION.md section 8.1)";
+      what
+          << "its geometric stiffening was verified up to 2 times that frequency (a rotating cantilever within "
+          << "0.12 %); beyond, the fixed modes and the terms still left out (large deformation, the modes' change with "
+          << "the speed) limit it, and the improved GCMS showed a spurious mode in the plane of rotation at 3-4 times "
+          << "it (docs/formulations.md, Geometric Stiffening)";
     } else {
-      what << "a linear corotational model has no centrifugal stiffening (FORMULATION.md section 8), so its "
-           << "deformation is wrong by about " << 100.0 * 0.36 * ratio * ratio << " % in the spin plane and "
+      what << "a linear corotational model has no centrifugal stiffening (docs/formulations.md, Geometric Stiffening), "
+           << "so its deformation is wrong by about " << 100.0 * 0.36 * ratio * ratio << " % in the spin plane and "
            << 100.0 * 1.2 * ratio * ratio << " % out of it";
       if (model.prestress) what << " (" << gap << ")";
     }

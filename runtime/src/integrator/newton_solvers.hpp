@@ -4,13 +4,13 @@
 //   [S  Jᵀ] [Δq]     [r]
 //   [J  0 ] [Δμ] = − [Φ],    S = M + (K_t + γ' C_t + Σ λ_k ∂²Φ_k/∂q²) / β',
 //
-// either densely (O(n³) per iteration), or with the constant core of FORMULATION.md section 5: the ξξ block of
-// each flexible body is Â C Âᵀ with C = G_ff ⊗ I3 + (K̂ + γ' D̂)/β' constant for a fixed step (A orthogonal), so C is
-// factorized once and every ξ block is eliminated by two triangular solves per right-hand side, leaving a small
-// system in the 12 rigid coordinates per body and the constraint rows (reduced_solver.hpp: dense for a few bodies,
-// sparse for many, where each joint's rows touch two bodies). Of the damping tangent C_t only the
-// ξξ block Â D̂ Âᵀ enters (its coupling to ȧ only changes the convergence rate). A floating-frame body keeps all of
-// its 7 + n_m coordinates in that dense system, with its exact tangent M(q) + (∂R/∂q + γ' ∂R/∂q̇)/β'.
+// either densely (O(n³) per iteration), or with the constant core of formulations.md, "The Method": the constant core:
+// the ξξ block of each flexible body is Â C Âᵀ with C = G_ff ⊗ I3 + (K̂ + γ' D̂)/β' constant for a fixed step (A
+// orthogonal), so C is factorized once and every ξ block is eliminated by two triangular solves per right-hand side,
+// leaving a small system in the 12 rigid coordinates per body and the constraint rows (reduced_solver.hpp: dense for a
+// few bodies, sparse for many, where each joint's rows touch two bodies). Of the damping tangent C_t only the ξξ block
+// Â D̂ Âᵀ enters (its coupling to ȧ only changes the convergence rate). A floating-frame body keeps all of its 7 + n_m
+// coordinates in that dense system, with its exact tangent M(q) + (∂R/∂q + γ' ∂R/∂q̇)/β'.
 
 #include "flexbody/runtime/system.hpp"
 

@@ -1,6 +1,7 @@
 #pragma once
 // dense_product.hpp (internal): y = A x for the runtime's per-iteration dense matrices, K̂ ξ̄ (Eq. 87) and
-// C⁻¹ r (FORMULATION.md section 5), both 3 n_f square, and the small products of the Newton solve.
+// C⁻¹ r (formulations.md, "The Method": the constant core), both 3 n_f square, and the small products of the Newton
+// solve.
 //
 // Eigen picks its vector width when it is compiled: a portable build (no -march) runs these products with SSE2,
 // two doubles per instruction. This kernel is compiled for several instruction sets and the dynamic loader picks

@@ -1,5 +1,6 @@
 // System::sparse_constraint_jacobian: Φ_q block by block, each block over the coordinates of the bodies its rows
-// touch (FORMULATION.md section 4), so its storage grows with the scene, not with its square.
+// touch (formulations.md, "The Method": constraints and markers), so its storage grows with the scene, not with its
+// square.
 #include "flexbody/runtime/reference_constraints.hpp"
 #include "flexbody/runtime/system.hpp"
 

@@ -1,5 +1,6 @@
-// system_prestress.cpp: the System's geometric stiffening (prestress.hpp; issue 29, FORMULATION.md section 8.1): the
-// weights λ of each prestressed body's cases from its spin and the loads at its interfaces, and the forces they add.
+// system_prestress.cpp: the System's geometric stiffening (prestress.hpp; issue 29, formulations.md, "Geometric
+// Stiffening"): the weights λ of each prestressed body's cases from its spin and the loads at its interfaces, and the
+// forces they add.
 #include "flexbody/runtime/system.hpp"
 
 #include "../kernels/outer_sum.hpp"

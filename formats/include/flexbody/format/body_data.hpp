@@ -102,9 +102,9 @@ struct Modes {
   [[nodiscard]] Eigen::Index count() const { return frequencies_hz.size(); }
 };
 
-/// The constant blocks of the improved GCMS equations of motion (Zwölfer & Gerstmayr 2023; FORMULATION.md
-/// sections 2 and 7). The modes' 3 n_m scalar fields (the columns of Ῡ) are replaced by an M_s-orthonormal
-/// basis of their span, built in mode order, without the fields that add nothing new (n_f <= 3 n_m).
+/// The constant blocks of the improved GCMS equations of motion (Zwölfer & Gerstmayr 2023; formulations.md, "The
+/// Method": nodal fields and dependent fields). The modes' 3 n_m scalar fields (the columns of Ῡ) are replaced by an
+/// M_s-orthonormal basis of their span, built in mode order, without the fields that add nothing new (n_f <= 3 n_m).
 /// With Y = [1, X̄, Ῡ'] the positions are r = (Y ⊗ I3) q, q = [τ; a; ξ], ξ of length 3 n_f.
 struct Gcms {
   /// Ῡ' (n_n x n_f) [kg^-1/2]: Ῡ'ᵀ M_s Ῡ' = I.
@@ -138,7 +138,7 @@ struct Gcms {
 };
 
 /// A named set of surface nodes where a joint or a force acts, as a marker of the GCMS body
-/// (FORMULATION.md section 4): its position and its small rotation are linear in q.
+/// (formulations.md, "The Method": constraints and markers): its position and its small rotation are linear in q.
 struct Interface {
   std::string name;
   /// "rbe3": the marker follows the area-weighted average motion of the nodes; "rbe2": the nodes

@@ -156,7 +156,7 @@ struct PrepSummary {
   double rigid_body_residual = 0.0, rigid_body_coupling = 0.0;
   int solver_runs = 0, restarts = 0, operator_applies = 0;
   ShiftSolveStats factor;
-  /// GCMS fields kept and dropped (FORMULATION.md section 7), and the condition numbers of
+  /// GCMS fields kept and dropped (formulations.md, "The Method": dependent fields), and the condition numbers of
   /// Ῡᵀ M_s Ῡ and of G before and of G after (+inf: singular to working precision): Jacobi-scaled
   /// (D^-1/2 G D^-1/2, D = diag G: unit-free, the same for the same shape at every size) and in SI units
   /// (which change with the part's size).

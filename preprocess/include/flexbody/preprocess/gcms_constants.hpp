@@ -1,6 +1,6 @@
 #pragma once
 // flexbody/preprocess/gcms_constants.hpp: everything the body file's /gcms group holds, from the
-// mesh, M_s, K̄ and the M-orthonormal modes (FORMULATION.md sections 2 and 7).
+// mesh, M_s, K̄ and the M-orthonormal modes (formulations.md, "The Method": nodal fields and dependent fields).
 
 #include "flexbody/format/body_data.hpp"
 #include "flexbody/preprocess/generalized_fields.hpp"

@@ -1,6 +1,6 @@
 #pragma once
 // flexbody/preprocess/gcms_matrices.hpp: the constant matrices of the improved GCMS equations of
-// motion (Zwölfer & Gerstmayr 2023), computed once in preprocessing (FORMULATION.md section 2).
+// motion (Zwölfer & Gerstmayr 2023), computed once in preprocessing (formulations.md, "The Method": nodal fields).
 //
 // With Y = [1, X̄, Ῡ] (n_n x (4 + n_f), one column per scalar nodal field) the positions are
 // r = (Y ⊗ I3) q, q = [τ; a; ξ] (Eqs. 60-61), so the generalized mass matrix of Eq. 66 is G ⊗ I3.

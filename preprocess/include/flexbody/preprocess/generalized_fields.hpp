@@ -1,6 +1,7 @@
 #pragma once
 // flexbody/preprocess/generalized_fields.hpp: the scalar fields of the improved GCMS and the removal
-// of their linear dependency (FORMULATION.md section 7; Zwölfer & Gerstmayr 2023, Eqs. 49 and 59).
+// of their linear dependency (formulations.md, "The Method": dependent fields; Zwölfer & Gerstmayr 2023, Eqs. 49 and
+// 59).
 //
 // GCMS gives every scalar field of Ῡ (component k of mode m, column 3m + k) its own 3-vector of
 // coordinates, so fields that are (nearly) linearly dependent make Ῡᵀ M_s Ῡ and G singular: the

@@ -1,7 +1,7 @@
 #pragma once
 // flexbody/preprocess/interfaces.hpp: interfaces (named sets of surface nodes where a joint or a force
-// acts) and their markers (FORMULATION.md section 4: a marker's position is a row of Y, its small
-// rotation a 3 x 3 n_f matrix on ξ̄; both linear in q, so point joints have constant Jacobians).
+// acts) and their markers (formulations.md, "The Method": constraints and markers: a marker's position is a row of Y,
+// its small rotation a 3 x 3 n_f matrix on ξ̄; both linear in q, so point joints have constant Jacobians).
 
 #include "flexbody/format/body_data.hpp"
 #include "flexbody/preprocess/cad_surface.hpp"

@@ -1,6 +1,7 @@
 #pragma once
 // flexbody/runtime/body_model.hpp: the constant data of one improved-GCMS body (Zwölfer & Gerstmayr 2023,
-// Eqs. 85-89; FORMULATION.md sections 2-4), loaded from a body file and truncated to what a scene needs.
+// Eqs. 85-89; formulations.md, "The Method": nodal fields to constraints and markers), loaded from a body file and
+// truncated to what a scene needs.
 //
 // Coordinates q = [τ (3); a = vec(A) (9, column-major, Eq. 27); ξ (3 n_f)], positions r = (Y ⊗ I3) q with
 // Y = [1, X̄, Ῡ'] (Eq. 61), mass matrix G ⊗ I3 (Eq. 66, constant), elastic energy ½ ξ̄ᵀ K̂ ξ̄ with ξ̄_f = Aᵀ ξ_f

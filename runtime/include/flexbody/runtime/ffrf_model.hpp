@@ -4,7 +4,7 @@
 // nodal positions r = τ + A(p) (X̄ + Σ_m ψ_m η_m). The inertia invariants are the consistent-mass integrals of
 // Zwölfer & Gerstmayr (Acta Mech. 232, 2021), with no lumped-mass approximation: every one of them is a bilinear
 // form of nodal fields with M_s, and every mode is a combination of the columns of Y = [1, X̄, Ῡ'], so each is a
-// product with G = Yᵀ M_s Y (FORMULATION.md section 2) and needs no n_n-sized work:
+// product with G = Yᵀ M_s Y (formulations.md, "The Method": nodal fields) and needs no n_n-sized work:
 //
 //   mode m's displacement u_m = (Y ⊗ I3)-combination with coefficients W_m ((4 + n_f) x 3: u_m(i) = W_mᵀ Y(i, :)ᵀ)
 //   ∫ρ X̄ = G[1:4, 0],  ∫ρ X̄ X̄ᵀ = G[1:4, 1:4],  ∫ρ ψ_m = W_mᵀ G[:, 0],  ∫ρ X̄ ψ_mᵀ = G[1:4, :] W_m,

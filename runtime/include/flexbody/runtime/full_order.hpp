@@ -1,8 +1,8 @@
 #pragma once
-// flexbody/runtime/full_order.hpp: the unreduced improved ACF as a reference body (FORMULATION.md section 5: the
-// same structure with Ῡ = I, so ξ are the nodal displacements, K̂ = K̄ and G_ff = M_s). It measures what a reduced
-// body's modes leave out. Sparse: K̄ and M_s keep the mesh's sparsity (BodyModel::sparse), its constant Newton
-// core M_s ⊗ I3 + K̄/β' is factorized once by Eigen's sparse Cholesky, and each iteration costs products with the
+// flexbody/runtime/full_order.hpp: the unreduced improved ACF as a reference body (formulations.md, "The Method": the
+// constant core: the same structure with Ῡ = I, so ξ are the nodal displacements, K̂ = K̄ and G_ff = M_s). It measures
+// what a reduced body's modes leave out. Sparse: K̄ and M_s keep the mesh's sparsity (BodyModel::sparse), its constant
+// Newton core M_s ⊗ I3 + K̄/β' is factorized once by Eigen's sparse Cholesky, and each iteration costs products with the
 // mesh's matrices. Its fields are not M-orthogonal to the rigid motions, so the body also carries the
 // translational Tisserand rows (Eq. 77). Its damping can only be stiffness-proportional (damp_full_order), which
 // keeps the core sparse.

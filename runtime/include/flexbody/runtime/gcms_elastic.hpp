@@ -1,6 +1,6 @@
 #pragma once
 // flexbody/runtime/gcms_elastic.hpp: the elastic energy of an improved-GCMS body and its derivatives
-// (Zwölfer & Gerstmayr 2023, Eqs. 86-87 and 96; FORMULATION.md section 3).
+// (Zwölfer & Gerstmayr 2023, Eqs. 86-87 and 96; formulations.md, "The Method": elastic forces).
 //
 //   U = ½ ξ̄ᵀ K̂ ξ̄,   ξ̄_f = Aᵀ ξ_f (the fields' coordinates in the body frame),   h = K̂ ξ̄
 //   ∂U/∂ξ_f = A h_f,  ∂U/∂A = Σ_f ξ_f h_fᵀ  (a = vec(A), column-major: a[3j + i] = A(i, j))

@@ -35,7 +35,7 @@ namespace flexbody::runtime {
 /// How each Newton iteration's linear system is solved.
 enum class NewtonMatrix {
   /// Eliminate each flexible body's ξ block with the factor of C = G_ff ⊗ I3 + (K̂ + γ' D̂)/β', constant for the
-  /// step size (FORMULATION.md section 5): O((3 n_f)²) per right-hand side instead of O(n³).
+  /// step size (formulations.md, "The Method": the constant core): O((3 n_f)²) per right-hand side instead of O(n³).
   constant_core,
   dense,  ///< the whole matrix, LU per iteration: the reference the constant core is tested against
 };
@@ -128,9 +128,10 @@ struct GeneralizedAlphaOptions {
   /// instead of only after a step failed with the alternating step. For scenes known to need it (a light carriage
   /// guiding a fast slider: stabilized_coupling.hpp); each Newton matrix then costs more.
   bool coupled_from_start = false;
-  /// A linear model holds for small deformations only (FORMULATION.md section 8: no geometric stiffening). A step
-  /// after which a flexible body's RMS elastic displacement ‖ξ̄‖/√m exceeds this fraction of its size (the
-  /// bounding-box diagonal) stops the run with a StepFailure that says so; 0 disables the check.
+  /// A linear model holds for small deformations only (formulations.md, "The Method": what a linear model leaves out:
+  /// no geometric stiffening). A step after which a flexible body's RMS elastic displacement ‖ξ̄‖/√m exceeds this
+  /// fraction of its size (the bounding-box diagonal) stops the run with a StepFailure that says so; 0 disables the
+  /// check.
   double deformation_limit = 0.02;
   /// A linear corotational model has no centrifugal (geometric) stiffening, so its deformation of a body spinning at
   /// Ω is wrong by about c (Ω/ω₁)², ω₁ = 2π BodyModel::lowest_frequency_hz: c ≈ 0.36 measured in the spin plane of

@@ -1,6 +1,6 @@
 #pragma once
 // flexbody/runtime/joint.hpp: joints between two markers (either may be on ground) as algebraic constraints
-// Φ(q, t) = 0 with exact Jacobians (FORMULATION.md section 4).
+// Φ(q, t) = 0 with exact Jacobians (formulations.md, "The Method": constraints and markers).
 //
 //   spherical        r_1 − r_2 = 0                                               3 rows
 //   fixed            spherical, and the markers' frames keep their initial relative orientation   6 rows

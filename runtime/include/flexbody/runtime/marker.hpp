@@ -1,8 +1,8 @@
 #pragma once
-// flexbody/runtime/marker.hpp: markers, the points and frames where joints and forces act (FORMULATION.md
-// section 4). A marker's position is a row of Y: r = (yᵀ ⊗ I3) q_b = τ + A X̄_c + Σ_f y_f ξ_f, linear in q with a
-// constant Jacobian. Its frame is A (I + [θ̄]×) with the small rotation θ̄ = R ξ̄ of its node set (ξ̄ = Âᵀ ξ), so a
-// body-fixed direction d at the marker points along A (d + θ̄ × d) = A (d − [d]× R ξ̄).
+// flexbody/runtime/marker.hpp: markers, the points and frames where joints and forces act (formulations.md, "The
+// Method": constraints and markers). A marker's position is a row of Y: r = (yᵀ ⊗ I3) q_b = τ + A X̄_c + Σ_f y_f ξ_f,
+// linear in q with a constant Jacobian. Its frame is A (I + [θ̄]×) with the small rotation θ̄ = R ξ̄ of its node set (ξ̄ =
+// Âᵀ ξ), so a body-fixed direction d at the marker points along A (d + θ̄ × d) = A (d − [d]× R ξ̄).
 //
 // On a floating-frame body (ffrf_model.hpp, coordinates [τ; p; η]) the same marker is r = τ + A(p) (X̄_c + Ψ_c η)
 // and θ̄ = Θ_c η, with Ψ_c and Θ_c its displacement and rotation per unit modal coordinate: nonlinear in q, so its

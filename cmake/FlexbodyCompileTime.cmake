@@ -7,8 +7,9 @@
 # 9.6). Batches of 8 took 4 min 8 s in one run (fewer, larger units leave a core idle at the end); precompiling
 # Eigen's headers on top of the batches took 5 min 10 s (not kept).
 # Sources in a batch share a translation unit, so names at namespace scope (also in anonymous namespaces) must be
-# unique within a library: the CI build compiles this way too and catches a clash. Turn it off while editing one
-# file often (-DFLEXBODY_UNITY_BUILD=OFF): a batch recompiles as a whole.
+# unique within a library: the CI build compiles this way too and catches two definitions of a name, but not two
+# file-local overloads of one name, which would serve each other's calls (so helpers get distinct names). Turn it off
+# while editing one file often (-DFLEXBODY_UNITY_BUILD=OFF): a batch recompiles as a whole.
 option(FLEXBODY_UNITY_BUILD "Compile the libraries, fbprep and fbsim in batches of 4 sources (faster from scratch)" ON)
 
 function(flexbody_compile_in_batches)

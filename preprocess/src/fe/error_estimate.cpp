@@ -41,7 +41,7 @@ Eigen::VectorXd relative_frequency_errors(const Eigen::VectorXd& error_energy, c
   return estimate;
 }
 
-void check_sizes(Eigen::Index nodes, const Eigen::MatrixXd& modes, const Eigen::VectorXd& frequencies_hz) {
+void check_mode_sizes(Eigen::Index nodes, const Eigen::MatrixXd& modes, const Eigen::VectorXd& frequencies_hz) {
   if (modes.rows() != 3 * nodes || frequencies_hz.size() != modes.cols())
     throw std::invalid_argument("frequency_error_estimates: the modes do not match the mesh or the frequencies");
 }
@@ -80,7 +80,7 @@ FrequencyErrorEstimate error_energies(Eigen::Index elements, const Eigen::Vector
 
 FrequencyErrorEstimate estimate_frequency_errors(const TetMesh& mesh, const Material& material,
                                                  const Eigen::MatrixXd& modes, const Eigen::VectorXd& frequencies_hz) {
-  check_sizes(mesh.node_count(), modes, frequencies_hz);
+  check_mode_sizes(mesh.node_count(), modes, frequencies_hz);
   const Eigen::MatrixXd recovered = nodal_stresses(mesh, material, modes);  // 6 n x m, σ* at the nodes
   const double lambda = lame_lambda(material), mu = shear_modulus(material);
   return error_energies(mesh.element_count(), frequencies_hz, [&](Eigen::Index e, Eigen::VectorXd& out) {
@@ -104,7 +104,7 @@ FrequencyErrorEstimate estimate_frequency_errors(const TetMesh& mesh, const Mate
 
 FrequencyErrorEstimate estimate_frequency_errors(const Tet10Mesh& mesh, const Material& material,
                                                  const Eigen::MatrixXd& modes, const Eigen::VectorXd& frequencies_hz) {
-  check_sizes(mesh.node_count(), modes, frequencies_hz);
+  check_mode_sizes(mesh.node_count(), modes, frequencies_hz);
   const Eigen::MatrixXd recovered = nodal_stresses(mesh, material, modes);  // 6 n x m, σ* at every node
   const double lambda = lame_lambda(material), mu = shear_modulus(material);
   // The 4-point Gauss rule (degree 2; weights 1/24 of the reference volume 1/6), at barycentric (a, b, b, b) and

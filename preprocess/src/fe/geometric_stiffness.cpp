@@ -17,8 +17,8 @@ Eigen::Matrix3d stress_of(const Eigen::Matrix3d& h, double lambda, double mu) {
   return lambda * strain.trace() * Eigen::Matrix3d::Identity() + 2.0 * mu * strain;
 }
 
-void check_sizes(const char* what, Eigen::Index nodes, const Material& material, const Eigen::MatrixXd& displacements,
-                 const Eigen::MatrixXd& fields) {
+void check_load_case_sizes(const char* what, Eigen::Index nodes, const Material& material,
+                           const Eigen::MatrixXd& displacements, const Eigen::MatrixXd& fields) {
   if (displacements.rows() != 3 * nodes || fields.rows() != nodes)
     throw std::invalid_argument(fmt::format("geometric stiffness ({}): {} nodes, but displacements of {} rows (3 per "
                                             "node) and fields of {} rows", what, nodes, displacements.rows(),
@@ -82,7 +82,7 @@ Eigen::MatrixXd centrifugal_unit_loads(const RowMatrixX3d& body_nodes, const Spa
 std::vector<Eigen::MatrixXd> projected_geometric_stiffness(const TetMesh& mesh, const Material& material,
                                                            const Eigen::MatrixXd& displacements,
                                                            const Eigen::MatrixXd& fields) {
-  check_sizes("linear tetrahedra", mesh.node_count(), material, displacements, fields);
+  check_load_case_sizes("linear tetrahedra", mesh.node_count(), material, displacements, fields);
   const std::vector<Tet4Geometry> geometry = element_geometries(mesh);
   return project<4>(mesh.tets, material, displacements, fields, [&](Eigen::Index e, auto&& visit) {
     const Tet4Geometry& g = geometry[static_cast<std::size_t>(e)];  // constant strain: one point, exact
@@ -93,7 +93,7 @@ std::vector<Eigen::MatrixXd> projected_geometric_stiffness(const TetMesh& mesh, 
 std::vector<Eigen::MatrixXd> projected_geometric_stiffness(const Tet10Mesh& mesh, const Material& material,
                                                            const Eigen::MatrixXd& displacements,
                                                            const Eigen::MatrixXd& fields) {
-  check_sizes("quadratic tetrahedra", mesh.node_count(), material, displacements, fields);
+  check_load_case_sizes("quadratic tetrahedra", mesh.node_count(), material, displacements, fields);
   const std::array<Eigen::Vector3d, 4> rule = format::tet10_gauss_points();
   return project<10>(mesh.tets, material, displacements, fields, [&](Eigen::Index e, auto&& visit) {
     format::Tet10Nodes corners;

@@ -13,7 +13,7 @@ namespace flexbody::runtime {
 namespace {
 
 template <class Stiffness>
-void check_sizes(const Stiffness& k_hat, const VectorRef& xi) {
+void check_stiffness_sizes(const Stiffness& k_hat, const VectorRef& xi) {
   if (k_hat.rows() != k_hat.cols() || k_hat.rows() % 3 != 0 || xi.size() != k_hat.rows())
     throw std::invalid_argument("GCMS elastic forces: K_hat is " + std::to_string(k_hat.rows()) + " x " +
                                 std::to_string(k_hat.cols()) + " and xi has " + std::to_string(xi.size()) +
@@ -43,7 +43,7 @@ namespace {
 template <class Stiffness>
 void forces_into(const Stiffness& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi, ElasticForces& out,
                  Eigen::VectorXd& xi_bar) {
-  check_sizes(k_hat, xi);
+  check_stiffness_sizes(k_hat, xi);
   const Eigen::Index n_f = xi.size() / 3;
   xi_bar.resize(xi.size());  // as 3 x n_f matrices, one column per field: Ξ̄ = Aᵀ Ξ
   Eigen::Map<Eigen::Matrix3Xd>(xi_bar.data(), 3, n_f).noalias() = a.transpose() * Eigen::Map<const Eigen::Matrix3Xd>(xi.data(), 3, n_f);
@@ -73,7 +73,7 @@ ElasticForces forces_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const 
 
 template <class Stiffness>
 ElasticTangent tangent_of(const Stiffness& k_hat, const Eigen::Matrix3d& a, const VectorRef& xi, bool with_xi_xi) {
-  check_sizes(k_hat, xi);
+  check_stiffness_sizes(k_hat, xi);
   const Eigen::Index n = xi.size(), n_f = n / 3;
   const Eigen::Matrix<double, Eigen::Dynamic, 9> d = body_frame_coordinates_derivative(xi);
   const Eigen::VectorXd h = k_hat * body_frame_coordinates(a, xi);

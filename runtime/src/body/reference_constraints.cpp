@@ -18,7 +18,7 @@ constexpr std::array<std::pair<int, int>, kOrthogonalityRows> kPairs = {
 
 using detail::skew;
 
-void check_sizes(const TisserandMatrix& g, const VectorRef& xi) {
+void check_tisserand_sizes(const TisserandMatrix& g, const VectorRef& xi) {
   if (xi.size() != 3 * g.cols())
     throw std::invalid_argument("reference constraints: xi has " + std::to_string(xi.size()) + " entries for " +
                                 std::to_string(g.cols()) + " fields (expected 3 n_f)");
@@ -28,7 +28,7 @@ void check_sizes(const TisserandMatrix& g, const VectorRef& xi) {
 
 Eigen::Matrix<double, 9, 1> reference_residual(const TisserandMatrix& g, const Eigen::Matrix3d& a,
                                                const VectorRef& xi) {
-  check_sizes(g, xi);
+  check_tisserand_sizes(g, xi);
   Eigen::Matrix<double, 9, 1> phi;
   for (int k = 0; k < kOrthogonalityRows; ++k) {
     const auto [i, j] = kPairs[static_cast<std::size_t>(k)];
@@ -42,7 +42,7 @@ Eigen::Matrix<double, 9, 1> reference_residual(const TisserandMatrix& g, const E
 }
 
 Eigen::MatrixXd reference_jacobian(const TisserandMatrix& g, const Eigen::Matrix3d& a, const VectorRef& xi) {
-  check_sizes(g, xi);
+  check_tisserand_sizes(g, xi);
   const Eigen::Index n_f = g.cols();
   Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(9, 9 + 3 * n_f);
   for (int k = 0; k < kOrthogonalityRows; ++k) {
@@ -63,7 +63,7 @@ Eigen::MatrixXd reference_jacobian(const TisserandMatrix& g, const Eigen::Matrix
 
 void reference_jacobian_transpose_product(const TisserandMatrix& g, const Eigen::Matrix3d& a, const VectorRef& xi,
                                           const Eigen::Matrix<double, 9, 1>& mu, Eigen::Ref<Eigen::VectorXd> out) {
-  check_sizes(g, xi);
+  check_tisserand_sizes(g, xi);
   const Eigen::Index n_f = g.cols();
   if (out.size() != 9 + 3 * n_f)
     throw std::invalid_argument("reference_jacobian_transpose_product: the output has " + std::to_string(out.size()) +
@@ -93,8 +93,8 @@ Eigen::VectorXd reference_jacobian_transpose_product(const TisserandMatrix& g, c
 Eigen::Matrix<double, 9, 1> reference_jacobian_product(const TisserandMatrix& g, const Eigen::Matrix3d& a,
                                                        const VectorRef& xi, const Eigen::Matrix3d& a_dot,
                                                        const VectorRef& xi_dot) {
-  check_sizes(g, xi);
-  check_sizes(g, xi_dot);
+  check_tisserand_sizes(g, xi);
+  check_tisserand_sizes(g, xi_dot);
   Eigen::Matrix<double, 9, 1> rate;
   for (int k = 0; k < kOrthogonalityRows; ++k) {  // d/dt of Eq. 79
     const auto [i, j] = kPairs[static_cast<std::size_t>(k)];
@@ -109,7 +109,7 @@ Eigen::Matrix<double, 9, 1> reference_jacobian_product(const TisserandMatrix& g,
 
 Eigen::Matrix<double, 9, Eigen::Dynamic> reference_hessian_a_rows(const TisserandMatrix& g, const VectorRef& xi,
                                                                   const Eigen::Matrix<double, 9, 1>& lambda) {
-  check_sizes(g, xi);
+  check_tisserand_sizes(g, xi);
   const Eigen::Index n_f = g.cols();
   Eigen::Matrix<double, 9, Eigen::Dynamic> rows = Eigen::Matrix<double, 9, Eigen::Dynamic>::Zero(9, 9 + 3 * n_f);
   for (int k = 0; k < kOrthogonalityRows; ++k) {  // λ_k a_i·a_j

@@ -34,10 +34,10 @@ std::optional<OptionProblem> check_options(const GeneralizedAlphaOptions& o) {
   if (!(o.rho_infinity >= 0.0 && o.rho_infinity <= 1.0))
     return problem("rho_inf", "must lie in [0, 1]", o.rho_infinity);
   if (!(o.step > 0.0) || !std::isfinite(o.step))
-    return problem(
-        "step",
-        automatic ? "(the first step) must be a positive time in seconds" : "must be a positive time in seconds",
-        o.step);
+    return problem("step",
+                   automatic ? "must be a positive time in seconds (the first step of error control)"
+                             : "must be a positive time in seconds",
+                   o.step);
   if (!(o.error_tolerance >= 0.0) || !std::isfinite(o.error_tolerance))
     return problem("error_tolerance", "must be >= 0 [m] (0: fixed steps)", o.error_tolerance);
   if (!(o.max_step >= 0.0) || std::isnan(o.max_step))
@@ -47,7 +47,7 @@ std::optional<OptionProblem> check_options(const GeneralizedAlphaOptions& o) {
                                          (automatic ? "initial " : "") + "step " + shortest(o.step) + " s"};
   }
   if (!(o.min_step >= 0.0) || !std::isfinite(o.min_step))
-    return problem("min_step", "must be a positive time in seconds (0: the step / 64)", o.min_step);
+    return problem("min_step", "must be a positive time in seconds, or 0 for the step / 64", o.min_step);
   if (o.min_step > o.step) {
     return OptionProblem{"min_step", "min_step " + shortest(o.min_step) + " s is larger than the " +
                                          (automatic ? "initial " : "") + "step " + shortest(o.step) +

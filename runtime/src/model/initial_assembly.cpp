@@ -355,8 +355,8 @@ InitialAssemblyReport initial_assembly(System& system, const InitialAssemblyOpti
     for (Eigen::Index f = 0; f < model.field_count(); ++f)
       q.segment<3>(o + 12 + 3 * f) = turn * q0.segment<3>(o + 12 + 3 * f);
   }
-  for (int b = 0; b < n_b;
-       ++b) {  // the largest displacement of a point: |Δτ| + |ΔA| times the body's radius, plus its deformation's
+  // Per body, the largest displacement of a point: |Δτ| + |ΔA| times the body's radius, plus its deformation's.
+  for (int b = 0; b < n_b; ++b) {
     const BodyModel& model = system.model(b);
     const Eigen::Index o = system.offset(b);
     const auto i = static_cast<std::size_t>(b);

@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
   try {
     // 1. The body: the file's first MODES modes (all by default), placed where its CAD puts it (its input frame at
     //    the origin).
-    fr::BodySpec spec;  // the body file's keys of a scene file's body (body_spec.hpp)
+    fr::SceneBody spec;  // the body file's keys of a scene file's body (scene_body.hpp)
     spec.file = argv[1];
     if (argc > 4) spec.modes = std::stoi(argv[4]);
     fr::System system;

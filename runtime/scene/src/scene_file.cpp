@@ -67,7 +67,7 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
     const YAML::Node b = it->second;
     r.expect_map(b, where, {"file", "modes", "formulation", "frame", "position", "rotation", "velocity", "angular_velocity",
                             "damping", "geometric_stiffness"});
-    runtime::BodySpec spec;
+    runtime::SceneBody spec;
     const std::string path_text = r.text(r.required(b, "file", where), where + " file");
     spec.file = std::filesystem::path(path_text).is_absolute() ? std::filesystem::path(path_text) : base / path_text;
     spec.stresses = stresses_used.count(name) > 0;
@@ -110,7 +110,7 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
       if (text != "gcms" && text != "ffrf")
         r.fail(f, fmt::format("{} formulation '{}' is unknown; use gcms (the improved GCMS, the default for elastic "
                               "bodies) or ffrf (the floating frame of reference formulation with the same modes)", where, text));
-      spec.formulation = text == "ffrf" ? runtime::BodySpec::Formulation::ffrf : runtime::BodySpec::Formulation::gcms;
+      spec.formulation = text == "ffrf" ? runtime::SceneBody::Formulation::ffrf : runtime::SceneBody::Formulation::gcms;
     }
     if (const YAML::Node frame = b["frame"]) {
       if (frame.IsMap()) {
@@ -119,7 +119,7 @@ Scene read_scene(const YAML::Node& root, const std::string& source, const std::f
         spec.frame_interface = r.text(r.required(frame, "interface", where + " frame"), where + " frame interface");
       } else if (const std::string text = r.text(frame, where + " frame"); text == "mean-axis") {
         spec.frame = runtime::FloatingFrame::mean_axis;
-      } else if (spec.formulation == runtime::BodySpec::Formulation::ffrf) {
+      } else if (spec.formulation == runtime::SceneBody::Formulation::ffrf) {
         r.fail(frame, fmt::format("{} frame '{}' is unknown; use mean-axis or {{interface: NAME}}", where, text));
       } else {
         spec.frame = runtime::FloatingFrame::mean_axis;  // refused below: a frame belongs to formulation ffrf

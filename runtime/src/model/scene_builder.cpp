@@ -45,7 +45,7 @@ int SceneBuilder::add_body(const std::string& name, BodyModel model, const Place
   return index;
 }
 
-int SceneBuilder::add_body(const std::string& name, const BodySpec& spec, const Placement& placement) {
+int SceneBuilder::add_body(const std::string& name, const SceneBody& spec, const Placement& placement) {
   if (index_.count(name)) throw std::invalid_argument("body '" + name + "' is defined twice");
   // Each file is read (and its seal checked) once: a chain of 1024 copies of one part would otherwise spend 60 ms
   // per copy of the bracket on its SHA-256.

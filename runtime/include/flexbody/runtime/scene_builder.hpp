@@ -7,7 +7,7 @@
 // \code
 //   flexbody::runtime::System system;
 //   flexbody::runtime::SceneBuilder scene(system);
-//   flexbody::runtime::BodySpec arm;
+//   flexbody::runtime::SceneBody arm;
 //   arm.file = "bracket.fbh5";
 //   arm.modes = 6;
 //   scene.add_body("arm", arm);   // its input frame where the global one is
@@ -15,9 +15,9 @@
 //                   Eigen::Vector3d::UnitZ());   // to ground, where bore_1 is now
 // \endcode
 
-#include "flexbody/runtime/body_spec.hpp"
 #include "flexbody/runtime/joint.hpp"
 #include "flexbody/runtime/marker.hpp"
+#include "flexbody/runtime/scene_body.hpp"
 #include "flexbody/runtime/system.hpp"
 
 #include <Eigen/Core>
@@ -70,10 +70,10 @@ class SceneBuilder {
   /// Returns its index in the System. Throws std::invalid_argument for a name already used.
   int add_body(const std::string& name, BodyModel model, const Placement& placement = {},
                const Eigen::Vector3d& input_center_of_mass = Eigen::Vector3d::Zero());
-  /// Adds body `name` as `spec` says (body_spec.hpp), from its body file: each file is read and its seal checked
+  /// Adds body `name` as `spec` says (scene_body.hpp), from its body file: each file is read and its seal checked
   /// once per builder, however many bodies share it. Throws SceneError (key "file" for a file that cannot be read,
   /// and as make_body_model(name, spec, data) does), std::invalid_argument for a name already used.
-  int add_body(const std::string& name, const BodySpec& spec, const Placement& placement = {});
+  int add_body(const std::string& name, const SceneBody& spec, const Placement& placement = {});
   /// The index of body `name`; throws std::invalid_argument "no body 'name' in the scene".
   [[nodiscard]] int body(const std::string& name) const;
 

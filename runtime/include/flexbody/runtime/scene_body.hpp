@@ -1,7 +1,7 @@
 #pragma once
-// flexbody/runtime/body_spec.hpp: how a scene takes a body from a body file, with the names of fbsim's scene keys
+// flexbody/runtime/scene_body.hpp: how a scene takes a body from a body file, with the names of fbsim's scene keys
 // (docs/scenes.md): which modes (all, the first k, rigid, or the unreduced mesh), the formulation (improved GCMS or
-// FFRF) and its frame, damping and the geometric stiffness. SceneBuilder::add_body(name, BodySpec) reads the file
+// FFRF) and its frame, damping and the geometric stiffness. SceneBuilder::add_body(name, SceneBody) reads the file
 // and makes the model; its refusals are SceneErrors that name the key at fault, so that a scene file can point at
 // its line.
 
@@ -27,7 +27,7 @@ struct BodyDamping {
   std::optional<double> beta;                   ///< β [s]; none: 0
 };
 
-struct BodySpec {
+struct SceneBody {
   std::filesystem::path file;  ///< the body file (*.fbh5)
   /// modes: none = all the file holds, 0 = rigid, k = the first k.
   std::optional<Eigen::Index> modes;
@@ -64,6 +64,6 @@ class SceneError : public std::invalid_argument {
 
 /// The model of body `name` that `spec` asks for, from `data` (read from spec.file). Throws SceneError: the body
 /// model's own message for a count of modes the file does not hold (key "modes"), else one naming "body 'name'".
-[[nodiscard]] BodyModel make_body_model(const std::string& name, const BodySpec& spec, const format::BodyData& data);
+[[nodiscard]] BodyModel make_body_model(const std::string& name, const SceneBody& spec, const format::BodyData& data);
 
 }  // namespace flexbody::runtime

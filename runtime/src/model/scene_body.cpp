@@ -1,4 +1,4 @@
-#include "flexbody/runtime/body_spec.hpp"
+#include "flexbody/runtime/scene_body.hpp"
 
 #include "flexbody/runtime/damping.hpp"
 #include "flexbody/runtime/full_order.hpp"
@@ -18,7 +18,8 @@ bool stiffness_proportional(const BodyDamping& d) {
 
 void add_damping(BodyModel& model, const BodyDamping& d, const std::string& where) {
   std::optional<Eigen::VectorXd> ratios = d.modal_ratios;
-  if (d.modal && d.modal_ratios) refuse("damping", where + " damping: give modal (every mode's ratio) or modal_ratios, not both");
+  if (d.modal && d.modal_ratios)
+    refuse("damping", where + " damping: give modal (every mode's ratio) or modal_ratios, not both");
   if (ratios && ratios->size() != model.modes)
     refuse("damping", where + " damping modal lists " + std::to_string(ratios->size()) + " ratios for " +
                           std::to_string(model.modes) + " modes");
@@ -33,7 +34,7 @@ void add_damping(BodyModel& model, const BodyDamping& d, const std::string& wher
 
 }  // namespace
 
-BodyModel make_body_model(const std::string& name, const BodySpec& spec, const format::BodyData& data) {
+BodyModel make_body_model(const std::string& name, const SceneBody& spec, const format::BodyData& data) {
   const std::string where = "body '" + name + "'";
   const std::string file = spec.file.filename().string();
   if (spec.full && spec.modes)
@@ -46,10 +47,12 @@ BodyModel make_body_model(const std::string& name, const BodySpec& spec, const f
   }
   if (!spec.stresses) model.recovery.clear();
   if (spec.geometric_stiffness) {
-    if (!*spec.geometric_stiffness) model.prestress.reset();
+    if (!*spec.geometric_stiffness)
+      model.prestress.reset();
     else if (spec.full)
-      refuse("geometric_stiffness", where + " geometric_stiffness: the body file stores it projected on the modes, so "
-                                            "modes: full (the unreduced model) has none");
+      refuse("geometric_stiffness", where +
+                                        " geometric_stiffness: the body file stores it projected on the modes, so "
+                                        "modes: full (the unreduced model) has none");
     else if (model.rigid())
       refuse("geometric_stiffness", where + " geometric_stiffness: a rigid body has no deformation to stiffen");
     else if (!model.prestress)
@@ -57,14 +60,16 @@ BodyModel make_body_model(const std::string& name, const BodySpec& spec, const f
                                         " holds none (fbprep --geometric-stiffness, or geometric_stiffness: true in "
                                         "its body spec, writes it)");
   }
-  const bool ffrf = spec.formulation == BodySpec::Formulation::ffrf;
+  const bool ffrf = spec.formulation == SceneBody::Formulation::ffrf;
   if (spec.full && ffrf)
-    refuse("formulation", where + ": formulation ffrf moves modes in a floating frame; modes: full is the unreduced "
-                                  "improved ACF (use a number of modes, or formulation gcms)");
+    refuse("formulation", where +
+                              ": formulation ffrf moves modes in a floating frame; modes: full is the unreduced "
+                              "improved ACF (use a number of modes, or formulation gcms)");
   if (spec.full && spec.damping) {
     if (!stiffness_proportional(*spec.damping))
-      refuse("damping", where + " damping: modes: full takes stiffness-proportional damping only, {rayleigh: {beta: β}} "
-                                "(β in s), which keeps its Newton matrix sparse");
+      refuse("damping", where +
+                            " damping: modes: full takes stiffness-proportional damping only, {rayleigh: {beta: β}} "
+                            "(β in s), which keeps its Newton matrix sparse");
     try {
       model = damp_full_order(std::move(model), *spec.damping->beta);
     } catch (const std::invalid_argument& e) {
@@ -74,8 +79,10 @@ BodyModel make_body_model(const std::string& name, const BodySpec& spec, const f
     add_damping(model, *spec.damping, where);
   }
   if (spec.frame && !ffrf)
-    refuse("frame", where + ": frame belongs to formulation ffrf (the improved GCMS's frame is always the mean-axis one)");
-  const bool floating = ffrf || (spec.modes && *spec.modes == 0 && spec.formulation == BodySpec::Formulation::automatic);
+    refuse("frame",
+           where + ": frame belongs to formulation ffrf (the improved GCMS's frame is always the mean-axis one)");
+  const bool floating =
+      ffrf || (spec.modes && *spec.modes == 0 && spec.formulation == SceneBody::Formulation::automatic);
   if (floating) {
     const FloatingFrame kind = spec.frame.value_or(FloatingFrame::mean_axis);
     try {

@@ -1,4 +1,4 @@
-// A body from its body file by a BodySpec (issue 31: fbsim's body keys for scenes in code): the builder's model is the
+// A body from its body file by a SceneBody (issue 31: fbsim's body keys for scenes in code): the builder's model is the
 // one the lower-level calls make, each file is read once, and every refusal names its key.
 #include "flexbody/format/body_file.hpp"
 #include "flexbody/runtime/damping.hpp"
@@ -9,8 +9,8 @@
 
 #include <filesystem>
 #include <optional>
-#include <utility>
 #include <string>
+#include <utility>
 
 namespace fr = flexbody::runtime;
 
@@ -30,19 +30,19 @@ const std::filesystem::path& bar_file() {
 
 // A spec of the bar's file with `modes` (none: all), changed by `edit`.
 template <class Edit>
-fr::BodySpec spec_of(std::optional<Eigen::Index> modes, Edit edit) {
-  fr::BodySpec spec;
+fr::SceneBody spec_of(std::optional<Eigen::Index> modes, Edit edit) {
+  fr::SceneBody spec;
   spec.file = bar_file();
   spec.modes = modes;
   edit(spec);
   return spec;
 }
-fr::BodySpec spec_of(std::optional<Eigen::Index> modes) {
-  return spec_of(modes, [](fr::BodySpec&) {});
+fr::SceneBody spec_of(std::optional<Eigen::Index> modes) {
+  return spec_of(modes, [](fr::SceneBody&) {});
 }
 
 // The key of the SceneError that adding `spec` throws, and its message.
-std::pair<std::string, std::string> refusal(const fr::BodySpec& spec) {
+std::pair<std::string, std::string> refusal(const fr::SceneBody& spec) {
   fr::System system;
   fr::SceneBuilder scene(system);
   try {
@@ -55,18 +55,19 @@ std::pair<std::string, std::string> refusal(const fr::BodySpec& spec) {
 
 }  // namespace
 
-TEST(SceneBodySpec, MakesTheModelTheLowerLevelCallsMake) {
+TEST(SceneBody, MakesTheModelTheLowerLevelCallsMake) {
   const flexbody::format::BodyData data = flexbody::format::read_body_file(bar_file());
   fr::System system;
   fr::SceneBuilder scene(system);
-  fr::BodySpec spec = spec_of(4);
+  fr::SceneBody spec = spec_of(4);
   spec.damping.emplace().modal = 0.02;
   spec.damping->beta = 1e-5;
   fr::Placement placement;
   placement.position = Eigen::Vector3d(1.0, 2.0, 3.0);
   const int b = scene.add_body("bar", spec, placement);
   fr::BodyModel by_hand = fr::make_body_model(data, 4, "soft_bar.fbh5");
-  by_hand.damping = fr::rayleigh_damping(by_hand, 0.0, 1e-5) + fr::modal_damping(by_hand, Eigen::VectorXd::Constant(4, 0.02));
+  by_hand.damping =
+      fr::rayleigh_damping(by_hand, 0.0, 1e-5) + fr::modal_damping(by_hand, Eigen::VectorXd::Constant(4, 0.02));
   const fr::BodyModel& built = system.model(b);
   EXPECT_EQ(built.modes, 4);
   EXPECT_FALSE(built.floating());
@@ -80,57 +81,68 @@ TEST(SceneBodySpec, MakesTheModelTheLowerLevelCallsMake) {
   const int rigid = scene.add_body("rigid", spec_of(0));
   EXPECT_TRUE(system.model(rigid).floating());
   EXPECT_EQ(system.model(rigid).modes, 0);
-  const int gcms = scene.add_body("rigid_gcms", spec_of(0, [](fr::BodySpec& s) {
-    s.formulation = fr::BodySpec::Formulation::gcms;
-  }));
+  const int gcms = scene.add_body(
+      "rigid_gcms", spec_of(0, [](fr::SceneBody& s) { s.formulation = fr::SceneBody::Formulation::gcms; }));
   EXPECT_FALSE(system.model(gcms).floating());
-  const int ffrf = scene.add_body("ffrf", spec_of(3, [](fr::BodySpec& s) {
-    s.formulation = fr::BodySpec::Formulation::ffrf;
-  }));
+  const int ffrf =
+      scene.add_body("ffrf", spec_of(3, [](fr::SceneBody& s) { s.formulation = fr::SceneBody::Formulation::ffrf; }));
   EXPECT_TRUE(system.model(ffrf).floating());
   EXPECT_EQ(system.model(ffrf).modes, 3);
 }
 
-TEST(SceneBodySpec, EachFileIsReadOncePerBuilder) {
+TEST(SceneBody, EachFileIsReadOncePerBuilder) {
   const std::filesystem::path copy = bar_file().parent_path() / "read_once.fbh5";
   std::filesystem::copy_file(bar_file(), copy, std::filesystem::copy_options::overwrite_existing);
   fr::System system;
   fr::SceneBuilder scene(system);
-  scene.add_body("first", spec_of(std::nullopt, [&](fr::BodySpec& s) { s.file = copy; }));
+  scene.add_body("first", spec_of(std::nullopt, [&](fr::SceneBody& s) { s.file = copy; }));
   std::filesystem::remove(copy);  // the second body of the same file comes from the builder's copy
-  EXPECT_NO_THROW(scene.add_body("second", spec_of(std::nullopt, [&](fr::BodySpec& s) { s.file = copy; })));
+  EXPECT_NO_THROW(scene.add_body("second", spec_of(std::nullopt, [&](fr::SceneBody& s) { s.file = copy; })));
   EXPECT_EQ(system.model(1).modes, 10);
   fr::System other;
   fr::SceneBuilder fresh(other);
-  EXPECT_THROW(fresh.add_body("first", spec_of(std::nullopt, [&](fr::BodySpec& s) { s.file = copy; })), fr::SceneError);
+  EXPECT_THROW(fresh.add_body("first", spec_of(std::nullopt, [&](fr::SceneBody& s) { s.file = copy; })),
+               fr::SceneError);
 }
 
-TEST(SceneBodySpec, EveryRefusalNamesItsKey) {
-  using F = fr::BodySpec::Formulation;
-  EXPECT_EQ(refusal(spec_of(std::nullopt, [](fr::BodySpec& s) { s.file = s.file.parent_path() / "none.fbh5"; })).first, "file");
+TEST(SceneBody, EveryRefusalNamesItsKey) {
+  using F = fr::SceneBody::Formulation;
+  EXPECT_EQ(refusal(spec_of(std::nullopt, [](fr::SceneBody& s) { s.file = s.file.parent_path() / "none.fbh5"; })).first,
+            "file");
   EXPECT_EQ(refusal(spec_of(11)).first, "modes");  // the file holds 10
-  EXPECT_EQ(refusal(spec_of(3, [](fr::BodySpec& s) { s.full = true; })).first, "modes");
-  EXPECT_EQ(refusal(spec_of(std::nullopt, [](fr::BodySpec& s) {
-              s.full = true;
-              s.formulation = F::ffrf;
-            })).first, "formulation");
-  EXPECT_EQ(refusal(spec_of(std::nullopt, [](fr::BodySpec& s) { s.frame = fr::FloatingFrame::mean_axis; })).first, "frame");
-  const auto hub = refusal(spec_of(std::nullopt, [](fr::BodySpec& s) {
+  EXPECT_EQ(refusal(spec_of(3, [](fr::SceneBody& s) { s.full = true; })).first, "modes");
+  EXPECT_EQ(refusal(spec_of(std::nullopt,
+                            [](fr::SceneBody& s) {
+                              s.full = true;
+                              s.formulation = F::ffrf;
+                            }))
+                .first,
+            "formulation");
+  EXPECT_EQ(refusal(spec_of(std::nullopt, [](fr::SceneBody& s) { s.frame = fr::FloatingFrame::mean_axis; })).first,
+            "frame");
+  const auto hub = refusal(spec_of(std::nullopt, [](fr::SceneBody& s) {
     s.formulation = F::ffrf;
     s.frame = fr::FloatingFrame::interface;
     s.frame_interface = "hub";
   }));
   EXPECT_EQ(hub.first, "frame");
   EXPECT_NE(hub.second.find("body 'bar' frame: soft_bar.fbh5: no interface 'hub'"), std::string::npos) << hub.second;
-  const auto ratios = refusal(spec_of(4, [](fr::BodySpec& s) { s.damping.emplace().modal_ratios = Eigen::VectorXd::Zero(3); }));
-  EXPECT_EQ(ratios, std::make_pair(std::string("damping"), std::string("body 'bar' damping modal lists 3 ratios for 4 modes")));
-  EXPECT_EQ(refusal(spec_of(std::nullopt, [](fr::BodySpec& s) { s.damping.emplace().modal = 1.5; })).first, "damping");  // ζ > 1
-  EXPECT_EQ(refusal(spec_of(std::nullopt, [](fr::BodySpec& s) {
-              s.full = true;
-              s.damping.emplace().modal = 0.01;
-            })).first, "damping");
-  EXPECT_EQ(refusal(spec_of(std::nullopt, [](fr::BodySpec& s) { s.geometric_stiffness = true; })).first,
+  const auto ratios =
+      refusal(spec_of(4, [](fr::SceneBody& s) { s.damping.emplace().modal_ratios = Eigen::VectorXd::Zero(3); }));
+  EXPECT_EQ(ratios,
+            std::make_pair(std::string("damping"), std::string("body 'bar' damping modal lists 3 ratios for 4 modes")));
+  EXPECT_EQ(refusal(spec_of(std::nullopt, [](fr::SceneBody& s) { s.damping.emplace().modal = 1.5; })).first,
+            "damping");  // ζ > 1
+  EXPECT_EQ(refusal(spec_of(std::nullopt,
+                            [](fr::SceneBody& s) {
+                              s.full = true;
+                              s.damping.emplace().modal = 0.01;
+                            }))
+                .first,
+            "damping");
+  EXPECT_EQ(refusal(spec_of(std::nullopt, [](fr::SceneBody& s) { s.geometric_stiffness = true; })).first,
             "geometric_stiffness");  // the file holds none
-  EXPECT_EQ(refusal(spec_of(0, [](fr::BodySpec& s) { s.geometric_stiffness = true; })).first, "geometric_stiffness");
-  EXPECT_EQ(refusal(spec_of(4, [](fr::BodySpec& s) { s.geometric_stiffness = false; })).first, "");  // off: always allowed
+  EXPECT_EQ(refusal(spec_of(0, [](fr::SceneBody& s) { s.geometric_stiffness = true; })).first, "geometric_stiffness");
+  EXPECT_EQ(refusal(spec_of(4, [](fr::SceneBody& s) { s.geometric_stiffness = false; })).first,
+            "");  // off: always allowed
 }

@@ -28,7 +28,6 @@ constexpr std::string_view kLengthKey = "hdf5_bytes ";
 constexpr std::string_view kDigestKey = "digest ";
 constexpr std::size_t kDigestHexDigits = 64;
 constexpr std::string_view kHdf5Signature{"\x89HDF\r\n\x1a\n", 8};
-constexpr std::size_t kChunkBytes = std::size_t{1} << 20;
 
 using Block = std::array<char, kSealBytes>;
 
@@ -75,35 +74,6 @@ std::optional<Recorded> parse_block(const Block& block) {
   // in the padding.
   if (seal_block(recorded.hdf5_bytes, recorded.hex) != block) return std::nullopt;
   return recorded;
-}
-
-/// Reads up to `size` bytes at `offset`, retrying interrupted and short reads; fewer only at the end.
-/// Returns -1 on a read error (errno set).
-long long read_at(int fd, char* data, std::size_t size, std::uint64_t offset) {
-  std::size_t done = 0;
-  while (done < size) {
-    const ssize_t n = ::pread(fd, data + done, size - done, static_cast<off_t>(offset + done));
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) return -1;
-    if (n == 0) break;
-    done += static_cast<std::size_t>(n);
-  }
-  return static_cast<long long>(done);
-}
-
-/// SHA-256 of the bytes from `offset` to the end, and their count; nullopt on a read error (errno set).
-std::optional<std::pair<std::string, std::uint64_t>> digest_from(int fd, std::uint64_t offset) {
-  Sha256 hash;
-  std::vector<char> chunk(kChunkBytes);
-  std::uint64_t total = 0;
-  for (;;) {
-    const long long n = read_at(fd, chunk.data(), chunk.size(), offset + total);
-    if (n < 0) return std::nullopt;
-    hash.update({reinterpret_cast<const std::uint8_t*>(chunk.data()), static_cast<std::size_t>(n)});
-    total += static_cast<std::uint64_t>(n);
-    if (static_cast<std::size_t>(n) < chunk.size()) break;
-  }
-  return std::pair{to_hex(hash.finish()), total};
 }
 
 std::uint64_t file_size(int fd) {

@@ -40,8 +40,7 @@ std::optional<OptionProblem> check_options(const GeneralizedAlphaOptions& o) {
                    o.step);
   if (!(o.error_tolerance >= 0.0) || !std::isfinite(o.error_tolerance))
     return problem("error_tolerance", "must be >= 0 [m] (0: fixed steps)", o.error_tolerance);
-  if (!(o.max_step >= 0.0) || std::isnan(o.max_step))
-    return problem("max_step", "must be >= 0 [s] (0: no limit)", o.max_step);
+  if (!(o.max_step >= 0.0)) return problem("max_step", "must be >= 0 [s] (0: no limit)", o.max_step);
   if (o.max_step > 0.0 && o.max_step < o.step) {
     return OptionProblem{"max_step", "max_step " + shortest(o.max_step) + " s is smaller than the " +
                                          (automatic ? "initial " : "") + "step " + shortest(o.step) + " s"};

@@ -96,12 +96,22 @@ bool ConstraintProjection::factor(const Eigen::SparseMatrix<double>& jacobian, c
 }
 
 void ConstraintProjection::solve_in_place(Eigen::VectorXd& x) {
-  if (sparse_) {
-    work_ = x;
-    x = factor_.solve(work_);
-  }
-  else
+  if (!sparse_) {
     dense_.solveInPlace(x);
+    return;
+  }
+  // SimplicialLLT::solve's own steps (P, L, Lᵀ, P⁻¹), with the permutations out of place: its last one, in place,
+  // builds a heap mask at every solve.
+  if (factor_.permutationP().size() > 0)
+    work_.noalias() = factor_.permutationP() * x;
+  else
+    work_ = x;
+  factor_.matrixL().solveInPlace(work_);
+  factor_.matrixU().solveInPlace(work_);
+  if (factor_.permutationPinv().size() > 0)
+    x.noalias() = factor_.permutationPinv() * work_;
+  else
+    x = work_;
 }
 
 }  // namespace flexbody::runtime::detail

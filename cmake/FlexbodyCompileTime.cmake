@@ -11,14 +11,13 @@
 # overloads of one name, which would serve each other's calls (so helpers get distinct names). Turn it off
 # while editing one file often: a batch recompiles as a whole.
 #
-# Off by default for now. With the batches, Allocations.NewtonIterationsAllocateNothing
-# (tests/runtime/allocation_test.cpp) failed: 307 allocations in 88 steps of the stabilised index-2 form, in
-# ConstraintProjection::solve_in_place. The allocation is there in every build: Eigen's SimplicialLLT::solve ends with
-# an in-place permutation that builds a heap mask per solve; compiled one source at a time, GCC turns the mask's
-# malloc and memset into calloc, which the test's hook does not count, and in a batch it does not. Once the solve
-# permutes out of place and the test counts calloc, the batches can be the default again.
+# A batch inlines differently from a source compiled alone, so it can expose what a single source hides: a heap
+# allocation in Eigen's SimplicialLLT::solve (an in-place permutation's mask) showed up only in batches, because
+# compiled alone GCC fused its malloc and memset into a calloc that tests/runtime/allocation_test.cpp did not count.
+# The projection now permutes out of place and the test counts calloc; run the tests with the batches on and off
+# after touching the Newton iteration.
 option(FLEXBODY_UNITY_BUILD "Compile the libraries, fbprep and fbsim in batches of 4 sources (faster from scratch)"
-       OFF)
+       ON)
 
 function(flexbody_compile_in_batches)
   if(FLEXBODY_UNITY_BUILD)

@@ -1,6 +1,6 @@
 // GeneralizedAlpha: the consistent initial state, each coordinate's length scale, and the Newton solver; a step is
 // in generalized_alpha_step.cpp, its Newton iteration in generalized_alpha_newton.cpp.
-#include "flexbody/runtime/generalized_alpha.hpp"
+#include "generalized_alpha_impl.hpp"
 
 #include "constraint_projection.hpp"
 #include "field_predictor.hpp"
@@ -88,7 +88,7 @@ void append_scales(const BodyModel& model, Eigen::VectorXd& scales, Eigen::Index
 
 }  // namespace
 
-GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaOptions& options, double t0)
+GeneralizedAlpha::Impl::Impl(const System& system, const GeneralizedAlphaOptions& options, double t0)
     : system_(system), options_(options), t0_(t0), t_(t0), coupling_(std::make_unique<detail::StabilizedCoupling>()) {
   if (const std::optional<OptionProblem> problem = check_options(options))
     throw std::invalid_argument("generalized-alpha: " + problem->message);
@@ -311,7 +311,7 @@ GeneralizedAlpha::GeneralizedAlpha(const System& system, const GeneralizedAlphaO
   build_solver(options.step);
 }
 
-void GeneralizedAlpha::build_solver(double h) {
+void GeneralizedAlpha::Impl::build_solver(double h) {
   const double beta_prime = (1.0 - alpha_m_) / (beta_ * h * h * (1.0 - alpha_f_));
   const double gamma_prime = gamma_ / (beta_ * h);
   sparse_core_ = nullptr;
@@ -329,9 +329,9 @@ void GeneralizedAlpha::build_solver(double h) {
   refresh_ = true;
 }
 
-void GeneralizedAlpha::build_sparse_coupling(double t1, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
-                                             const Eigen::VectorXd& qdd, const Eigen::VectorXd& mu, double h,
-                                             double gamma_prime) {
+void GeneralizedAlpha::Impl::build_sparse_coupling(double t1, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                                   const Eigen::VectorXd& qdd, const Eigen::VectorXd& mu, double h,
+                                                   double gamma_prime) {
   const Eigen::SparseMatrix<double> rate = detail::constraint_rate(system_, t1, q, v, scales_, h, gamma_prime);  // Z/γ'
   // P = W Φ_q(q_f)ᵀ: the direction of ν's correction (position_correction), with q_f this iterate
   const Eigen::SparseMatrix<double, Eigen::RowMajor> direction = squared_scales_.asDiagonal() * work_.jacobian.transpose();
@@ -339,6 +339,6 @@ void GeneralizedAlpha::build_sparse_coupling(double t1, const Eigen::VectorXd& q
   sparse_core_->factor_coupled(t1, q, v, qdd, mu, work_.jacobian, rate, direction, projected);
 }
 
-GeneralizedAlpha::~GeneralizedAlpha() = default;
+GeneralizedAlpha::Impl::~Impl() = default;
 
 }  // namespace flexbody::runtime

@@ -2,7 +2,7 @@
 // the state, what the next steps depend on is the modified Newton matrix kept from an earlier iterate: restore()
 // rebuilds it there, from the inputs build_newton_matrix recorded, with the sparse factorization's pivot history as
 // it was before that build (ReducedSolver::restore_history).
-#include "flexbody/runtime/generalized_alpha.hpp"
+#include "generalized_alpha_impl.hpp"
 
 #include "local_error.hpp"
 #include "newton_solvers.hpp"
@@ -45,7 +45,7 @@ enum Time { kTime, kStart, kSolverStep, kBuildTime, kBuildStep, kStep, kRho, kTi
 
 }  // namespace
 
-void GeneralizedAlpha::save(format::CheckpointData& out) const {
+void GeneralizedAlpha::Impl::save(format::CheckpointData& out) const {
   Entries& e = out.numbers;
   std::vector<double> counts(kCountSize), times(kTimeSize);
   counts[kSteps] = static_cast<double>(steps_);
@@ -108,7 +108,7 @@ void GeneralizedAlpha::save(format::CheckpointData& out) const {
   out.texts["integrator.warnings"] = warnings;
 }
 
-void GeneralizedAlpha::restore(const format::CheckpointData& in) {
+void GeneralizedAlpha::Impl::restore(const format::CheckpointData& in) {
   const Entries& e = in.numbers;
   const std::vector<double>& counts = entry(e, "integrator.counts", kCountSize);
   const std::vector<double>& times = entry(e, "integrator.times", kTimeSize);

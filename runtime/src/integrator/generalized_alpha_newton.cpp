@@ -1,7 +1,7 @@
 // GeneralizedAlpha: the Newton iteration of a step (Arnold and Brüls' generalized-α on the equations of motion,
 // Eq. (40), and the constraint rows): the Newton matrix, the corrections of the index-3 or the stabilised index-2
 // form, and the stopping test.
-#include "flexbody/runtime/generalized_alpha.hpp"
+#include "generalized_alpha_impl.hpp"
 
 #include "constraint_projection.hpp"
 #include "finite.hpp"
@@ -38,14 +38,15 @@ constexpr double kStagnationFloors = 1000.0;
 // The converged step then moves along q_f's normal rather than q_n's: bench/convergence_bench's errors changed
 // by -0.3 to +1.1 % (rigid pendulum, heavy top, flexible pendulum, 4e-4 to 1e-5 s), the orders not at all.
 // `work_.shift` is the whole W Φ_q(q_f)ᵀ ν in q; a new Newton matrix moves it to the new Jacobian's direction.
-void GeneralizedAlpha::position_correction(const Eigen::VectorXd& nu, Eigen::VectorXd& out) const {
+void GeneralizedAlpha::Impl::position_correction(const Eigen::VectorXd& nu, Eigen::VectorXd& out) const {
   out.noalias() = work_.jacobian.transpose() * nu;
   out.array() *= squared_scales_.array();
 }
 
 // Why the first attempt that diverged did: the step fails with it unless a fresh matrix or the coupled step
 // (advance) gets through.
-void GeneralizedAlpha::record_divergence(double t1, const Eigen::VectorXd& phi, bool growing, std::string& failure) const {
+void GeneralizedAlpha::Impl::record_divergence(double t1, const Eigen::VectorXd& phi, bool growing,
+                                               std::string& failure) const {
   if (!failure.empty()) return;
   const Eigen::Index m = lambda_.size();
   std::ostringstream why;
@@ -60,7 +61,7 @@ void GeneralizedAlpha::record_divergence(double t1, const Eigen::VectorXd& phi, 
 }
 
 // The scaled dynamic rows at the iterate: (M q̈ − f)/β' + Φ_qᵀ μ, Eq. (40) with the multipliers' term.
-void GeneralizedAlpha::evaluate_residual(const StepFrame& f) {
+void GeneralizedAlpha::Impl::evaluate_residual(const StepFrame& f) {
   Iterate& w = work_;
   system_.dynamic_residual(f.t1, w.q, w.v, w.qdd, w.residual, false);  // a floating-frame body's in one pass
   w.residual *= 1.0 / f.beta_prime;  // a product: a division per entry costs more than the rest of this line
@@ -70,7 +71,7 @@ void GeneralizedAlpha::evaluate_residual(const StepFrame& f) {
   system_.add_prestress_residual(f.t1, w.q, w.v, w.mu, f.beta_prime, w.residual);
 }
 
-bool GeneralizedAlpha::build_newton_matrix(const StepFrame& f, bool& evaluated, std::string& failure) {
+bool GeneralizedAlpha::Impl::build_newton_matrix(const StepFrame& f, bool& evaluated, std::string& failure) {
   Iterate& w = work_;
   built_at_.valid = true;  // its inputs, for restore() (a few vector copies against a factorization)
   built_at_.t1 = f.t1;
@@ -130,7 +131,7 @@ bool GeneralizedAlpha::build_newton_matrix(const StepFrame& f, bool& evaluated, 
   return true;
 }
 
-bool GeneralizedAlpha::iterate(const StepFrame& f, double extent, bool& fresh, std::string& failure) {
+bool GeneralizedAlpha::Impl::iterate(const StepFrame& f, double extent, bool& fresh, std::string& failure) {
   const Eigen::Index n = q_.size(), m = lambda_.size();
   Iterate& w = work_;
   Eigen::VectorXd &qdd = w.qdd, &v = w.v, &q = w.q, &mu = w.mu, &dx = w.dx, &phi = w.phi;

@@ -1,6 +1,6 @@
 // GeneralizedAlpha: one step (the predictor, the retries of a step whose Newton iteration fails, the new state) and
 // the checks of the model's validity after it (the deformation and spin limits).
-#include "flexbody/runtime/generalized_alpha.hpp"
+#include "generalized_alpha_impl.hpp"
 
 #include "field_predictor.hpp"
 #include "finite.hpp"
@@ -40,7 +40,7 @@ double elastic_mass_norm_squared(const System& system, int b, const Eigen::Vecto
 
 }  // namespace
 
-void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) const {
+void GeneralizedAlpha::Impl::check_deformation(double t, const Eigen::VectorXd& q) const {
   if (!(options_.deformation_limit > 0.0)) return;
   for (int b = 0; b < system_.body_count(); ++b) {
     const BodyModel& model = system_.model(b);
@@ -71,7 +71,7 @@ void GeneralizedAlpha::check_deformation(double t, const Eigen::VectorXd& q) con
   }
 }
 
-void GeneralizedAlpha::check_spin(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
+void GeneralizedAlpha::Impl::check_spin(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
   for (int b = 0; b < system_.body_count(); ++b) {
     const BodyModel& model = system_.model(b);
     if (model.rigid() || !(model.lowest_frequency_hz > 0.0)) continue;
@@ -112,7 +112,7 @@ void GeneralizedAlpha::check_spin(double t, const Eigen::VectorXd& q, const Eige
 
 // Why a step may have failed, from the last converged state (the failed iterate says nothing reliable): the body
 // that turned most per step, and the one closest to the deformation limit.
-std::string GeneralizedAlpha::last_state_diagnosis() const {
+std::string GeneralizedAlpha::Impl::last_state_diagnosis() const {
   const double h = solver_step_;  // the step or piece that failed
   int fastest = -1, most_deformed = -1;
   double largest_turn = 0.0, largest_share = 0.0, rms_of_most = 0.0;
@@ -140,7 +140,7 @@ std::string GeneralizedAlpha::last_state_diagnosis() const {
   return out.str();
 }
 
-void GeneralizedAlpha::step() {
+void GeneralizedAlpha::Impl::step() {
   if (controller_) {
     step_toward(std::numeric_limits<double>::infinity());
     return;
@@ -152,7 +152,7 @@ void GeneralizedAlpha::step() {
 // Error control: attempts from the step's start until one is accepted (local_error.hpp, step_controller.hpp), of the
 // size the plan below chooses: the proposal or less when the steps are fitted anew, a kept size otherwise (which may
 // be larger than the proposal: up to 1 / kKeepBelow of it from one stop to the next, any between two stops).
-void GeneralizedAlpha::step_toward(double t_stop) {
+void GeneralizedAlpha::Impl::step_toward(double t_stop) {
   if (!controller_)
     throw std::logic_error("generalized-alpha: step_toward needs error control (GeneralizedAlphaOptions::error_tolerance)");
   const double remaining = t_stop - t_;
@@ -242,13 +242,13 @@ void GeneralizedAlpha::step_toward(double t_stop) {
   steps_ = 0;
 }
 
-long GeneralizedAlpha::rejected_steps() const { return controller_ ? controller_->rejected() : 0; }
-long GeneralizedAlpha::steps_above_tolerance() const { return controller_ ? controller_->above_tolerance() : 0; }
-double GeneralizedAlpha::next_step() const { return controller_ ? controller_->proposal() : options_.step; }
+long GeneralizedAlpha::Impl::rejected_steps() const { return controller_ ? controller_->rejected() : 0; }
+long GeneralizedAlpha::Impl::steps_above_tolerance() const { return controller_ ? controller_->above_tolerance() : 0; }
+double GeneralizedAlpha::Impl::next_step() const { return controller_ ? controller_->proposal() : options_.step; }
 
-IntegratorState GeneralizedAlpha::state() const { return {t_, q_, v_, qdd_, a_, lambda_, nu_}; }
+IntegratorState GeneralizedAlpha::Impl::state() const { return {t_, q_, v_, qdd_, a_, lambda_, nu_}; }
 
-void GeneralizedAlpha::set_state(const IntegratorState& s) {
+void GeneralizedAlpha::Impl::set_state(const IntegratorState& s) {
   const Eigen::Index n = q_.size(), m = lambda_.size();
   auto check = [](const char* name, const Eigen::VectorXd& x, Eigen::Index size) {
     if (x.size() != size)
@@ -274,7 +274,7 @@ void GeneralizedAlpha::set_state(const IntegratorState& s) {
   fresh_starts_ = fresh_start_backoff_ = 0;
 }
 
-void GeneralizedAlpha::step_to(double t_end) {
+void GeneralizedAlpha::Impl::step_to(double t_end) {
   if (controller_) {  // the steps the controller chooses, the last ending on t_end
     if (!(t_end > t_)) throw std::invalid_argument("generalized-alpha: step_to(" + std::to_string(t_end) + ") from t = " +
                                                    std::to_string(t_) + " s is not ahead");
@@ -299,7 +299,7 @@ void GeneralizedAlpha::step_to(double t_end) {
 // there coupled the rotation to the fields (K_aξ ∝ K̂ ξ̄, Eq. (86)) 2.4e4 times β' M where the solution's coupling is
 // 3.2 times it: Newton diverged at 4 and 8 ms. Only the start moves: the step's equations and the stopping test's
 // predictor-corrector distance (w.predicted) are unchanged.
-void GeneralizedAlpha::predict_fields(const StepFrame& f) {
+void GeneralizedAlpha::Impl::predict_fields(const StepFrame& f) {
   Iterate& w = work_;
   const double h = f.h, h2 = h * h;
   field_predictor_->apply(q_, w.q, [&](Eigen::Index first, Eigen::Index count) {
@@ -314,7 +314,7 @@ void GeneralizedAlpha::predict_fields(const StepFrame& f) {
 
 // The Newton iterate's start, the predictor q̈_{n+1} = q̈_n, through the Newmark update (a GCMS body's fields:
 // predict_fields); in the stabilised form moved by the last step's ν along the last Jacobian built.
-void GeneralizedAlpha::predict(const StepFrame& f) {
+void GeneralizedAlpha::Impl::predict(const StepFrame& f) {
   Iterate& w = work_;
   const double h = f.h;
   w.qdd = qdd_;
@@ -339,7 +339,7 @@ void GeneralizedAlpha::predict(const StepFrame& f) {
   }
 }
 
-void GeneralizedAlpha::advance(double h, double t1) {
+void GeneralizedAlpha::Impl::advance(double h, double t1) {
   step_start_.valid = false;
   if (split_ > 0) keep_step_start();
   const long iterations_before = total_iterations_;
@@ -364,7 +364,7 @@ void GeneralizedAlpha::advance(double h, double t1) {
 // ω² ≪ β', passes, one it does not is divided by about β h² ω², and an error along a constraint's normal is not
 // an error of the constrained motion. Without it, the bracket pendulum's 2 kHz vibration (6e-8 m after the sudden
 // gravity) reached the rigid motion's estimate through the pivot, and at 1e-8 m the step changed 4 times in 5 steps.
-double GeneralizedAlpha::estimate_step_error(const StepFrame& f) {
+double GeneralizedAlpha::Impl::estimate_step_error(const StepFrame& f) {
   Iterate& w = work_;
   const Eigen::Index n = q_.size(), m = lambda_.size();
   const bool two = h_before_ > 0.0;
@@ -385,7 +385,7 @@ double GeneralizedAlpha::estimate_step_error(const StepFrame& f) {
   return local_error_->measure(w.q, all_finite(w.error_dx) ? w.error_dx : w.error, *field_predictor_);
 }
 
-void GeneralizedAlpha::keep_step_start() {  // into the kept vectors: no allocation once their sizes are set
+void GeneralizedAlpha::Impl::keep_step_start() {  // into the kept vectors: no allocation once their sizes are set
   IntegratorState& s = step_start_.state;
   step_start_.valid = true;
   s.time = t_;
@@ -399,7 +399,7 @@ void GeneralizedAlpha::keep_step_start() {  // into the kept vectors: no allocat
   step_start_.h_before = h_before_;
 }
 
-void GeneralizedAlpha::restore_step_start() {
+void GeneralizedAlpha::Impl::restore_step_start() {
   if (!step_start_.valid) return;
   load(step_start_.state);
   a_before_ = step_start_.a_before;
@@ -407,7 +407,7 @@ void GeneralizedAlpha::restore_step_start() {
   step_start_.valid = false;
 }
 
-void GeneralizedAlpha::load(const IntegratorState& s) {
+void GeneralizedAlpha::Impl::load(const IntegratorState& s) {
   t_ = s.time;
   q_ = s.q;
   v_ = s.v;
@@ -417,13 +417,13 @@ void GeneralizedAlpha::load(const IntegratorState& s) {
   nu_ = s.nu;
 }
 
-double GeneralizedAlpha::min_step() const {
+double GeneralizedAlpha::Impl::min_step() const {
   return options_.min_step > 0.0 ? options_.min_step : options_.step / kDefaultSplits;
 }
 
 // From t_ to t1 = t_ + h: as 2^pieces steps, and a step that fails as two halves, recursively, while a half is at least
 // min_step; `depth` counts the halvings so far, `deepest` the most any step that was accepted needed.
-void GeneralizedAlpha::cover(double h, double t1, int pieces, int depth, int& deepest) {
+void GeneralizedAlpha::Impl::cover(double h, double t1, int pieces, int depth, int& deepest) {
   const bool can_split = 0.5 * h >= min_step() * (1.0 - kStepToSlack);
   if (pieces > 0 && can_split) {
     const double mid = t_ + 0.5 * h;
@@ -452,7 +452,7 @@ void GeneralizedAlpha::cover(double h, double t1, int pieces, int depth, int& de
   cover(t1 - t_, t1, 0, depth + 1, deepest);
 }
 
-bool GeneralizedAlpha::attempt_step(double h, double t1, std::string& failure) {
+bool GeneralizedAlpha::Impl::attempt_step(double h, double t1, std::string& failure) {
   const Eigen::Index n = q_.size(), m = lambda_.size();
   // β' and γ' of the solver's matrix are those of the step it was built for; a step size changed by more than
   // kSameStep rebuilds it (step_to, a failed step's halves, error control), a kept one is a modified Newton matrix
@@ -547,7 +547,7 @@ bool GeneralizedAlpha::attempt_step(double h, double t1, std::string& failure) {
 }
 
 // The converged iterate becomes the state, after the checks of the model's validity.
-void GeneralizedAlpha::accept(const StepFrame& f) {
+void GeneralizedAlpha::Impl::accept(const StepFrame& f) {
   Iterate& w = work_;
   check_deformation(f.t1, w.q);
   check_spin(f.t1, w.q, w.v);

@@ -1,8 +1,8 @@
-// System::sparse_constraint_jacobian: Φ_q block by block, each block over the coordinates of the bodies its rows
+// System::Impl::sparse_constraint_jacobian: Φ_q block by block, each block over the coordinates of the bodies its rows
 // touch (formulations.md, "The Method": constraints and markers), so its storage grows with the scene, not with its
 // square.
 #include "flexbody/runtime/reference_constraints.hpp"
-#include "flexbody/runtime/system.hpp"
+#include "system_impl.hpp"
 
 #include "../kernels/parallel.hpp"
 #include "../kernels/triplet_assembly.hpp"
@@ -17,7 +17,8 @@
 
 namespace flexbody::runtime {
 
-void System::sparse_constraint_jacobian(double t, const Eigen::VectorXd& q, Eigen::SparseMatrix<double>& out) const {
+void System::Impl::sparse_constraint_jacobian(double t, const Eigen::VectorXd& q,
+                                              Eigen::SparseMatrix<double>& out) const {
   std::vector<Eigen::Triplet<double>>& entries = jacobian_work_;  // kept: its storage is reused
   entries.clear();
   auto add_block = [&entries](Eigen::Index row, Eigen::Index column, const Eigen::Ref<const Eigen::MatrixXd>& block) {
@@ -107,14 +108,14 @@ std::vector<Eigen::Index> dependent_rows(const Eigen::SparseMatrix<double>& jac)
 
 }  // namespace
 
-Eigen::Index System::first_redundant_constraint(double t, const Eigen::VectorXd& q) const {
+Eigen::Index System::Impl::first_redundant_constraint(double t, const Eigen::VectorXd& q) const {
   Eigen::SparseMatrix<double> jac;
   sparse_constraint_jacobian(t, q, jac);
   const std::vector<Eigen::Index> dependent = dependent_rows(jac);
   return dependent.empty() ? -1 : dependent.front();
 }
 
-std::vector<RemovedConstraint> System::remove_redundant_constraints(double t, const Eigen::VectorXd& q) {
+std::vector<RemovedConstraint> System::Impl::remove_redundant_constraints(double t, const Eigen::VectorXd& q) {
   if (q.size() != coordinates_) throw std::invalid_argument("remove_redundant_constraints: q has the wrong size");
   Eigen::SparseMatrix<double> jac;
   sparse_constraint_jacobian(t, q, jac);

@@ -1,7 +1,7 @@
 // System: adding bodies, joints, forces and springs, and the scene's coordinates (initial_assembly.cpp closes its
 // joints; system_dynamics.cpp evaluates masses and forces, system_constraints.cpp the constraint rows,
 // system_outputs.cpp what a run reports).
-#include "flexbody/runtime/system.hpp"
+#include "system_impl.hpp"
 
 #include "../kernels/dense_product.hpp"
 #include "../kernels/rotation.hpp"
@@ -16,7 +16,7 @@ namespace flexbody::runtime {
 using detail::euler_global_velocity_matrix;
 using detail::skew;
 
-void System::check_marker(const Marker& m, const std::string& what) const {
+void System::Impl::check_marker(const Marker& m, const std::string& what) const {
   if (m.body == kGround) return;
   if (m.body < 0 || m.body >= body_count())
     throw std::invalid_argument(what + ": marker " + m.name + " is not on a body of this system");
@@ -34,7 +34,7 @@ void System::check_marker(const Marker& m, const std::string& what) const {
                                 " of body '" + bodies_[static_cast<std::size_t>(m.body)].name + "', which it is not");
 }
 
-int System::add_body(const std::string& name, BodyModel model, const BodyState& initial) {
+int System::Impl::add_body(const std::string& name, BodyModel model, const BodyState& initial) {
   for (const Body& b : bodies_)
     if (b.name == name) throw std::invalid_argument("body '" + name + "' is defined twice");
   const Eigen::Index n_xi = 3 * model.field_count();
@@ -113,7 +113,7 @@ int System::add_body(const std::string& name, BodyModel model, const BodyState& 
   return static_cast<int>(bodies_.size()) - 1;
 }
 
-void System::add_joint(Joint joint) {
+void System::Impl::add_joint(Joint joint) {
   check_marker(joint.first, "joint '" + joint.name + "'");
   check_marker(joint.second, "joint '" + joint.name + "'");
   for (const Joint& j : joints_)
@@ -124,7 +124,7 @@ void System::add_joint(Joint joint) {
   joint_work_.emplace_back();
 }
 
-void System::add_force(PointForce force) {
+void System::Impl::add_force(PointForce force) {
   if (force.marker.body < 0 || force.marker.body >= body_count())
     throw std::invalid_argument("point force at " + force.marker.name + ": not a marker on a body of this system");
   if (!force.force) throw std::invalid_argument("point force at " + force.marker.name + ": no force function");
@@ -132,7 +132,7 @@ void System::add_force(PointForce force) {
   forces_.push_back(std::move(force));
 }
 
-void System::add_torque(PointTorque torque) {
+void System::Impl::add_torque(PointTorque torque) {
   if (torque.marker.body < 0 || torque.marker.body >= body_count())
     throw std::invalid_argument("torque at " + torque.marker.name + ": not a marker on a body of this system");
   if (!torque.torque) throw std::invalid_argument("torque at " + torque.marker.name + ": no torque function");
@@ -140,7 +140,7 @@ void System::add_torque(PointTorque torque) {
   torques_.push_back(std::move(torque));
 }
 
-void System::add_spring(SpringDamper spring) {
+void System::Impl::add_spring(SpringDamper spring) {
   for (const Marker* m : {&spring.first, &spring.second})
     if (m->body < kGround || m->body >= body_count())
       throw std::invalid_argument("spring '" + spring.name + "': marker " + m->name + " is not in this system");
@@ -152,15 +152,15 @@ void System::add_spring(SpringDamper spring) {
   spring_work_.emplace_back();
 }
 
-int System::body_index(const std::string& name) const {
+int System::Impl::body_index(const std::string& name) const {
   for (std::size_t b = 0; b < bodies_.size(); ++b)
     if (bodies_[b].name == name) return static_cast<int>(b);
   throw std::invalid_argument("no body '" + name + "'");
 }
 
-Eigen::Index System::constraint_count() const { return reference_total_ + joint_total_; }
+Eigen::Index System::Impl::constraint_count() const { return reference_total_ + joint_total_; }
 
-Eigen::VectorXd System::initial_coordinates() const {
+Eigen::VectorXd System::Impl::initial_coordinates() const {
   Eigen::VectorXd q(coordinates_);
   for (int k = 0; k < body_count(); ++k) {
     const Body& b = bodies_[static_cast<std::size_t>(k)];
@@ -169,7 +169,7 @@ Eigen::VectorXd System::initial_coordinates() const {
   return q;
 }
 
-Eigen::VectorXd System::initial_body_coordinates(int body) const {
+Eigen::VectorXd System::Impl::initial_body_coordinates(int body) const {
   if (body == kGround) return {};
   if (body < 0 || body >= body_count())
     throw std::invalid_argument("initial_body_coordinates: no body " + std::to_string(body) + " in the system");
@@ -186,7 +186,7 @@ Eigen::VectorXd System::initial_body_coordinates(int body) const {
   return q;
 }
 
-void System::set_initial_coordinates(const Eigen::VectorXd& q) {
+void System::Impl::set_initial_coordinates(const Eigen::VectorXd& q) {
   if (q.size() != coordinates_) throw std::invalid_argument("set_initial_coordinates: q has the wrong size");
   for (int k = 0; k < body_count(); ++k) {  // every body checked before any is changed
     const Eigen::Matrix3d a = orientation(k, q);
@@ -205,7 +205,7 @@ void System::set_initial_coordinates(const Eigen::VectorXd& q) {
   }
 }
 
-Eigen::VectorXd System::initial_velocities() const {
+Eigen::VectorXd System::Impl::initial_velocities() const {
   Eigen::VectorXd v(coordinates_);
   for (const Body& b : bodies_) {
     v.segment<3>(b.offset) = b.initial.velocity;
@@ -222,13 +222,13 @@ Eigen::VectorXd System::initial_velocities() const {
   return v;
 }
 
-VectorRef System::body_view(const Eigen::VectorXd& q, int body) const {
+VectorRef System::Impl::body_view(const Eigen::VectorXd& q, int body) const {
   if (body == kGround) return q.head(0);
   const Body& b = bodies_.at(static_cast<std::size_t>(body));
   return q.segment(b.offset, b.model.coordinate_count());
 }
 
-Eigen::VectorXd System::body_coordinates(const Eigen::VectorXd& q, int body) const {
+Eigen::VectorXd System::Impl::body_coordinates(const Eigen::VectorXd& q, int body) const {
   if (body == kGround) return {};
   const Body& b = bodies_.at(static_cast<std::size_t>(body));
   return q.segment(b.offset, b.model.coordinate_count());

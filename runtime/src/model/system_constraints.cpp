@@ -1,6 +1,6 @@
 // System: the constraint rows (each GCMS body's reference conditions, Eqs. (77)-(78), then the joints), their
 // Jacobian products, time derivative and curvature, and the rows' names.
-#include "flexbody/runtime/system.hpp"
+#include "system_impl.hpp"
 
 #include "../kernels/parallel.hpp"
 #include "joint_rows.hpp"
@@ -12,7 +12,7 @@
 
 namespace flexbody::runtime {
 
-Eigen::Index System::reference_residuals(const Eigen::VectorXd& q, Eigen::VectorXd& phi) const {
+Eigen::Index System::Impl::reference_residuals(const Eigen::VectorXd& q, Eigen::VectorXd& phi) const {
   Eigen::Index row = 0;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
@@ -33,7 +33,8 @@ Eigen::Index System::reference_residuals(const Eigen::VectorXd& q, Eigen::Vector
   return row;
 }
 
-Eigen::Index System::reference_rates(const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& rate) const {
+Eigen::Index System::Impl::reference_rates(const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                           Eigen::VectorXd& rate) const {
   Eigen::Index row = 0;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count(), rows = std::min<Eigen::Index>(9, reference_rows(b));
@@ -55,19 +56,19 @@ Eigen::Index System::reference_rates(const Eigen::VectorXd& q, const Eigen::Vect
   return row;
 }
 
-const JointEvaluation& System::evaluated(std::size_t k, double t, const Eigen::VectorXd& q) const {
+const JointEvaluation& System::Impl::evaluated(std::size_t k, double t, const Eigen::VectorXd& q) const {
   const Joint& j = joints_[k];
   evaluate_joint(j, t, body_view(q, j.first.body), body_view(q, j.second.body), joint_work_[k]);
   return joint_work_[k];
 }
 
-Eigen::VectorXd System::constraints(double t, const Eigen::VectorXd& q) const {
+Eigen::VectorXd System::Impl::constraints(double t, const Eigen::VectorXd& q) const {
   Eigen::VectorXd phi;
   constraints(t, q, phi);
   return phi;
 }
 
-void System::constraints(double t, const Eigen::VectorXd& q, Eigen::VectorXd& phi) const {
+void System::Impl::constraints(double t, const Eigen::VectorXd& q, Eigen::VectorXd& phi) const {
   phi.resize(constraint_count());
   reference_residuals(q, phi);
   // Each joint into its own rows, without its Jacobian (joint_rows.hpp).
@@ -78,8 +79,8 @@ void System::constraints(double t, const Eigen::VectorXd& q, Eigen::VectorXd& ph
   });
 }
 
-void System::constraints_and_rates(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& phi,
-                                   Eigen::VectorXd& rate) const {
+void System::Impl::constraints_and_rates(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                         Eigen::VectorXd& phi, Eigen::VectorXd& rate) const {
   phi.resize(constraint_count());
   rate.resize(constraint_count());
   reference_residuals(q, phi);
@@ -94,21 +95,21 @@ void System::constraints_and_rates(double t, const Eigen::VectorXd& q, const Eig
   });
 }
 
-Eigen::MatrixXd System::constraint_jacobian(double t, const Eigen::VectorXd& q) const {
+Eigen::MatrixXd System::Impl::constraint_jacobian(double t, const Eigen::VectorXd& q) const {
   Eigen::SparseMatrix<double> jac;
   sparse_constraint_jacobian(t, q, jac);
   return Eigen::MatrixXd(jac);
 }
 
-Eigen::VectorXd System::constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q,
-                                                              const Eigen::VectorXd& mu) const {
+Eigen::VectorXd System::Impl::constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q,
+                                                                    const Eigen::VectorXd& mu) const {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(coordinates_);
   add_constraint_jacobian_transpose_product(t, q, mu, out);
   return out;
 }
 
-void System::add_constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& mu,
-                                                       Eigen::VectorXd& out) const {
+void System::Impl::add_constraint_jacobian_transpose_product(double t, const Eigen::VectorXd& q,
+                                                             const Eigen::VectorXd& mu, Eigen::VectorXd& out) const {
   Eigen::Index row = 0;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count(), rows = std::min<Eigen::Index>(9, reference_rows(b));
@@ -145,20 +146,21 @@ void System::add_constraint_jacobian_transpose_product(double t, const Eigen::Ve
   }
 }
 
-Eigen::VectorXd System::constraint_jacobian_product(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
+Eigen::VectorXd System::Impl::constraint_jacobian_product(double t, const Eigen::VectorXd& q,
+                                                          const Eigen::VectorXd& v) const {
   Eigen::VectorXd phi, rate;
   constraints_and_rates(t, q, v, phi, rate);
   return rate;
 }
 
-Eigen::VectorXd System::constraint_time_derivative(double t, const Eigen::VectorXd& q, double time_scale) const {
+Eigen::VectorXd System::Impl::constraint_time_derivative(double t, const Eigen::VectorXd& q, double time_scale) const {
   Eigen::VectorXd rate = Eigen::VectorXd::Zero(constraint_count());
   add_constraint_time_derivative(t, q, time_scale, rate);
   return rate;
 }
 
-void System::add_constraint_time_derivative(double t, const Eigen::VectorXd& q, double time_scale,
-                                            Eigen::VectorXd& out) const {
+void System::Impl::add_constraint_time_derivative(double t, const Eigen::VectorXd& q, double time_scale,
+                                                  Eigen::VectorXd& out) const {
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
     // The type's last row, the angle, is the only one that depends on t (never removed: remove_redundant_constraints).
@@ -168,7 +170,8 @@ void System::add_constraint_time_derivative(double t, const Eigen::VectorXd& q, 
   }
 }
 
-Eigen::MatrixXd System::constraint_hessian(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& lambda) const {
+Eigen::MatrixXd System::Impl::constraint_hessian(double t, const Eigen::VectorXd& q,
+                                                 const Eigen::VectorXd& lambda) const {
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(coordinates_, coordinates_);
   Eigen::Index row = 0;
   for (const Body& b : bodies_) {
@@ -193,9 +196,9 @@ Eigen::MatrixXd System::constraint_hessian(double t, const Eigen::VectorXd& q, c
   return h;
 }
 
-void System::add_joint_hessian(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& lambda,
-                               const std::vector<Eigen::Index>& offsets, const std::vector<Eigen::Index>& counts,
-                               Eigen::MatrixXd& out) const {
+void System::Impl::add_joint_hessian(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& lambda,
+                                     const std::vector<Eigen::Index>& offsets, const std::vector<Eigen::Index>& counts,
+                                     Eigen::MatrixXd& out) const {
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
     if (j.rows() == 0) continue;  // every row removed as redundant
@@ -235,7 +238,7 @@ void System::add_joint_hessian(double t, const Eigen::VectorXd& q, const Eigen::
   }
 }
 
-std::string System::constraint_name(Eigen::Index row) const {
+std::string System::Impl::constraint_name(Eigen::Index row) const {
   for (const Body& b : bodies_) {
     if (b.model.floating()) {
       if (row < 1) return "body '" + b.name + "': normalisation of the Euler parameters";
@@ -254,11 +257,11 @@ std::string System::constraint_name(Eigen::Index row) const {
   return "constraint " + std::to_string(row);
 }
 
-Eigen::Index System::reference_row(int body) const {
+Eigen::Index System::Impl::reference_row(int body) const {
   return body == body_count() ? reference_total_ : bodies_.at(static_cast<std::size_t>(body)).reference_row;
 }
 
-Eigen::Index System::joint_row(std::size_t joint) const {
+Eigen::Index System::Impl::joint_row(std::size_t joint) const {
   return reference_total_ + (joint == joints_.size() ? joint_total_ : joint_start_.at(joint));
 }
 

@@ -1,6 +1,6 @@
 // System: the mass matrix, the forces and their tangents, body by body (the residual of the equations of motion,
 // Eq. (40) and its FFRF and rigid counterparts, before the constraint rows of system_constraints.cpp).
-#include "flexbody/runtime/system.hpp"
+#include "system_impl.hpp"
 
 #include "../body/gcms_elastic_padded.hpp"
 #include "../kernels/outer_sum.hpp"
@@ -38,7 +38,7 @@ void add_marker_force(Eigen::Ref<Eigen::VectorXd> f_b, const Marker& m, const Ve
 
 }  // namespace
 
-Eigen::MatrixXd System::mass_matrix(const Eigen::VectorXd& q) const {
+Eigen::MatrixXd System::Impl::mass_matrix(const Eigen::VectorXd& q) const {
   Eigen::MatrixXd m = Eigen::MatrixXd::Zero(coordinates_, coordinates_);
   for (const Body& b : bodies_) {
     if (b.model.floating()) {
@@ -61,7 +61,7 @@ Eigen::MatrixXd System::mass_matrix(const Eigen::VectorXd& q) const {
   return m;
 }
 
-Eigen::SparseMatrix<double> System::sparse_mass_matrix(const Eigen::VectorXd& q) const {
+Eigen::SparseMatrix<double> System::Impl::sparse_mass_matrix(const Eigen::VectorXd& q) const {
   std::vector<Eigen::Triplet<double>> entries;
   auto add = [&entries](Eigen::Index offset, Eigen::Index r, Eigen::Index c, double value) {
     if (value != 0.0)
@@ -99,7 +99,7 @@ Eigen::SparseMatrix<double> System::sparse_mass_matrix(const Eigen::VectorXd& q)
   return m;
 }
 
-Eigen::VectorXd System::mass_product(const Eigen::VectorXd& q, const Eigen::VectorXd& x) const {
+Eigen::VectorXd System::Impl::mass_product(const Eigen::VectorXd& q, const Eigen::VectorXd& x) const {
   Eigen::VectorXd y(coordinates_);
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
@@ -110,7 +110,7 @@ Eigen::VectorXd System::mass_product(const Eigen::VectorXd& q, const Eigen::Vect
   return y;
 }
 
-Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
+Eigen::VectorXd System::Impl::forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   Eigen::VectorXd f = Eigen::VectorXd::Zero(coordinates_);
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();
@@ -126,8 +126,8 @@ Eigen::VectorXd System::forces(double t, const Eigen::VectorXd& q, const Eigen::
   return f;
 }
 
-void System::dynamic_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& qdd,
-                              Eigen::VectorXd& out, bool with_prestress) const {
+void System::Impl::dynamic_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                    const Eigen::VectorXd& qdd, Eigen::VectorXd& out, bool with_prestress) const {
   out.resize(coordinates_);
   const int count = body_count();
   // Each body writes its own slice from its own workspace (detail::kParallelFrom).
@@ -149,8 +149,8 @@ void System::dynamic_residual(double t, const Eigen::VectorXd& q, const Eigen::V
   add_applied_forces(t, q, v, -1.0, out);
 }
 
-void System::add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
-                             Eigen::Ref<Eigen::VectorXd> f_b, bool with_prestress) const {
+void System::Impl::add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                   Eigen::Ref<Eigen::VectorXd> f_b, bool with_prestress) const {
   const Eigen::Index n = b.model.coordinate_count();
   {
     for (Eigen::Index k = 0; k < n / 3; ++k) f_b.segment<3>(3 * k) += b.model.g_border(0, k) * gravity_;  // (G[:, 0] ⊗ I3) g
@@ -191,8 +191,8 @@ void System::add_body_forces(const Body& b, const Eigen::VectorXd& q, const Eige
   }
 }
 
-void System::add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, double sign,
-                                Eigen::VectorXd& f) const {
+void System::Impl::add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, double sign,
+                                      Eigen::VectorXd& f) const {
   for (const PointForce& p : forces_) {
     const Body& b = bodies_.at(static_cast<std::size_t>(p.marker.body));
     const Eigen::Index n = b.model.coordinate_count();
@@ -238,7 +238,7 @@ void System::add_applied_forces(double t, const Eigen::VectorXd& q, const Eigen:
   }
 }
 
-Eigen::Vector3d System::spring_force(std::size_t k, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
+Eigen::Vector3d System::Impl::spring_force(std::size_t k, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   const SpringDamper& s = springs_[k];
   std::array<Eigen::MatrixXd, 2>& work = spring_work_[k];  // one per marker: their bodies' sizes differ
   const VectorRef q1 = body_view(q, s.first.body), q2 = body_view(q, s.second.body);
@@ -259,8 +259,8 @@ Eigen::Vector3d System::spring_force(std::size_t k, const Eigen::VectorXd& q, co
   return (s.stiffness * (length - s.rest_length) + s.damping * e.dot(rate)) * e;
 }
 
-FfrfTangent System::floating_frame_tangent(int body, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
-                                           const Eigen::VectorXd& a) const {
+FfrfTangent System::Impl::floating_frame_tangent(int body, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                                 const Eigen::VectorXd& a) const {
   const Body& b = bodies_.at(static_cast<std::size_t>(body));
   if (!b.model.floating()) throw std::invalid_argument("body '" + b.name + "' has no floating frame");
   const Eigen::Index n = b.model.coordinate_count();
@@ -270,19 +270,19 @@ FfrfTangent System::floating_frame_tangent(int body, const Eigen::VectorXd& q, c
   return t;
 }
 
-Eigen::Matrix3d System::orientation(int body, const Eigen::VectorXd& q) const {
+Eigen::Matrix3d System::Impl::orientation(int body, const Eigen::VectorXd& q) const {
   const Body& b = bodies_.at(static_cast<std::size_t>(body));
   return b.model.floating() ? euler_rotation(q.segment<4>(b.offset + 3)) : orientation_of(q.segment(b.offset, 12));
 }
 
-Eigen::Vector3d System::angular_velocity(int body, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
+Eigen::Vector3d System::Impl::angular_velocity(int body, const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   const Body& b = bodies_.at(static_cast<std::size_t>(body));
   if (b.model.floating()) return 2.0 * euler_global_velocity_matrix(q.segment<4>(b.offset + 3)) * v.segment<4>(b.offset + 3);
   const Eigen::Matrix3d w = orientation_of(v.segment(b.offset, 12)) * orientation_of(q.segment(b.offset, 12)).transpose();
   return 0.5 * Eigen::Vector3d(w(2, 1) - w(1, 2), w(0, 2) - w(2, 0), w(1, 0) - w(0, 1));
 }
 
-Eigen::MatrixXd System::stiffness(const Eigen::VectorXd& q) const {
+Eigen::MatrixXd System::Impl::stiffness(const Eigen::VectorXd& q) const {
   Eigen::MatrixXd k = Eigen::MatrixXd::Zero(coordinates_, coordinates_);
   for (const Body& b : bodies_) {
     if (b.model.rigid() || b.model.floating()) continue;
@@ -308,7 +308,7 @@ Eigen::MatrixXd System::stiffness(const Eigen::VectorXd& q) const {
   return k;
 }
 
-std::vector<SpringTangent> System::spring_tangents(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
+std::vector<SpringTangent> System::Impl::spring_tangents(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   std::vector<SpringTangent> tangents;
   for (const SpringDamper& s : springs_) {
     const VectorRef q1 = body_view(q, s.first.body), q2 = body_view(q, s.second.body);

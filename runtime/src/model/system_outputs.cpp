@@ -1,5 +1,5 @@
 // System: what a run reports: joint reactions and the energies.
-#include "flexbody/runtime/system.hpp"
+#include "system_impl.hpp"
 
 #include "../kernels/rotation.hpp"
 
@@ -9,8 +9,8 @@ namespace flexbody::runtime {
 
 using detail::euler_global_velocity_matrix;
 
-JointReaction System::joint_reaction(std::size_t joint, double t, const Eigen::VectorXd& q,
-                                    const Eigen::VectorXd& lambda) const {
+JointReaction System::Impl::joint_reaction(std::size_t joint, double t, const Eigen::VectorXd& q,
+                                           const Eigen::VectorXd& lambda) const {
   const Joint& j = joints_.at(joint);
   if (j.first.body == kGround)
     throw std::invalid_argument("joint '" + j.name + "': its reaction is reported on the first marker's body, which is ground");
@@ -20,8 +20,8 @@ JointReaction System::joint_reaction(std::size_t joint, double t, const Eigen::V
   return wrench(bodies_[static_cast<std::size_t>(j.first.body)], q1, generalized, marker_position(j.first, q1));
 }
 
-JointReaction System::wrench(const Body& b, const VectorRef& q_b, const Eigen::VectorXd& g,
-                             const Eigen::Vector3d& point) {
+JointReaction System::Impl::wrench(const Body& b, const VectorRef& q_b, const Eigen::VectorXd& g,
+                                   const Eigen::Vector3d& point) {
   JointReaction w;
   w.force = g.head<3>();
   // The moment about τ: the virtual work of a rigid rotation δθ of the whole body.
@@ -36,7 +36,7 @@ JointReaction System::wrench(const Body& b, const VectorRef& q_b, const Eigen::V
   return w;
 }
 
-Energies System::energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
+Energies System::Impl::energies(const Eigen::VectorXd& q, const Eigen::VectorXd& v) const {
   Energies e;
   for (const Body& b : bodies_) {
     const Eigen::Index n = b.model.coordinate_count();

@@ -1,7 +1,7 @@
 // system_prestress.cpp: the System's geometric stiffening (prestress.hpp; issue 29, formulations.md, "Geometric
 // Stiffening"): the weights λ of each prestressed body's cases from its spin and the loads at its interfaces, and the
 // forces they add.
-#include "flexbody/runtime/system.hpp"
+#include "system_impl.hpp"
 
 #include "../kernels/outer_sum.hpp"
 #include "joint_rows.hpp"
@@ -15,7 +15,7 @@
 
 namespace flexbody::runtime {
 
-std::string System::prestress_gap(int body) const {
+std::string System::Impl::prestress_gap(int body) const {
   const Body& b = bodies_.at(static_cast<std::size_t>(body));
   if (!b.model.prestress) return "it has no geometric stiffness";
   const Prestress& p = *b.model.prestress;
@@ -57,21 +57,21 @@ std::string System::prestress_gap(int body) const {
   return {};
 }
 
-void System::set_prestress(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& lambda,
-                           double lambda_scale) const {
+void System::Impl::set_prestress(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                 const Eigen::VectorXd& lambda, double lambda_scale) const {
   update_prestress(t, q, v, lambda, lambda_scale, true);
 }
 
-void System::add_prestress_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
-                                    const Eigen::VectorXd& mu, double scale, Eigen::VectorXd& residual) const {
+void System::Impl::add_prestress_residual(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                          const Eigen::VectorXd& mu, double scale, Eigen::VectorXd& residual) const {
   if (!has_prestress()) return;
   update_prestress(t, q, v, mu, scale, false);
   for (const Body& b : bodies_)
     if (b.prestress.active) add_prestress_forces(b, q, residual.segment(b.offset, b.model.coordinate_count()), -1.0 / scale);
 }
 
-void System::update_prestress(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& lambda,
-                              double lambda_scale, bool evaluate_joints) const {
+void System::Impl::update_prestress(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                    const Eigen::VectorXd& lambda, double lambda_scale, bool evaluate_joints) const {
   if (!has_prestress()) return;
   if (lambda.size() != 0 && lambda.size() != constraint_count())
     throw std::invalid_argument("set_prestress: " + std::to_string(lambda.size()) + " multipliers for " +
@@ -140,8 +140,8 @@ void System::update_prestress(double t, const Eigen::VectorXd& q, const Eigen::V
   }
 }
 
-void System::add_prestress_forces(const Body& b, const Eigen::VectorXd& q, Eigen::Ref<Eigen::VectorXd> f_b,
-                                  double sign) const {
+void System::Impl::add_prestress_forces(const Body& b, const Eigen::VectorXd& q, Eigen::Ref<Eigen::VectorXd> f_b,
+                                        double sign) const {
   PrestressState& state = b.prestress;
   if (!state.active) return;
   const Eigen::Index n = b.model.coordinate_count();

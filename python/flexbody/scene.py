@@ -103,7 +103,8 @@ class Simulation:
         The last step is shortened to end on `end`, and its state recorded. `progress(t)` is called every 100 steps;
         without it, a terminal on stderr shows the time. Ctrl-C stops the run at the last completed step
         (KeyboardInterrupt). A failed step raises StepFailure; a force's function that raises stops the run with its
-        exception; either leaves the state of the last completed step, recorded in the outputs.
+        exception; either leaves the state of the last completed step, recorded in the outputs, and summary()'s
+        "termination" ("step failed" or "error", with "termination_message") says so.
         """
         end = self.end_time if end is None else float(end)
         shown = progress is None and sys.stderr.isatty()
@@ -140,7 +141,8 @@ class Simulation:
         self._native.set_state(dict(state))
 
     def summary(self):
-        """The run so far as fbsim --json reports it (docs/scenes.md): steps, Newton iterations, energies, ..."""
+        """The run so far as fbsim --json reports it (docs/scenes.md): how it ended ("termination": "running" between
+        step() calls, "end reached" after run()), steps, Newton iterations, energies, ..."""
         return json.loads(self._native.summary_json(self._source))
 
 

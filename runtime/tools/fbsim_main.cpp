@@ -164,6 +164,19 @@ int main(int argc, char** argv) {
       return fmt::format("; no checkpoint: {}", e.what());
     }
   };
+  // The run's summary on stdout; after a failure, one that cannot be made (its files unreadable) is left out rather
+  // than hide the failure's line.
+  auto print_summary = [&](bool with_end_checkpoint) {
+    try {
+      if (json)
+        std::cout << flexbody::scene::summary_json(*simulation, scene_path.string()) << '\n';
+      else if (!quiet)
+        std::cout << flexbody::scene::summary_text(*simulation, directory, with_end_checkpoint);
+      std::cout.flush();
+    } catch (const std::exception& e) {
+      std::cerr << fmt::format("fbsim: warning: no summary: {}\n", e.what());
+    }
+  };
   try {
     auto warn = [terminal](const std::string& line) {  // even with -q: a broken conservation law is not progress
       if (terminal) std::cerr << '\n';
@@ -211,18 +224,17 @@ int main(int argc, char** argv) {
     return fail(e.what(), kBadInput);
   } catch (const flexbody::runtime::StepFailure& e) {
     if (terminal) std::cerr << '\n';
+    if (simulation) print_summary(false);  // what the run did up to the failed step; its termination names it
     return fail(fmt::format("{}: {} (outputs up to the last completed step are in {}{})", scene_path.string(), e.what(),
                             directory.string(), checkpoints ? checkpoint_at_stop() : std::string()), kFailed);
   } catch (const std::invalid_argument& e) {  // the assembled scene is inconsistent (before any step or file)
     return fail(fmt::format("{}: {}", scene_path.string(), e.what()), kBadInput);
   } catch (const std::exception& e) {
+    // A scene's own function (a force's) that threw during a step: the run so far, then why it ended.
+    if (simulation && simulation->summary().termination == flexbody::scene::Termination::error) print_summary(false);
     return fail(fmt::format("{}: {}", scene_path.string(), e.what()), kFailed);
   }
   if (terminal) std::cerr << '\n';
-  if (json) {
-    std::cout << flexbody::scene::summary_json(*simulation, scene_path.string()) << '\n';
-  } else if (!quiet) {
-    std::cout << flexbody::scene::summary_text(*simulation, directory, end_checkpoint);
-  }
+  print_summary(end_checkpoint);
   return 0;
 }

@@ -102,6 +102,7 @@ def test_outputs_have_the_documented_shapes_and_units(folder):
 
 def test_a_run_in_steps_and_pieces(folder):
     sim = flexbody.load_scene(folder / "scene.yaml")
+    assert sim.summary()["termination"] == "running"
     for _ in range(9):
         sim.step()
     assert sim.time != 0.009  # 9 x 1e-3 rounds to 0.009000000000000001
@@ -179,10 +180,14 @@ def test_a_raising_function_stops_the_run_at_the_last_completed_step(folder):
     with pytest.raises(SensorOff, match="sensor is off"):
         sim.run()
     assert sim.time == pytest.approx(0.032, abs=1e-15)  # the 33rd step failed
+    summary = sim.summary()
+    assert summary["termination"] == "error" and "sensor is off" in summary["termination_message"]
+    assert summary["time_s"] == sim.time
     # The last completed step is recorded although rows fall every 5th step (t = 0.030, then 0.035).
     np.testing.assert_allclose(sim.outputs["bore_3"].time[-2:], [0.030, 0.032], rtol=0, atol=1e-15)
     failing[0] = False
     sim.run()  # goes on from there
+    assert sim.summary()["termination"] == "end reached"
     reference = scene_in_code(folder, force=lambda t: [0.0, 0.0, 2.5 * min(1.0, t / 0.02)]).simulate()
     expected = reference.run()["bore_3"]
     # The same motion up to the Newton iteration's error after the interruption (a fresh Newton matrix, as in

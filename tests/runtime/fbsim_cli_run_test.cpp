@@ -96,6 +96,39 @@ TEST(FbsimCli, EndOnTheCommandLineReplacesTheScenes) {
   }
 }
 
+// How a run ended is in its summary, for a run that reached its end and one whose step failed (here the linear
+// model's deformation limit, set far below the bar's sag under gravity so that the first step trips it): fbsim
+// prints the summary up to the failure on stdout, its one error line on stderr, and exits 1.
+TEST(FbsimCli, TheSummarySaysHowTheRunEnded) {
+  const auto& dir = bar_folder();
+  write_text(dir / "ends.yaml", kIssueScene);
+  const CliRun done = run_fbsim(dir, "ends.yaml -o ends_out --json --end 1e-3");
+  ASSERT_EQ(done.exit_code, 0) << done.err;
+  const auto reached = nlohmann::json::parse(done.out);
+  EXPECT_EQ(reached["termination"], "end reached");
+  EXPECT_EQ(reached["termination_message"], "");
+  EXPECT_EQ(reached["time_s"], 1e-3);
+
+  std::string scene = kIssueScene;
+  scene.replace(scene.find("end: 2.0}"), 9, "end: 2.0, deformation_limit: 1.0e-12}");
+  write_text(dir / "fails.yaml", scene);
+  const CliRun failed = run_fbsim(dir, "fails.yaml -o fails_out --json");
+  EXPECT_EQ(failed.exit_code, 1) << failed.err;
+  EXPECT_EQ(std::count(failed.err.begin(), failed.err.end(), '\n'), 1) << failed.err;
+  EXPECT_NE(failed.err.find("left the small-deformation range"), std::string::npos) << failed.err;
+  const auto summary = nlohmann::json::parse(failed.out);
+  EXPECT_EQ(summary["termination"], "step failed");
+  EXPECT_NE(summary["termination_message"].get<std::string>().find("left the small-deformation range"),
+            std::string::npos);
+  EXPECT_EQ(summary["time_s"], 0.0);  // the last completed step: the start
+  EXPECT_EQ(summary["steps"], 0);
+  const CliRun text = run_fbsim(dir, "fails.yaml -o fails_text");
+  EXPECT_EQ(text.exit_code, 1) << text.err;
+  EXPECT_NE(text.out.find("ended at t = 0 s: step failed (t = 0.0001 s: body 'bar' left the small-deformation range"),
+            std::string::npos)
+      << text.out;
+}
+
 // Issue 13: an output directory that is an existing file gave "filesystem error: ..." (exit code 1).
 TEST(FbsimCli, AnOutputDirectoryThatIsAFileIsRefused) {
   const auto& dir = bar_folder();

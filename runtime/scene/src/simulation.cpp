@@ -248,6 +248,21 @@ void Simulation::Run::recover() {
   flush();
 }
 
+void Simulation::Run::ended_by_exception(const std::exception_ptr& reason) {
+  try {
+    std::rethrow_exception(reason);
+  } catch (const runtime::StepFailure& e) {
+    summary.termination = Termination::step_failed;
+    summary.termination_message = e.what();
+  } catch (const std::exception& e) {
+    summary.termination = Termination::error;
+    summary.termination_message = e.what();
+  } catch (...) {
+    summary.termination = Termination::error;
+    summary.termination_message = "an exception that is not a std::exception";
+  }
+}
+
 Simulation::Simulation(Scene scene, const OutputSinks& sinks, std::function<void(const std::string&)> warn)
     : run_(std::make_unique<Run>()) {
   run_->start(std::move(scene), sinks, std::move(warn), nullptr);
@@ -328,9 +343,11 @@ void Simulation::step() {
   } catch (...) {
     run_->recover();
     run_->summary.cpu_seconds += cpu_since(cpu_start);
+    run_->ended_by_exception(std::current_exception());
     throw;
   }
   run_->summary.cpu_seconds += cpu_since(cpu_start);
+  run_->summary.termination = Termination::running;
 }
 
 bool Simulation::run(double end, const std::function<void(double)>& progress, const std::function<bool()>& stop) {
@@ -342,7 +359,10 @@ bool Simulation::run(double end, const std::function<void(double)>& progress, co
                                 8.0 * std::numeric_limits<double>::epsilon() * std::abs(end));
   if (!std::isfinite(end) || end < now - slack)
     throw std::invalid_argument(fmt::format("run to t = {} s: the simulation is at t = {} s already", end, now));
-  if (end <= now + slack) return true;
+  if (end <= now + slack) {
+    r.summary.termination = Termination::end_reached;
+    return true;
+  }
   // Fixed steps: whole steps, the last one shortened to end on `end` exactly (step_count), at most kMostSteps
   // (scene.hpp). Under error control (step: auto) the controller's steps, toward each row's and frame's time, until
   // one ends on `end`.
@@ -368,16 +388,19 @@ bool Simulation::run(double end, const std::function<void(double)>& progress, co
       if (stop && stop()) {
         r.flush();
         r.summary.cpu_seconds += cpu_since(cpu_start);
+        r.summary.termination = Termination::stopped;
         return false;
       }
     }
   } catch (...) {
     r.recover();
     r.summary.cpu_seconds += cpu_since(cpu_start);
+    r.ended_by_exception(std::current_exception());
     throw;
   }
   r.flush();
   r.summary.cpu_seconds += cpu_since(cpu_start);
+  r.summary.termination = Termination::end_reached;
   return true;
 }
 
@@ -399,9 +422,21 @@ void Simulation::set_state(const runtime::IntegratorState& state) {
 }
 const std::vector<OutputTable>& Simulation::tables() const { return run_->tables; }
 
+const char* termination_name(Termination termination) {
+  switch (termination) {
+    case Termination::running: return "running";
+    case Termination::end_reached: return "end reached";
+    case Termination::stopped: return "stopped";
+    case Termination::step_failed: return "step failed";
+    case Termination::error: return "error";
+  }
+  return "running";
+}
+
 RunSummary Simulation::summary() const {
   run_->flush();  // the CSV files' sizes below are what is on disk
   RunSummary s = run_->summary;
+  s.time = run_->integrator->time();
   s.newton_matrices = run_->integrator->factorizations();
   s.retried_steps = run_->integrator->retried_steps();
   s.rejected_steps = run_->integrator->rejected_steps();

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <exception>
 #include <fstream>
 
 namespace flexbody::format {
@@ -81,6 +82,8 @@ struct Simulation::Run {
   void reschedule();
   void advance(bool to_end, double end, bool last);
   void recover();  // after a failed step: the last completed step recorded and drawn
+  /// The summary's termination for the exception that ended a step: step_failed for runtime::StepFailure, else error.
+  void ended_by_exception(const std::exception_ptr& reason);
   void start(Scene s, const OutputSinks& sinks, std::function<void(const std::string&)> w,
              const format::CheckpointData* from, const std::filesystem::path& label = {});
   /// Refuses (CheckpointMismatch) a checkpoint of another scene file or body file, or of another fbsim.

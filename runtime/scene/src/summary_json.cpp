@@ -13,6 +13,9 @@ std::string summary_json(const Simulation& simulation, const std::string& scene_
   const RunSummary summary = simulation.summary();
   nlohmann::ordered_json j;
   j["scene"] = scene_file;
+  j["termination"] = termination_name(summary.termination);
+  j["termination_message"] = summary.termination_message;
+  j["time_s"] = summary.time;
   j["steps"] = summary.steps;
   j["newton_iterations"] = summary.newton_iterations;
   j["newton_matrices"] = summary.newton_matrices;

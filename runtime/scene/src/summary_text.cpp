@@ -17,6 +17,9 @@ std::string summary_text(const Simulation& simulation, const std::filesystem::pa
       summary.newton_iterations,
       summary.steps ? static_cast<double>(summary.newton_iterations) / static_cast<double>(summary.steps) : 0.0,
       summary.cpu_seconds);
+  if (summary.termination != Termination::end_reached)
+    out << fmt::format("  ended at t = {:.6g} s: {}{}\n", summary.time, termination_name(summary.termination),
+                       summary.termination_message.empty() ? "" : " (" + summary.termination_message + ")");
   if (summary.resumed_at)
     out << fmt::format("  resumed at t = {:.6g} s from {} (the counts are the whole run's)\n", *summary.resumed_at,
                        (directory / kCheckpointFileName).string());

@@ -17,7 +17,24 @@
 
 namespace flexbody::scene {
 
+/// How a run ended: Simulation::run's or step()'s last call.
+enum class Termination {
+  running,      ///< no run() has ended yet (the start, or step() calls), or the last one was resumed from
+  end_reached,  ///< run() reached its end time
+  stopped,      ///< run()'s `stop` asked it to stop (fbsim: a signal)
+  step_failed,  ///< a step failed (runtime::StepFailure; RunSummary::termination_message says why)
+  error,        ///< an exception from the scene's own functions (a force's) ended it
+};
+
+/// "running", "end reached", "stopped", "step failed", "error": how fbsim and summary_json name a Termination.
+[[nodiscard]] const char* termination_name(Termination termination);
+
 struct RunSummary {
+  /// How the run ended, the time of its last completed step [s], and for a failed step or an error the reason (the
+  /// exception's message).
+  Termination termination = Termination::running;
+  double time = 0.0;
+  std::string termination_message;
   long steps = 0;
   long newton_iterations = 0;
   long newton_matrices = 0;  ///< Newton matrices built (factorizations)

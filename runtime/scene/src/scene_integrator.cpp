@@ -1,4 +1,4 @@
-// A scene's integrator settings (the `integrator` key, and --end): scene.hpp's read_integrator.
+// A scene's integrator settings (the `integrator` key, and --end): scene_parts.hpp's read_integrator.
 #include "flexbody/scene/scene.hpp"
 #include "scene_parts.hpp"
 

@@ -6,6 +6,13 @@
 
 namespace flexbody::scene {
 
+int SceneReading::body_of(const YAML::Node& node, const std::string& where) const {
+  const std::string name = r.text(node, where + " body");
+  const auto found = bodies.find(name);
+  if (found == bodies.end()) r.fail(node, fmt::format("{}: no body '{}' in the scene", where, name));
+  return found->second;
+}
+
 // A marker on `body` from exactly one of interface (name), point (input-frame coordinates [m]), node (index).
 runtime::Marker read_marker(const Reader& r, const YAML::Node& map, const runtime::SceneBuilder& builder, int body,
                             const std::string& where) {

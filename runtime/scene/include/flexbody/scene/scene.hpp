@@ -109,11 +109,6 @@ struct SceneOverrides {
   std::optional<double> max_output;  ///< --max-output [bytes]: the output budget's size, over the scene's
 };
 
-/// The scene's `integrator` map (required) into scene.integrator, scene.end_time (or overrides.end_time) and
-/// scene.output_every, each value checked against the line it is on (scene_integrator.cpp).
-void read_integrator(const format::YamlReader& r, const YAML::Node& root, const SceneOverrides& overrides,
-                     Scene& scene);
-
 /// What a scene needs once its bodies, joints, forces and springs are in: the joint rows that repeat others left
 /// out (Scene::removed, System::remove_redundant_constraints), the conservation laws its motion must obey
 /// (Scene::conserves), and the initial assembly (Scene::assembly, runtime::initial_assembly). Throws

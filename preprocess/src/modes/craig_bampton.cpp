@@ -6,6 +6,7 @@
 #include "flexbody/preprocess/rigid_body_modes.hpp"
 
 #include "../linalg/skew.hpp"
+#include "frequency.hpp"
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
@@ -17,8 +18,6 @@
 
 namespace flexbody::preprocess {
 namespace {
-
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 // The submatrix of an upper-triangle CSC matrix on the rows and columns with new_index >= 0 (new_index
 // increasing with the old index, so the result is upper and sorted too).

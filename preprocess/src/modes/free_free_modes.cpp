@@ -4,6 +4,7 @@
 #include "flexbody/preprocess/eigen_residual.hpp"
 #include "flexbody/preprocess/rigid_body_modes.hpp"
 
+#include "frequency.hpp"
 #include "lanczos_basis_limit.hpp"
 
 #include <fmt/format.h>
@@ -15,7 +16,6 @@
 namespace flexbody::preprocess {
 namespace {
 
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
 // Elastic eigenvalues below this fraction of the reference bar's (2 pi f_ref)^2 are zero-energy modes:
 // a real part is 1e5 times less stiff than a bar only as a mechanism (f below 1e-5 f_ref, i.e. below
 // 0.03 Hz for a 1 m steel part, where a real first mode is tens of Hz or more).

@@ -1,5 +1,6 @@
 #include "flexbody/preprocess/body_summary.hpp"
 
+#include "../modes/frequency.hpp"
 #include "report_text.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -16,8 +17,6 @@
 
 namespace flexbody::preprocess {
 namespace {
-
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 using detail::vector3;
 

@@ -1,6 +1,8 @@
 // fbsim: runs a scene of flexible (improved GCMS) and rigid bodies and writes what it asks for.
 //
 //   fbsim scene.yaml [-o DIR] [--json] [-q] [--resume DIR]
+//
+// main reads as its steps: parse the command line, choose the output directory, read the scene, run it and report.
 #include "flexbody/format/body_file.hpp"
 #include "flexbody/scene/scene.hpp"
 #include "flexbody/scene/simulation.hpp"
@@ -13,8 +15,11 @@
 #include <algorithm>
 #include <chrono>
 #include <csignal>
+#include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <string>
 #include <system_error>
 #include <unistd.h>
 
@@ -50,93 +55,131 @@ std::string duration_text(double seconds) {
   return fmt::format("{:.1f} h", seconds / 3600.0);
 }
 
-int fail(const std::string& message, int code) {
+// fbsim's one error line; the exit code goes up to main as an Exit.
+struct Exit {
+  int code;
+};
+
+[[noreturn]] void fail(const std::string& message, int code) {
   std::cerr << "fbsim: error: " << message << '\n';
-  return code;
+  throw Exit{code};
 }
 
-}  // namespace
+namespace scene = flexbody::scene;
 
-int main(int argc, char** argv) {
-  flexbody::format::skip_hdf5_cleanup_at_exit();  // one error line, nothing from HDF5 after it
-  CLI::App app{"fbsim: simulate a scene of flexible and rigid bodies (improved GCMS, generalized-alpha)."};
-  std::string scene_file, output;
+// What the command line asks for.
+struct Invocation {
+  std::filesystem::path scene_path;
+  std::string output, resume, max_output;
   bool json = false, quiet = false;
-  app.add_option("SCENE", scene_file, "scene file (YAML)")->required();
-  app.add_option("-o,--output", output, "directory for the CSV files (default: <scene name>_results, here)");
-  app.add_flag("--json", json, "print the run summary as one JSON object on stdout");
-  app.add_flag("-q,--quiet", quiet, "no progress and no summary (errors still go to stderr)");
   std::optional<double> end_time;
-  app.add_option("--end", end_time, "end time [s] instead of the scene's integrator end (a shorter trial run, or a "
-                                    "longer one); refused below the integrator step");
-  std::string max_output;
-  app.add_option("--max-output", max_output, "the most the run may write into its output directory, e.g. 50GB (default "
-                                             "10 GB and 100000 files; the scene's output_budget sets both); a run "
-                                             "estimated over it is refused before its first step");
-  std::string resume;
-  app.add_option("--resume", resume, "continue the run whose outputs and checkpoint.h5 are in DIR (written when it was "
-                                     "stopped, or by the scene's checkpoint: {interval}), with the same scene and body "
-                                     "files; its outputs come out as an uninterrupted run's, bit for bit")
-      ->type_name("DIR");
   int threads = 1;
-  app.add_option("--threads", threads,
-                 "threads for the per-body work of scenes of 64 bodies and more (default 1: with the cores shared, more "
-                 "threads are far slower; results are the same bits for any count)")
+  std::filesystem::path directory;  ///< where the run writes: -o, --resume's, or <scene name>_results
+};
+
+Invocation parse(int argc, char** argv) {
+  CLI::App app{"fbsim: simulate a scene of flexible and rigid bodies (improved GCMS, generalized-alpha)."};
+  Invocation in;
+  std::string scene_file;
+  app.add_option("SCENE", scene_file, "scene file (YAML)")->required();
+  app.add_option("-o,--output", in.output, "directory for the CSV files (default: <scene name>_results, here)");
+  app.add_flag("--json", in.json, "print the run summary as one JSON object on stdout");
+  app.add_flag("-q,--quiet", in.quiet, "no progress and no summary (errors still go to stderr)");
+  app.add_option("--end", in.end_time,
+                 "end time [s] instead of the scene's integrator end (a shorter trial run, or a "
+                 "longer one); refused below the integrator step");
+  app.add_option("--max-output", in.max_output,
+                 "the most the run may write into its output directory, e.g. 50GB "
+                 "(default 10 GB and 100000 files; the scene's output_budget sets "
+                 "both); a run estimated over it is refused before its first step");
+  app.add_option("--resume", in.resume,
+                 "continue the run whose outputs and checkpoint.h5 are in DIR (written when it "
+                 "was stopped, or by the scene's checkpoint: {interval}), with the same scene "
+                 "and body files; its outputs come out as an uninterrupted run's, bit for bit")
+      ->type_name("DIR");
+  app.add_option(
+         "--threads", in.threads,
+         "threads for the per-body work of scenes of 64 bodies and more (default 1: with the cores shared, more "
+         "threads are far slower; results are the same bits for any count)")
       ->check(CLI::Range(1, 1024));
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
+    throw Exit{app.exit(e)};
   } catch (const CLI::ParseError& e) {
-    return fail(std::string(e.what()) + " (see fbsim --help)", kBadInput);
+    fail(std::string(e.what()) + " (see fbsim --help)", kBadInput);
   }
-  flexbody::runtime::set_threads(threads);
-  const std::filesystem::path scene_path(scene_file);
-  if (!resume.empty()) {
+  in.scene_path = scene_file;
+  return in;
+}
+
+// The output directory, checked before anything is read or run: --resume's must hold a checkpoint (and be -o's, if
+// both are given), and an existing file is never a directory to write into.
+void choose_directory(Invocation& in) {
+  if (!in.resume.empty()) {
     // The error_code overloads: a directory that cannot be read is a refusal, not an abort.
     std::error_code resume_error, output_error, file_error;
-    if (!output.empty() && std::filesystem::weakly_canonical(resume, resume_error) !=
-                               std::filesystem::weakly_canonical(output, output_error))
-      return fail(fmt::format("--resume {} and -o {}: a run resumes in its own output directory; give one of them",
-                              resume, output), kBadInput);
+    if (!in.output.empty() && std::filesystem::weakly_canonical(in.resume, resume_error) !=
+                                  std::filesystem::weakly_canonical(in.output, output_error))
+      fail(fmt::format("--resume {} and -o {}: a run resumes in its own output directory; give one of them", in.resume,
+                       in.output),
+           kBadInput);
     if (resume_error || output_error)
-      return fail(fmt::format("--resume {}: {}", resume, (resume_error ? resume_error : output_error).message()), kBadInput);
-    const bool found = std::filesystem::is_regular_file(std::filesystem::path(resume) / flexbody::scene::kCheckpointFileName,
-                                                        file_error);
+      fail(fmt::format("--resume {}: {}", in.resume, (resume_error ? resume_error : output_error).message()),
+           kBadInput);
+    const bool found =
+        std::filesystem::is_regular_file(std::filesystem::path(in.resume) / scene::kCheckpointFileName, file_error);
     if (!found)  // a missing file is the usual case, said without the system's "No such file or directory"
-      return fail(fmt::format("--resume {}: no {} there{} (a run writes it when it is stopped, or every interval of the "
-                              "scene's checkpoint key)", resume, flexbody::scene::kCheckpointFileName,
-                              file_error && file_error != std::errc::no_such_file_or_directory
-                                  ? " (" + file_error.message() + ")" : ""), kBadInput);
+      fail(fmt::format("--resume {}: no {} there{} (a run writes it when it is stopped, or every interval of the "
+                       "scene's checkpoint key)",
+                       in.resume, scene::kCheckpointFileName,
+                       file_error && file_error != std::errc::no_such_file_or_directory
+                           ? " (" + file_error.message() + ")"
+                           : ""),
+           kBadInput);
   }
-  const std::filesystem::path directory =
-      !resume.empty() ? std::filesystem::path(resume)
-      : output.empty() ? std::filesystem::path(scene_path.stem().string() + "_results") : std::filesystem::path(output);
-  // Checked before anything is read or run: an existing file is never a directory to write into.
-  if (std::error_code error; std::filesystem::exists(directory, error) && !std::filesystem::is_directory(directory, error)) {
-    const std::string origin = output.empty() ? fmt::format("{} (the default output directory: the scene's name + "
-                                                            "_results)", directory.string())
-                                              : fmt::format("-o {}", directory.string());
-    return fail(fmt::format("{}: is an existing file, not a directory; choose another output directory with -o", origin),
-                kBadInput);
+  in.directory = !in.resume.empty()  ? std::filesystem::path(in.resume)
+                 : in.output.empty() ? std::filesystem::path(in.scene_path.stem().string() + "_results")
+                                     : std::filesystem::path(in.output);
+  if (std::error_code error;
+      std::filesystem::exists(in.directory, error) && !std::filesystem::is_directory(in.directory, error)) {
+    const std::string origin = in.output.empty() ? fmt::format(
+                                                       "{} (the default output directory: the scene's name + "
+                                                       "_results)",
+                                                       in.directory.string())
+                                                 : fmt::format("-o {}", in.directory.string());
+    fail(fmt::format("{}: is an existing file, not a directory; choose another output directory with -o", origin),
+         kBadInput);
   }
-  flexbody::scene::Scene read;
-  try {
-    flexbody::scene::SceneOverrides overrides;
-    overrides.end_time = end_time;
-    if (!max_output.empty()) {
-      try {
-        overrides.max_output = flexbody::scene::parse_size(max_output);
-      } catch (const std::invalid_argument& e) {
-        return fail(fmt::format("--max-output: {}", e.what()), kBadInput);
-      }
+}
+
+// The scene file with the command line's overrides (--end, --max-output).
+scene::Scene read_scene_file(const Invocation& in) {
+  scene::SceneOverrides overrides;
+  overrides.end_time = in.end_time;
+  if (!in.max_output.empty()) {
+    try {
+      overrides.max_output = scene::parse_size(in.max_output);
+    } catch (const std::invalid_argument& e) {
+      fail(fmt::format("--max-output: {}", e.what()), kBadInput);
     }
-    read = flexbody::scene::read_scene(scene_path, overrides);
-  } catch (const std::invalid_argument& e) {
-    return fail(e.what(), kBadInput);
-  } catch (const std::exception& e) {
-    return fail(e.what(), kFailed);
   }
+  try {
+    return scene::read_scene(in.scene_path, overrides);
+  } catch (const std::invalid_argument& e) {
+    fail(e.what(), kBadInput);
+  } catch (const std::exception& e) {
+    fail(e.what(), kFailed);
+  }
+}
+
+// Runs the scene to its end (or resumes it) and prints the summary; returns the exit code (128 + a signal's number
+// for a run a signal stopped, after its checkpoint).
+int run(const Invocation& in, scene::Scene read) {
+  const std::filesystem::path& scene_path = in.scene_path;
+  const std::filesystem::path& directory = in.directory;
+  const bool json = in.json, quiet = in.quiet;
+  const std::string& resume = in.resume;
   const double end = read.end_time;
   const bool terminal = !quiet && !json && ::isatty(STDERR_FILENO);
   // On a terminal: the simulated time, steps per second and the time to go (at the rate so far), every 100 steps.
@@ -217,24 +260,39 @@ int main(int argc, char** argv) {
       std::filesystem::remove(directory / flexbody::scene::kCheckpointFileName, ignored);
     }
   } catch (const flexbody::scene::OutputBudgetError& e) {  // before the first step, naming the scene's lines
-    return fail(e.what(), kBadInput);
+    fail(e.what(), kBadInput);
   } catch (const flexbody::scene::CheckpointMismatch& e) {  // --resume with a checkpoint of another scene or directory
-    return fail(e.what(), kBadInput);
+    fail(e.what(), kBadInput);
   } catch (const flexbody::format::BodyFileError& e) {  // --resume with a damaged or foreign checkpoint file
-    return fail(e.what(), kBadInput);
+    fail(e.what(), kBadInput);
   } catch (const flexbody::runtime::StepFailure& e) {
     if (terminal) std::cerr << '\n';
     if (simulation) print_summary(false);  // what the run did up to the failed step; its termination names it
-    return fail(fmt::format("{}: {} (outputs up to the last completed step are in {}{})", scene_path.string(), e.what(),
-                            directory.string(), checkpoints ? checkpoint_at_stop() : std::string()), kFailed);
+    fail(fmt::format("{}: {} (outputs up to the last completed step are in {}{})", scene_path.string(), e.what(),
+                     directory.string(), checkpoints ? checkpoint_at_stop() : std::string()),
+         kFailed);
   } catch (const std::invalid_argument& e) {  // the assembled scene is inconsistent (before any step or file)
-    return fail(fmt::format("{}: {}", scene_path.string(), e.what()), kBadInput);
+    fail(fmt::format("{}: {}", scene_path.string(), e.what()), kBadInput);
   } catch (const std::exception& e) {
     // A scene's own function (a force's) that threw during a step: the run so far, then why it ended.
     if (simulation && simulation->summary().termination == flexbody::scene::Termination::error) print_summary(false);
-    return fail(fmt::format("{}: {}", scene_path.string(), e.what()), kFailed);
+    fail(fmt::format("{}: {}", scene_path.string(), e.what()), kFailed);
   }
   if (terminal) std::cerr << '\n';
   print_summary(end_checkpoint);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  flexbody::format::skip_hdf5_cleanup_at_exit();  // one error line, nothing from HDF5 after it
+  try {
+    Invocation in = parse(argc, argv);
+    flexbody::runtime::set_threads(in.threads);
+    choose_directory(in);
+    return run(in, read_scene_file(in));
+  } catch (const Exit& exit) {
+    return exit.code;
+  }
 }

@@ -424,11 +424,16 @@ const std::vector<OutputTable>& Simulation::tables() const { return run_->tables
 
 const char* termination_name(Termination termination) {
   switch (termination) {
-    case Termination::running: return "running";
-    case Termination::end_reached: return "end reached";
-    case Termination::stopped: return "stopped";
-    case Termination::step_failed: return "step failed";
-    case Termination::error: return "error";
+    case Termination::running:
+      return "running";
+    case Termination::end_reached:
+      return "end reached";
+    case Termination::stopped:
+      return "stopped";
+    case Termination::step_failed:
+      return "step failed";
+    case Termination::error:
+      return "error";
   }
   return "running";
 }

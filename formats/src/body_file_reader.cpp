@@ -332,7 +332,7 @@ BodyData read_body_file(const std::filesystem::path& path, const ReadOptions& op
   // program) is refused before HDF5 parses it, since libhdf5 can crash or hang on damaged bytes.
   if (seal.state == detail::SealState::absent && options.require_seal) throw BodyFileError(detail::unsealed_message(label));
   // A sealed file's HDF5 metadata is the subset fbprep writes, checked before libhdf5 follows any address in it: a
-  // seal can be recomputed, and libhdf5 1.10 crashed on changed addresses of dense storage (issue 13).
+  // seal can be recomputed, and libhdf5 1.10 crashed on changed addresses of dense storage.
   if (seal.state == detail::SealState::valid && options.require_seal) {
     const std::string problem = detail::check_hdf5_structure(bytes, detail::kSealBytes);
     if (!problem.empty())

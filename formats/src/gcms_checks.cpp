@@ -49,9 +49,9 @@ void check_symmetric_scaled(const Eigen::MatrixXd& m, const std::string& path, c
 // K̂ = (Ῡ ⊗ I3)ᵀ K̄ (Ῡ ⊗ I3) is positive semi-definite: a negative eigenvalue is an elastic shape that releases
 // energy, and the runtime would find it only as a failing Newton core or a motion that grows. K̂ + σ I with σ =
 // 8 ε n max|K̂_ii| (the rounding of a matrix of that size) must have a Cholesky factor. (A pivoted LDLᵀ missed
-// indefinite blocks with zero diagonal, [[0, a], [a, 0]]: review of f0c14ad.) An eigenvalue below −σ is refused; one
+// indefinite blocks with zero diagonal, [[0, a], [a, 0]].) An eigenvalue below −σ is refused; one
 // above it cannot be told from rounding in a matrix whose largest entry is max|K̂_ii|. Valid files have eigenvalues of
-// 1.5e-9 to 2.4e-2 times the largest (issue 13), far above σ.
+// 1.5e-9 to 2.4e-2 times the largest, far above σ.
 void check_semidefinite(const Eigen::MatrixXd& m, const std::string& path, const std::string& context) {
   if (m.size() == 0) return;
   const double largest = m.diagonal().cwiseAbs().maxCoeff();

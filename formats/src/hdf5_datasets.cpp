@@ -92,7 +92,7 @@ std::string bytes_text(double bytes) {
   return text;
 }
 
-// The size a dataset declares, checked before anything is allocated for it (issue 13: 10^8 nodes declared in a
+// The size a dataset declares, checked before anything is allocated for it (10^8 nodes declared in a
 // 158 KB file took 4.7 GB and 8-18 s before the refusal): the schema's datasets are contiguous and uncompressed,
 // so the values must fit in the file and in the storage HDF5 has allocated for them.
 std::size_t checked_count(const Location& loc, std::string_view name, const OpenDataset& open, std::size_t memory_size) {

@@ -211,9 +211,9 @@ ObjectKind object_kind(const Location& file, const std::string& path) {
 namespace flexbody::format {
 
 // After a damaged file HDF5's own cleanup at exit can fail to close its internal objects and print "HDF5: infinite
-// loop closing library" and a long line of codes (issue 13: 2,238 of 10,500 damaged files) after the tool's one
+// loop closing library" and a long line of codes (2,238 of 10,500 damaged files) after the tool's one
 // error line. In the library this would change every HDF5 user of the process (a host program's own unclosed file
-// came out damaged: review of 6efde03), so only the tools call it.
+// came out damaged), so only the tools call it.
 void skip_hdf5_cleanup_at_exit() { (void)H5dont_atexit(); }
 
 }  // namespace flexbody::format

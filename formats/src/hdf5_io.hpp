@@ -79,7 +79,7 @@ class Location {
   /// Closes the object now; throws if HDF5 reports an error (for the file: data not written).
   void close();
   /// Whether string attributes may be variable-length (they live in the file's global heap, whose damage crashed
-  /// or hung libhdf5 1.10 in issue 13's fuzz run). Members opened from here inherit it.
+  /// or hung libhdf5 1.10 in a fuzz run). Members opened from here inherit it.
   [[nodiscard]] bool variable_strings_allowed() const noexcept { return variable_strings_; }
 
  private:

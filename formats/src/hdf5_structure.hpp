@@ -1,6 +1,6 @@
 #pragma once
 // hdf5_structure.hpp (private): a check of a sealed body file's HDF5 metadata, on its bytes, before libhdf5 parses
-// them. A seal is a digest anyone can recompute, and so are HDF5's own checksums: issue 13's fuzz run changed bytes
+// them. A seal is a digest anyone can recompute, and so are HDF5's own checksums: a fuzz run changed bytes
 // in object headers, recomputed both, and libhdf5 1.10 followed the changed addresses of dense link and attribute
 // storage (and a changed link message) into segmentation faults. fbprep writes a small subset of HDF5 (superblock
 // version 2, version-2 object headers, links and attributes stored compactly in them, no heaps), so anything else is

@@ -49,7 +49,7 @@ void check_recovery_finite(const BodyData& body, const std::string& context) {
 // h_i (|∇N_i| = 1/h_i) at most 4 U_f / h_min; for a quadratic one the extrapolated gradients of
 // format/tet10_element.hpp, summed. Every stress component is at most (3 |λ| + 2 μ) times that (|λ|: λ < 0 for
 // ν < 0). An entry above this bound (by more than rounding) was not computed from this mesh, material and fields: a
-// damaged file (issue 13: byte flips that stay finite made non-finite von Mises stresses in ParaView).
+// damaged file (byte flips that stay finite made non-finite von Mises stresses in ParaView).
 namespace {
 
 double largest_linear_gradient(const BodyData& body, const std::string& context) {
@@ -59,7 +59,7 @@ double largest_linear_gradient(const BodyData& body, const std::string& context)
     Eigen::Vector3d p[4];
     for (int k = 0; k < 4; ++k) p[k] = x.row(body.mesh.tets(t, k)).transpose();
     const double six_volume = std::abs((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]));
-    if (!(six_volume > 0.0))  // a flat element has no stress modes to bound them with (review of f0c14ad)
+    if (!(six_volume > 0.0))  // a flat element has no stress modes to bound them with
       fail(context, "/mesh/tets" + index(t) + " has zero volume, so no stress of /recovery can be checked against it");
     for (int k = 0; k < 4; ++k) {  // the height over the face opposite node k: 3 V / area = 6 V / (2 area)
       const Eigen::Vector3d& a = p[(k + 1) % 4], &b = p[(k + 2) % 4], &c = p[(k + 3) % 4];

@@ -47,7 +47,7 @@ constexpr double kSmallInModelUnits = 1e-2;
 // OpenCASCADE's sewing tolerance, relative so that a part sews the same in any unit.
 constexpr double kSewingTolerance = 1e-6;
 // Parts outside this extent [m] (bounding-box diagonal) are named in a warning before the work: nearly always a unit
-// mistake (issue 28: a part 4 µm across failed in the eigensolver, which blamed itself).
+// mistake (a part 4 µm across failed in the eigensolver, which blamed itself).
 constexpr double kPlausibleExtent[2] = {1e-4, 1e3};
 
 // The CAD solids' volume in gmsh's coordinates (OpenCASCADE's mass properties), or nullopt for a model that is not

@@ -175,7 +175,7 @@ namespace {
 
 // gmsh's elastic smoothing on a quadratic mesh with folded elements (curved_mesh_repair.hpp): the high-order nodes
 // inside the volume follow the curved boundary as an elastic solid would ("HighOrderElastic"), then the tetrahedra
-// are read again. Measured with gmsh 4.8 at the default size (issue 28): it left 0 of 30 and 0 of 16 folded elements
+// are read again. Measured with gmsh 4.8 at the default size: it left 0 of 30 and 0 of 16 folded elements
 // (SOT_323_3, TCMT1107_4), 7 of 63 (TSM_104_01_L_DV_A), 4 of 19 (0603_SMD) and 18 of 50 (MSOP_10), in 1.4-3 s, the same
 // mesh in every run. gmsh's other optimizer, "HighOrder" (on the elements' scaled Jacobians), is not used: on 0603_SMD
 // it took 27-44 s, gave a different mesh in each of three runs, and in two of them inverted corner tetrahedra;
@@ -299,7 +299,7 @@ std::optional<double> resolved_volume(const GmshTetrahedra& tetrahedra) {
 
 // Meshes the model, checked against the CAD solids' volume `solid` (gmsh's coordinates; nullopt: no CAD volume, no
 // check). The mesh must hold it to options.volume_tolerance: a mesh coarser than the part's features drops them
-// (issue 28: a solid of gmsh's as1-tu-203 demo at the default size held 64 % of its volume, and the body file lost
+// (a solid of gmsh's as1-tu-203 demo at the default size held 64 % of its volume, and the body file lost
 // 36 % of the mass without a word), and linear elements cut curved faces along their chords. The default size is
 // halved until the mesh holds the volume (at most kVolumeRefinements times); a size the user gave is kept, and a
 // mesh that misses the volume is refused with a size that would do.

@@ -1,5 +1,5 @@
 #pragma once
-// shell_sewing.hpp (internal): solids from a CAD model that has surfaces but no volume (issue 28 item 3). Exporters
+// shell_sewing.hpp (internal): solids from a CAD model that has surfaces but no volume. Exporters
 // often write a part as its faces only; OpenCASCADE can sew faces that meet along the same curves into a shell and
 // make the closed shell a solid. Works on the current gmsh model (OpenCASCADE kernel), before meshing.
 

@@ -1,6 +1,6 @@
 #pragma once
 // available_memory.hpp (internal): how much memory this process can still take, so that a factorization that cannot
-// fit is refused before the work (issue 28: CHOLMOD's "status -2" came after up to 80 s).
+// fit is refused before the work (CHOLMOD's "status -2" came after up to 80 s).
 
 #include <cstdint>
 #include <filesystem>

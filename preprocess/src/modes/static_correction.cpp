@@ -157,7 +157,7 @@ Eigen::MatrixXd unit_load_vectors(const RowMatrixX3d& nodes, const std::vector<L
       size = std::max(size, d.norm());
     }
     // The centroid's own rounding is about ε |c|: a small patch far from the centre of mass (an interface of a
-    // 1 km part) needs that in the tolerance (helper review: 117 of 200 random patches at 5000 sizes away failed).
+    // 1 km part) needs that in the tolerance (117 of 200 random patches at 5000 sizes away failed).
     if (std::abs(p.weights.sum() - 1.0) > 1e-12 || first_moment.norm() > 1e-12 * (size + p.reference_point.norm()))
       throw std::invalid_argument(fmt::format("load point '{}': the weights must sum to 1 and the reference point "
                                               "must be their weighted centroid", p.name));

@@ -1,7 +1,7 @@
 #pragma once
 // mumps_status.hpp (internal): what a MUMPS failure means for the user, from PETSc's message of it ("MUMPS error in
-// numerical factorization: INFOG(1)=-9, INFO(2)=1234 ..."): the out-of-memory codes in words and with the ways out
-// (issue 28, item 4: "translate every status into words"). No PETSc needed: the text is all it reads.
+// numerical factorization: INFOG(1)=-9, INFO(2)=1234 ..."): the out-of-memory codes in words and with the ways out.
+// No PETSc needed: the text is all it reads.
 
 #include <optional>
 #include <string>

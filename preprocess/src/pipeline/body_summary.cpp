@@ -189,7 +189,7 @@ std::string body_report(const format::BodyData& body, const std::filesystem::pat
   line("fields", fmt::format("{} of {} ({} dropped as dependent, tolerance {:.0e})", g.field_count(),
                              g.mode_coefficients.cols(), g.mode_coefficients.cols() - g.field_count(), g.drop_tolerance));
   // The Jacobi-scaled condition numbers are unit-free (the same at every size of the part); the SI ones
-  // mix kg, kg m^2 and 1. Files from before issue 12 do not record the scaled one before.
+  // mix kg, kg m^2 and 1. Older files may not record the scaled one before.
   const std::string scaled_before = g.condition_mass_scaled_before
                                         ? fmt::format("{:.3g} before", *g.condition_mass_scaled_before)
                                         : std::string("before not recorded");
@@ -277,8 +277,9 @@ std::string body_json(const format::BodyData& body, const std::filesystem::path&
   j["condition_mode_gram_before"] = number_or_null(g.condition_mode_gram_before);
   j["condition_G_before"] = number_or_null(g.condition_mass_before);
   j["condition_G_after"] = number_or_null(g.condition_mass_after);
-  j["condition_G_scaled_before"] =  // null: singular, or not recorded (files from before issue 12)
-      g.condition_mass_scaled_before ? number_or_null(*g.condition_mass_scaled_before) : nlohmann::ordered_json(nullptr);
+  j["condition_G_scaled_before"] =  // null: singular, or not recorded (older files)
+      g.condition_mass_scaled_before ? number_or_null(*g.condition_mass_scaled_before)
+                                     : nlohmann::ordered_json(nullptr);
   j["condition_G_scaled_after"] = number_or_null(g.condition_mass_scaled_after);
   j["k_hat_frequency_range_hz"] = {k_low, k_high};
   std::vector<std::string> loads;

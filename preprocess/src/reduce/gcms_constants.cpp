@@ -21,7 +21,7 @@ format::Gcms gcms_constants(const SparseMatrix& stiffness_upper, const SparseMat
   const Eigen::MatrixXd mass_upsilon = symmetric_product(full_from_upper(scalar_mass_upper), upsilon);
   // The Gram matrix's entries all carry the same unit (1, for M-orthonormal modes): its condition does not
   // depend on the part's size. G's blocks carry kg, kg m^2 and 1: the Jacobi-scaled figures are the ones that
-  // do not (SCHEMA.md, "Conditioning"); the SI ones are kept for the file's version 3 (issue 12).
+  // do not (SCHEMA.md, "Conditioning"); the SI ones are kept for the file's version 3.
   gcms.condition_mode_gram_before = spectral_condition(blas::transposed_product(upsilon, mass_upsilon));
   const Eigen::MatrixXd g_before = gcms_mass_matrix(scalar_mass_upper, nodes, upsilon, mass_upsilon);
   gcms.condition_mass_before = spectral_condition(g_before);
@@ -34,7 +34,7 @@ format::Gcms gcms_constants(const SparseMatrix& stiffness_upper, const SparseMat
   // zeros SCHEMA.md states, when within the reader's 1e-8 √m of zero (a larger value is a bad basis, which
   // the writer's check refuses): noise there is a constraint Σ_f G[0][4 + f] ξ_f = 0 with random coefficients to
   // a reader that decides from these entries whether Eq. 77 needs imposing, and against an absolute threshold the
-  // noise crosses it or not depending on the part's size (issue 12: the runtime compares them with 1e-12 m and
+  // noise crosses it or not depending on the part's size (the runtime compares them with 1e-12 m and
   // imposed Eq. 77 below about 2 cm of steel, which moved the modal response by up to 4 %).
   if (const Eigen::Index n_f = fields.upsilon.cols(); n_f > 0) {
     auto translation_row = gcms.mass_matrix.row(0).tail(n_f);

@@ -1,4 +1,4 @@
-// Simulation's checkpoints (issue 32): what a run saves besides the integrator's state and history (its counters, the
+// Simulation's checkpoints: what a run saves besides the integrator's state and history (its counters, the
 // conservation checks' baselines, each output file's length and each series' frames), the identity of the scene and
 // of its body files, and the resume of the output files.
 #include "simulation_run.hpp"

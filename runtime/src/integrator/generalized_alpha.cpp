@@ -24,7 +24,7 @@ namespace {
 // right-hand side of the consistent initial accelerations (a directional derivative). The step is ∛ε over the fastest
 // relative rate of a coordinate, |q̇_i| / (|q_i| + scale_i), or 1/h, as constraint_rate's (stabilized_coupling.cpp):
 // truncation and rounding both ~ε^⅔ of the terms. (A fixed 1e-6 s differenced a 1 mm part spinning at 3.3e5 rad/s
-// over 0.3 rad, and its initial accelerations were off by 40 %, issue 29's scale test.)
+// over 0.3 rad, and its initial accelerations were off by 40 %.)
 Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                                      const Eigen::VectorXd& scales, double h) {
   double fastest = 1.0 / h;
@@ -183,7 +183,7 @@ GeneralizedAlpha::Impl::Impl(const System& system, const GeneralizedAlphaOptions
   };
   if (!saddle.ok()) refuse();
   // A solve is good when its residual is round-off of the terms that cancel in it, ‖|K| |x|‖ + ‖b‖, not of ‖b‖ alone
-  // (issue 12: a 100 m beam spinning at 0.1 rad/s cancels terms of 3e8 to a right-hand side of 3e-2).
+  // (a 100 m beam spinning at 0.1 rad/s cancels terms of 3e8 to a right-hand side of 3e-2).
   auto solved = [&kkt](const Eigen::VectorXd& x, const Eigen::VectorXd& b) {
     if (!x.allFinite()) return false;
     const Eigen::SparseMatrix<double> magnitudes = kkt.cwiseAbs();
@@ -194,8 +194,8 @@ GeneralizedAlpha::Impl::Impl(const System& system, const GeneralizedAlphaOptions
   // a joint, would otherwise give a velocity jump and a spike in the multipliers). The bodies' rigid velocities close
   // the rows where they can, M-nearest among them with the deformation rates kept; only where they cannot, all
   // velocities, M-nearest. (M-nearest over all, a beam held at its root and given only its spin took part of the
-  // root's velocity correction into its deformation rates, a kick that set it vibrating at 2 % of its size; issue 29's
-  // scale test. A deformation block weighted even 1e6 times in the metric still took 1 % of it: the fields' shapes
+  // root's velocity correction into its deformation rates, a kick that set it vibrating at 2 % of its size.
+  // A deformation block weighted even 1e6 times in the metric still took 1 % of it: the fields' shapes
   // move an rbe3 root with little mass.)
   {
     const Eigen::VectorXd phi_t = system.constraint_time_derivative(t_, q_, options.step);

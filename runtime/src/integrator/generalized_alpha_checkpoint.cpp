@@ -1,4 +1,4 @@
-// GeneralizedAlpha: save() and restore(), a run's continuation bit for bit (a scene's checkpoint, issue 32). Besides
+// GeneralizedAlpha: save() and restore(), a run's continuation bit for bit (a scene's checkpoint). Besides
 // the state, what the next steps depend on is the modified Newton matrix kept from an earlier iterate: restore()
 // rebuilds it there, from the inputs build_newton_matrix recorded, with the sparse factorization's pivot history as
 // it was before that build (ReducedSolver::restore_history).
@@ -71,7 +71,7 @@ void GeneralizedAlpha::Impl::save(format::CheckpointData& out) const {
   times[kStep] = options_.step;
   times[kRho] = options_.rho_infinity;
   e["integrator.counts"] = counts;
-  // The halving of failed steps and the coupled step's turn (issue 47): what the next step starts with.
+  // The halving of failed steps and the coupled step's turn: what the next step starts with.
   e["integrator.retries"] = {static_cast<double>(split_), static_cast<double>(retried_steps_),
                              std::isfinite(smallest_step_) ? smallest_step_ : 0.0,  // 0: no step yet
                              static_cast<double>(coupled_steps_left_), static_cast<double>(coupled_backoff_),

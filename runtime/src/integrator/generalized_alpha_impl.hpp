@@ -119,8 +119,7 @@ class GeneralizedAlpha::Impl {
   Eigen::VectorXd scales_;
   /// Per coordinate, W of ConstraintForm::stabilized_index2: scale_i² / (m r²) of its body. Within a body the
   /// coordinates' own metric; between bodies 1/(m r²), so that a light body takes the position correction rather
-  /// than a heavy one (with scale² alone a 1 mm bar on the tip of a 100 m bar moved the big bar, and Newton stalled;
-  /// helper review of 77a5e2a).
+  /// than a heavy one (with scale² alone a 1 mm bar on the tip of a 100 m bar moved the big bar, and Newton stalled).
   Eigen::VectorXd squared_scales_;
   /// Per coordinate, its scale per metre (scales_ / the body's r): how far a world position of 1 m moves it.
   Eigen::VectorXd reach_;

@@ -93,7 +93,7 @@ bool GeneralizedAlpha::Impl::build_newton_matrix(const StepFrame& f, bool& evalu
   // The coupled stabilised step with a sparse reduced matrix builds its own system (below).
   const bool sparse_coupled = f.stabilized && couple_ && sparse_core_ != nullptr;
   // A floating-frame body's tangent and the dense matrix carry K_g: weigh it at this iterate, not at the last
-  // one evaluated (after a failed attempt, that one may be far off or not finite; helper review of e1a02b5).
+  // one evaluated (after a failed attempt, that one may be far off or not finite).
   if (system_.has_prestress()) system_.set_prestress(f.t1, w.q, w.v, w.mu, f.beta_prime);
   if (!sparse_coupled) solver_->factor(f.t1, w.q, w.v, w.qdd, w.mu, w.jacobian);
   if (f.stabilized) {
@@ -160,8 +160,7 @@ bool GeneralizedAlpha::Impl::iterate(const StepFrame& f, double extent, bool& fr
       // rows, γ' Φ_q δ = −Ψ with Ψ = Φ_q v + Φ_t; the position rows are then met by ν alone: Φ_q W Φ_qᵀ Δν =
       // −Φ − Φ_q δ = −Φ + Ψ/γ'. The position moves by W Φ_qᵀ Δν before the dynamic rows are evaluated, so that δ
       // sees it in the same iteration (with the move applied one iteration late, the corrections of the two
-      // cancelled and the stopping test ended the iteration early: velocities off by 6.5e-7 of 3 m/s, helper
-      // review of 77a5e2a).
+      // cancelled and the stopping test ended the iteration early: velocities off by 6.5e-7 of 3 m/s).
       w.nu_step = velocity_rows - phi;
       projected_->solve_in_place(w.nu_step);
       position_correction(w.nu_step, position_step);
@@ -240,17 +239,17 @@ bool GeneralizedAlpha::Impl::iterate(const StepFrame& f, double extent, bool& fr
     const double remaining = rate < 1.0 ? correction * rate / (1.0 - rate) : std::numeric_limits<double>::infinity();
     // Corrections that stopped shrinking within kStagnationFloors floors are round-off of a source the floor does
     // not know: the rounding of the linear solve, whose saddle-point matrix can have a condition number of 1e14
-    // (helper review of 77a5e2a: a 1 mm bar on the tip of a 100 m bar repeated a correction of 250 floors).
+    // (a 1 mm bar on the tip of a 100 m bar repeated a correction of 250 floors).
     const bool stagnated = iterations_ > 2 && rate > 0.5 && above_floor <= kStagnationFloors;
     const bool at_round_off = (above_floor <= 1.0 && above_velocity_floor <= 1.0) || stagnated;
     if (at_round_off || remaining <= options_.tolerance * distance) {
-      // Slow contraction that ends at round-off says nothing about the matrix: keep it (helper review: the rigid
+      // Slow contraction that ends at round-off says nothing about the matrix: keep it (the rigid
       // pendulum at h = 1e-5 s rebuilt it 121 times instead of once).
       if (at_round_off && slow) refresh_ = false;
       return true;
     }
     // Judged against a correction of the same matrix: the first one of a matrix built in this iteration follows
-    // one of the stale matrix (helper review: counting it rebuilt a fresh matrix at once, two builds per step).
+    // one of the stale matrix (counting it rebuilt a fresh matrix at once, two builds per step).
     if (!refresh && correction > 0.25 * previous_correction) refresh_ = slow = true;
     previous_correction = correction;
   }

@@ -83,7 +83,7 @@ double driven_row_time_derivative(const Joint& j, double t, double time_scale, c
     rate = j.angle_rate(t);
   } else {
     // ∛(ε (1 + |t|/h)) h: the step that balances truncation (step² φ‴) against the angle's rounding (ε |φ|, |φ| growing
-    // with t), with time in units of h; a step ∛ε (|t| + h) let the truncation grow as t² (review of bdd6de4).
+    // with t), with time in units of h; a step ∛ε (|t| + h) let the truncation grow as t².
     const double h = std::abs(time_scale);
     const double dt = std::cbrt(std::numeric_limits<double>::epsilon() * (1.0 + std::abs(t) / h)) * h;
     const double before = t - dt, after = t + dt;  // divided by after − before: exact, whatever t + dt rounds to

@@ -1,4 +1,4 @@
-// system_prestress.cpp: the System's geometric stiffening (prestress.hpp; issue 29, formulations.md, "Geometric
+// system_prestress.cpp: the System's geometric stiffening (prestress.hpp; formulations.md, "Geometric
 // Stiffening"): the weights λ of each prestressed body's cases from its spin and the loads at its interfaces, and the
 // forces they add.
 #include "system_impl.hpp"

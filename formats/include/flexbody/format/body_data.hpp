@@ -165,7 +165,7 @@ struct RecoveryRegion {
   Eigen::MatrixXd stress_modes;
 };
 
-/// The geometric stiffness of unit prestress cases (issue 29; SCHEMA.md "Geometric stiffness";
+/// The geometric stiffness of unit prestress cases (SCHEMA.md "Geometric stiffness";
 /// preprocess/geometric_stiffness.hpp): the prestress of case k, weighted by λ_k, adds λ_k Ĝ_k to the stiffness
 /// projected on Y = [1, X̄, Ῡ'] (as G projects the mass); the GCMS's K̂ gains λ_k (Ĝ_k[4:, 4:] ⊗ I3).
 /// The geometric stiffness's load cases are named "centrifugal:<c>" and "<interface>:<l>", with c and l from these

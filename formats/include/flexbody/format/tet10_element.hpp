@@ -1,5 +1,5 @@
 #pragma once
-// flexbody/format/tet10_element.hpp: the quadratic tetrahedron (10 nodes) of issue 15, beside the linear one
+// flexbody/format/tet10_element.hpp: the quadratic tetrahedron (10 nodes), beside the linear one
 // (tet4_element.hpp) for the same reason: fbprep assembles K̄ and M_s from it and the runtime's full-order body would
 // assemble them again from a body file's mesh.
 //
@@ -41,7 +41,7 @@ enum class Tet10MassRule {
 
 /// The Jacobian determinant det ∂x/∂ξ at the 4 Gauss points, then at the 10 nodes [m³ per unit reference volume,
 /// 6 V for a straight element]: an element whose values are not all positive is inverted or folded by its
-/// curvature (issue 15's quality check).
+/// curvature (the quality check).
 [[nodiscard]] Eigen::Matrix<double, 14, 1> tet10_jacobian_determinants(const Tet10Nodes& nodes);
 
 /// The 4-point Gauss rule of degree 2 on the reference tetrahedron (volume 1/6), the rule of tet10_stiffness: its
@@ -56,7 +56,7 @@ struct Tet10Gradients {
 };
 [[nodiscard]] Tet10Gradients tet10_gradients(const Tet10Nodes& nodes, const Eigen::Vector3d& xi);
 
-/// What stress recovery uses of one element (issue 15): the displacement gradient at each of its nodes, extrapolated
+/// What stress recovery uses of one element: the displacement gradient at each of its nodes, extrapolated
 /// from the 4 Gauss points as Abaqus and CalculiX do, ∇u(node a) = Σ_b u_b ⊗ at_node[a].row(b). The 4 Gauss-point
 /// values are fitted by the linear function of the barycentric coordinates through them and that function is
 /// evaluated at the node (at a mid-edge node: the mean of its two corners). In a straight-sided element the gradient

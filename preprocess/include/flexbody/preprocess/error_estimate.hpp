@@ -1,5 +1,5 @@
 #pragma once
-// flexbody/preprocess/error_estimate.hpp: how far a mesh's frequencies are from the part's (issue 28 item 5).
+// flexbody/preprocess/error_estimate.hpp: how far a mesh's frequencies are from the part's.
 //
 // The Zienkiewicz-Zhu estimate (ZZ 1987): the recovered stress σ* (the nodal averages of stress_recovery.hpp,
 // interpolated by the element's shape functions) is closer to the exact stress than the element's own σ_h, so

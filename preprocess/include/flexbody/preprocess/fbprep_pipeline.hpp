@@ -71,7 +71,7 @@ struct PrepOptions {
   /// Output regions for stress recovery; nullopt: the default (kDefaultRecoveryBytes), empty: none.
   std::optional<std::vector<OutputRegionRequest>> output_regions;
   /// The geometric stiffness of the prestress cases (geometric_stiffness.hpp: the six centrifugal ones and a unit
-  /// force and moment at each interface), projected on the GCMS fields, for rotating and preloaded parts (issue 29).
+  /// force and moment at each interface), projected on the GCMS fields, for rotating and preloaded parts.
   bool geometric_stiffness = false;
   /// The relative error of the first frequency (dimensionless, f_h / f − 1 by the error estimate) above which the
   /// default mesh is refined once where the estimate puts the error (mesh_refinement.hpp), aiming at half of it with
@@ -92,7 +92,7 @@ struct StageRecord {
   double peak_memory_mb = 0.0;
 };
 
-/// The estimated frequency error (relative) above which fbprep warns (issue 28 item 5).
+/// The estimated frequency error (relative) above which fbprep warns.
 inline constexpr double kAccuracyWarning = 0.05;
 
 /// What fbprep did, for FullReport() and --json. Starts empty; run_fbprep fills every field.

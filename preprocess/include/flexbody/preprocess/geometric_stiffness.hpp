@@ -1,6 +1,6 @@
 #pragma once
 // flexbody/preprocess/geometric_stiffness.hpp: the geometric (stress) stiffness of unit prestress load cases, projected
-// onto the GCMS fields (issue 29; formulations.md, "Geometric Stiffening").
+// onto the GCMS fields (formulations.md, "Geometric Stiffening").
 //
 // A part that spins or carries joint loads is prestressed, and the prestress σ stiffens it (tension) or softens it
 // (compression) through the second-order strain energy ½ ∫ σ_ij u_k,i u_k,j dV. A linear corotational model has no

@@ -1,6 +1,6 @@
 #pragma once
 // flexbody/preprocess/mesh_refinement.hpp: element sizes for a second mesh, refined where the error estimate
-// (error_estimate.hpp) puts the frequencies' error (issue 28 item 2: the default mesh resolves the part).
+// (error_estimate.hpp) puts the frequencies' error (the default mesh resolves the part).
 //
 // An element e of size h_e (here (8.5 V_e)^(1/3), the size at which gmsh fills its volume V_e: gmsh_import.cpp's
 // estimate) holds the share η²_e of a mode's relative eigenvalue error. With elements of order p and a smooth mode,

@@ -49,7 +49,7 @@ inline constexpr int kStressComponents = 6;
 [[nodiscard]] Eigen::MatrixXd nodal_stress_modes(const TetMesh& mesh, const Material& material,
                                                  const Eigen::MatrixXd& fields, const Eigen::VectorXi& region_nodes);
 
-/// The same for quadratic tetrahedra (issue 15): each element's stress at its node is extrapolated from its 4 Gauss
+/// The same for quadratic tetrahedra: each element's stress at its node is extrapolated from its 4 Gauss
 /// points (format::tet10_recovery_gradients: exact in straight-sided elements, whose stress is linear), then averaged
 /// over the elements around the node weighted by their volumes. A quadratic displacement field gives its exact
 /// (linear) stress at every node of a straight-sided mesh.

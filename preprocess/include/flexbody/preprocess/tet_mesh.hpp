@@ -29,7 +29,7 @@ struct TetMesh {
   [[nodiscard]] Eigen::Index dof_count() const { return 3 * nodes.rows(); }
 };
 
-/// A quadratic tetrahedral mesh (issue 15): per element its 4 corners, then the middles of the edges (0,1), (1,2),
+/// A quadratic tetrahedral mesh: per element its 4 corners, then the middles of the edges (0,1), (1,2),
 /// (2,0), (0,3), (1,3), (2,3) (format/tet10_element.hpp). Node coordinates in metres, 0-based indices.
 struct Tet10Mesh {
   RowMatrixX3d nodes;

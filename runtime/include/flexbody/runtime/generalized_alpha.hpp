@@ -65,7 +65,7 @@ enum class ConstraintForm {
   /// slider needs it; runtime/src/integrator/stabilized_coupling.hpp).
   /// Without
   /// the velocity rows the velocities drift off the hidden constraints and, at ρ∞ near 1, a spinning body gains
-  /// energy and angular momentum (issue 12: a heavy top at 150 rad/s diverges at ρ∞ = 1, a flipping plate gains
+  /// energy and angular momentum (a heavy top at 150 rad/s diverges at ρ∞ = 1, a flipping plate gains
   /// 17.6 % energy at ρ∞ = 0.99).
   stabilized_index2,
   /// Φ(q_{n+1}) = 0 only (Arnold & Brüls 2007): one linear solve per iteration less (a product with Φ_q and a
@@ -133,7 +133,7 @@ struct GeneralizedAlphaOptions {
   double deformation_limit = 0.02;
   /// A linear corotational model has no centrifugal (geometric) stiffening, so its deformation of a body spinning at
   /// Ω is wrong by about c (Ω/ω₁)², ω₁ = 2π BodyModel::lowest_frequency_hz: c ≈ 0.36 measured in the spin plane of
-  /// a clamped beam (10 % at Ω = 0.53 ω₁, issue 12), c ≈ 1.2 out of it (Southwell's coefficient of a cantilever's
+  /// a clamped beam (10 % at Ω = 0.53 ω₁), c ≈ 1.2 out of it (Southwell's coefficient of a cantilever's
   /// first mode). After each step, a flexible body whose Ω/ω₁ exceeds `spin_warning` gets a line in warnings()
   /// (once), and one whose Ω/ω₁ exceeds `spin_limit` stops the run with a StepFailure that says why. 0 disables
   /// either. Bodies without a known frequency are not checked.

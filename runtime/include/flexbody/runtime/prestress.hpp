@@ -1,5 +1,5 @@
 #pragma once
-// flexbody/runtime/prestress.hpp: geometric stiffening at run time (issue 29; formulations.md, "Geometric Stiffening").
+// flexbody/runtime/prestress.hpp: geometric stiffening at run time (formulations.md, "Geometric Stiffening").
 //
 // A body file written with `fbprep --geometric-stiffness` holds Ĝ_k, the geometric stiffness of unit prestress case k
 // projected on Y = [1, X̄, Ῡ'] (SCHEMA.md, "Geometric stiffness"). At run time the prestress is weighted by the loads

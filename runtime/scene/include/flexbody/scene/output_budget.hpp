@@ -1,6 +1,6 @@
 #pragma once
 // flexbody/scene/output_budget.hpp: what a run will write, estimated before its first step, against a budget of bytes
-// and files (issue 32: a ParaView frame every 10 steps of 1e-9 s is terabytes and millions of files, and nothing said
+// and files (a ParaView frame every 10 steps of 1e-9 s is terabytes and millions of files, and nothing said
 // so before the disk filled).
 
 #include <stdexcept>

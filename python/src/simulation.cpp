@@ -107,9 +107,19 @@ class PythonSimulation {
     const Busy busy(*this);
     try {
       simulation_->run(end, [&progress](double t) {
-        if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-        if (!progress.is_none()) progress(t);
+        // The KeyboardInterrupt stays Python's pending error until the run has stopped (termination: stopped).
+        if (PyErr_CheckSignals() != 0) throw scene::RunInterrupted("KeyboardInterrupt");
+        if (progress.is_none()) return;
+        try {
+          progress(t);
+        } catch (py::error_already_set& e) {  // Ctrl-C while the function ran: a stop too
+          if (!e.matches(PyExc_KeyboardInterrupt)) throw;
+          e.restore();
+          throw scene::RunInterrupted("KeyboardInterrupt");
+        }
       });
+    } catch (const scene::RunInterrupted&) {
+      throw py::error_already_set();
     } catch (const std::invalid_argument& e) {  // an end before the time, or too many steps ahead
       throw py::value_error(e.what());
     }

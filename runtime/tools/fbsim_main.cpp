@@ -275,7 +275,7 @@ int run(const Invocation& in, scene::Scene read) {
     fail(fmt::format("{}: {}", scene_path.string(), e.what()), kBadInput);
   } catch (const std::exception& e) {
     // A scene's own function (a force's) that threw during a step: the run so far, then why it ended.
-    if (simulation && simulation->summary().termination == flexbody::scene::Termination::error) print_summary(false);
+    if (simulation && simulation->termination() == flexbody::scene::Termination::error) print_summary(false);
     fail(fmt::format("{}: {}", scene_path.string(), e.what()), kFailed);
   }
   if (terminal) std::cerr << '\n';

@@ -195,6 +195,23 @@ def test_a_raising_function_stops_the_run_at_the_last_completed_step(folder):
     np.testing.assert_allclose(sim.outputs["bore_3"].values[-1], expected.values[-1], rtol=0, atol=1e-7)
 
 
+def test_ctrl_c_stops_the_run_at_the_last_completed_step(folder):
+    """A KeyboardInterrupt (here raised by the progress function, as Ctrl-C would while it runs) stops the run: it
+    reaches the caller, the last completed step is recorded, and the summary says the run was stopped."""
+    def progress(t):
+        raise KeyboardInterrupt
+
+    sim = flexbody.load_scene(folder / "scene.yaml")
+    with pytest.raises(KeyboardInterrupt):
+        sim.run(0.2, progress=progress)
+    assert sim.time == pytest.approx(0.1, abs=1e-12)  # progress is called every 100 steps of 1 ms
+    assert sim.outputs["bore_3"].time[-1] == sim.time
+    summary = sim.summary()
+    assert summary["termination"] == "stopped" and summary["time_s"] == sim.time
+    sim.run(0.11)
+    assert sim.summary()["termination"] == "end reached"
+
+
 def test_a_function_may_not_step_its_own_simulation(folder):
     holder = {}
 

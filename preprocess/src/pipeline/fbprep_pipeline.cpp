@@ -110,7 +110,8 @@ PrepSummary run_pass(const PrepOptions& options, std::shared_ptr<const MeshSizeF
     const StageTimer timer(summary, "assembly");
     assembly_stage(pass);
   }
-  interface_stage(pass);  // between the timed stages, as it always was
+  body_frame_stage(pass);  // these two between the timed stages, as they always were
+  interface_stage(pass);
   bool whole = true;
   {
     const StageTimer timer(summary, "modes");

@@ -1,8 +1,8 @@
 #pragma once
 // One fbprep pass from the input to the body file, in stages (fbprep_pipeline.cpp: run_pass calls them in order and
-// times them): the mesh, the FE matrices, the interfaces and load cases, the modes, the GCMS constants, the stress
-// modes, the body file. Each stage reads what the ones before it left in the PrepPass and fills its part of the
-// summary. flexbody::preprocess's own, not installed.
+// times all but the body frame and the interfaces): the mesh, the FE matrices, the body frame, the interfaces and load
+// cases, the modes, the GCMS constants, the stress modes, the body file. Each stage reads what the ones before it left
+// in the PrepPass and fills its part of the summary. flexbody::preprocess's own, not installed.
 
 #include "flexbody/format/body_data.hpp"
 #include "flexbody/preprocess/fbprep_pipeline.hpp"
@@ -61,8 +61,10 @@ struct PrepPass {
 
 /// The geometry imported and meshed (gmsh_import.hpp), the mesh's counts and quality (prep_pass_mesh.cpp).
 void mesh_stage(PrepPass& pass);
-/// K̄ and M_s, the mass properties, and the body-frame mesh (origin at the centre of mass) (prep_pass_mesh.cpp).
+/// K̄ and M_s, and the mass properties (prep_pass_mesh.cpp).
 void assembly_stage(PrepPass& pass);
+/// The mesh in the body frame (origin at the centre of mass, the input's axes) and its boundary (prep_pass_mesh.cpp).
+void body_frame_stage(PrepPass& pass);
 /// The interfaces and load points selected on the mesh, the load points' unit loads, and the geometric stiffness's
 /// load cases when asked for (prep_pass_mesh.cpp).
 void interface_stage(PrepPass& pass);

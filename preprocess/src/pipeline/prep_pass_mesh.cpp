@@ -61,8 +61,11 @@ void assembly_stage(PrepPass& pass) {
     pass.scalar_mass = assemble_scalar_mass(mesh, graph, geometry, options.material.density, MassScheme::consistent);
   });
   summary.mass = mass_properties(pass.scalar_mass, pass.input_nodes());
+}
 
-  // The body frame: the origin at the centre of mass, the input's axes.
+void body_frame_stage(PrepPass& pass) {
+  const ImportedMesh& imported = pass.imported;
+  PrepSummary& summary = pass.summary;
   format::BodyData& body = pass.body;
   body.mesh.nodes = pass.input_nodes().rowwise() - summary.mass.center_of_mass_input.transpose();
   if (imported.quadratic) {

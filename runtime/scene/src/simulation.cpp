@@ -254,6 +254,9 @@ void Simulation::Run::ended_by_exception(const std::exception_ptr& reason) {
   } catch (const runtime::StepFailure& e) {
     summary.termination = Termination::step_failed;
     summary.termination_message = e.what();
+  } catch (const RunInterrupted& e) {
+    summary.termination = Termination::stopped;
+    summary.termination_message = e.what();
   } catch (const std::exception& e) {
     summary.termination = Termination::error;
     summary.termination_message = e.what();
@@ -352,6 +355,8 @@ void Simulation::step() {
 
 bool Simulation::run(double end, const std::function<void(double)>& progress, const std::function<bool()>& stop) {
   Run& r = *run_;
+  r.summary.termination = Termination::running;
+  r.summary.termination_message.clear();
   const double now = r.integrator->time();
   const double h = r.scene.integrator.step;
   // A time that is `end` up to the rounding of t0 + k h (nine steps of 1e-3 s end at 0.009000000000000001) is there.
@@ -417,10 +422,14 @@ const runtime::GeneralizedAlpha& Simulation::integrator() const { return *run_->
 runtime::IntegratorState Simulation::state() const { return run_->integrator->state(); }
 void Simulation::set_state(const runtime::IntegratorState& state) {
   run_->integrator->set_state(state);
+  run_->summary.termination = Termination::running;
+  run_->summary.termination_message.clear();
   run_->baseline();
   run_->reschedule();
 }
 const std::vector<OutputTable>& Simulation::tables() const { return run_->tables; }
+
+Termination Simulation::termination() const noexcept { return run_->summary.termination; }
 
 const char* termination_name(Termination termination) {
   switch (termination) {

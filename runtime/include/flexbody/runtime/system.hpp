@@ -103,6 +103,7 @@ class System {
   ~System();
   System(const System& other);  ///< a copy with its own work storage (the constant matrices stay shared)
   System& operator=(const System& other);
+  /// A moved-from System holds nothing: it may only be assigned to or destroyed.
   System(System&&) noexcept;
   System& operator=(System&&) noexcept;
 

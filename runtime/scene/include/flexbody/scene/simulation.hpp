@@ -19,9 +19,10 @@ namespace flexbody::scene {
 
 /// How a run ended: Simulation::run's or step()'s last call.
 enum class Termination {
-  running,      ///< no run() has ended yet (the start, or step() calls), or the last one was resumed from
+  running,      ///< no run() has ended yet: the start, step() calls, a resumed run, or a state set since
   end_reached,  ///< run() reached its end time
-  stopped,      ///< run()'s `stop` asked it to stop (fbsim: a signal)
+  /// run()'s `stop` asked it to stop (fbsim: a signal), or its `progress` threw RunInterrupted (Python: Ctrl-C)
+  stopped,
   step_failed,  ///< a step failed (runtime::StepFailure; RunSummary::termination_message says why)
   error,        ///< an exception from the scene's own functions (a force's) ended it
 };
@@ -111,6 +112,14 @@ struct Resume {
   std::filesystem::path checkpoint;
 };
 
+/// What a run()'s `progress` function throws to stop the run at once, at the last completed step (recorded, as after
+/// a failed step), with the termination `stopped`: an interrupt that must reach the caller as an exception (Python's
+/// KeyboardInterrupt). what() says what stopped it.
+class RunInterrupted : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// A checkpoint that does not belong to the scene (another scene file or body file, another step), or that does not
 /// match its output directory (a CSV file shorter than it was, a frame missing): one line naming what differs.
 class CheckpointMismatch : public std::runtime_error {
@@ -168,6 +177,8 @@ class Simulation {
   [[nodiscard]] std::optional<double> last_checkpoint() const;
   /// The run so far.
   [[nodiscard]] RunSummary summary() const;
+  /// How the run ended (RunSummary::termination), without the summary's work (which reads the output files).
+  [[nodiscard]] Termination termination() const noexcept;
   /// The rows recorded so far (OutputSinks::in_memory; empty otherwise), in the scene's order of outputs, then
   /// "monitors" when the scene asks for them.
   [[nodiscard]] const std::vector<OutputTable>& tables() const;

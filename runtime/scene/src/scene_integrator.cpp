@@ -65,17 +65,8 @@ void read_integrator(const format::YamlReader& r, const YAML::Node& root, const 
       throw std::invalid_argument(fmt::format("--end must be a positive time in seconds, got {}", *overrides.end_time));
     scene.end_time = *overrides.end_time;
   }
-  if (const YAML::Node every = integrator["output_every"]) {
-    if (automatic)
-      r.fail(every, "integrator output_every counts steps, which step: auto chooses; give output_interval (seconds)");
-    scene.output_every = r.count(every, "integrator output_every");
-    if (scene.output_every < 1) r.fail(every, "integrator output_every must be at least 1");
-  }
-  if (const YAML::Node interval = integrator["output_interval"]) {  // [s]: rows at the same times whatever the step
-    if (integrator["output_every"])
-      r.fail(interval, "integrator: output_every (steps) and output_interval (seconds) are both given; give one");
-    scene.output_interval = r.positive(interval, "integrator output_interval");
-  }
+  read_cadence(r, integrator, "integrator", "output_every", "output_interval", automatic, scene.output_every,
+               scene.output_interval);
   if (automatic) {
     read_error_control(r, integrator, scene);
   } else {

@@ -124,16 +124,8 @@ void read_paraview(SceneReading& reading) {
     const long steps = automatic ? 1 : static_cast<long>(step_count(scene.end_time, scene.integrator.step));
     scene.paraview_every = static_cast<int>(std::max(1L, (steps + 99) / 100));
     if (automatic && !paraview["interval"]) scene.paraview_interval = scene.end_time / kAutoFrames;
-    if (const YAML::Node every = paraview["every"]) {
-      if (automatic) r.fail(every, "paraview every counts steps, which step: auto chooses; give interval (seconds)");
-      scene.paraview_every = r.count(every, "paraview every");
-      if (scene.paraview_every < 1) r.fail(every, "paraview every must be at least 1");
-    }
-    if (const YAML::Node interval = paraview["interval"]) {  // [s]: frames at the same times whatever the step
-      if (paraview["every"])
-        r.fail(interval, "paraview: every (steps) and interval (seconds) are both given; give one");
-      scene.paraview_interval = r.positive(interval, "paraview interval");
-    }
+    read_cadence(r, paraview, "paraview", "every", "interval", automatic, scene.paraview_every,
+                 scene.paraview_interval);
   }
 }
 

@@ -6,6 +6,23 @@
 
 namespace flexbody::scene {
 
+void read_cadence(const Reader& r, const YAML::Node& map, const std::string& what, const char* every_key,
+                  const char* interval_key, bool automatic, int& every, std::optional<double>& interval) {
+  if (const YAML::Node node = map[every_key]) {
+    if (automatic)
+      r.fail(node, fmt::format("{} {} counts steps, which step: auto chooses; give {} (seconds)", what, every_key,
+                               interval_key));
+    every = r.count(node, fmt::format("{} {}", what, every_key));
+    if (every < 1) r.fail(node, fmt::format("{} {} must be at least 1", what, every_key));
+  }
+  if (const YAML::Node node = map[interval_key]) {  // [s]: at the same times whatever the step
+    if (map[every_key])
+      r.fail(node,
+             fmt::format("{}: {} (steps) and {} (seconds) are both given; give one", what, every_key, interval_key));
+    interval = r.positive(node, fmt::format("{} {}", what, interval_key));
+  }
+}
+
 int SceneReading::body_of(const YAML::Node& node, const std::string& where) const {
   const std::string name = r.text(node, where + " body");
   const auto found = bodies.find(name);

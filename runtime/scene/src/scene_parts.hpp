@@ -11,6 +11,7 @@
 
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,12 @@ using Reader = format::YamlReader;
 
 /// spherical, fixed, revolute, prismatic or driven-revolute; anything else fails on its line.
 [[nodiscard]] runtime::JointType joint_type(const Reader& r, const YAML::Node& node, const std::string& where);
+
+/// How often a run records (rows, frames): `every_key` counts steps (at least 1; refused under step: auto, whose steps
+/// the controller chooses) into `every`, `interval_key` gives seconds into `interval`; not both. `what` names the map
+/// in messages ("integrator", "paraview"). Each is left as it is when its key is absent.
+void read_cadence(const Reader& r, const YAML::Node& map, const std::string& what, const char* every_key,
+                  const char* interval_key, bool automatic, int& every, std::optional<double>& interval);
 
 /// A scene being read: its document, the scene and its builder, and what the keys read so far defined.
 struct SceneReading {

@@ -2,13 +2,14 @@
 // in generalized_alpha_step.cpp, its Newton iteration in generalized_alpha_newton.cpp.
 #include "generalized_alpha_impl.hpp"
 
+#include "../body/body_measures.hpp"
 #include "constraint_projection.hpp"
 #include "field_predictor.hpp"
 #include "local_error.hpp"
-#include "step_controller.hpp"
 #include "newton_solvers.hpp"
 #include "saddle_point.hpp"
 #include "stabilized_coupling.hpp"
+#include "step_controller.hpp"
 
 #include <Eigen/SparseCore>
 
@@ -46,46 +47,6 @@ Eigen::VectorXd constraint_curvature(const System& system, double t, const Eigen
 // pinned beam of fast_spin_test 1.0; a deformed tumbling beam's Tisserand rows 4e31 times (rejected).
 constexpr double kRigidCorrectionRatio = 100.0;
 
-// The length scale of each of one body's coordinates (GeneralizedAlphaOptions::tolerance): the radius of gyration
-// r = √(tr J / m) for τ, 1 for vec(A) (δa moves a point at distance r by r δa, as δτ = r δa would), and for a field
-// coordinate the amplitude whose largest nodal displacement is r: r / max_i |Ῡ'(i, f)|. The full-order body's fields
-// are the nodal displacements themselves (Ῡ' = I) or its rbe2 sets' affine fields, scaled to at most 1; a model built without its fields takes the RMS displacement,
-// r √(m / G_ff(f, f)).
-void append_scales(const BodyModel& model, Eigen::VectorXd& scales, Eigen::Index offset) {
-  const double trace = model.g_border(1, 1) + model.g_border(2, 2) + model.g_border(3, 3);
-  const double r = std::sqrt(std::max(trace, 0.0) / model.mass);
-  scales.segment(offset, 3).setConstant(r);
-  if (model.floating()) {
-    // Euler parameters: δp turns the body by 2 |δp|, moving a point at r by 2 r |δp|: scale ½. A modal coordinate:
-    // the amplitude whose largest nodal displacement is r (each node's displacement in the mode, W_mᵀ Y(i, :)ᵀ).
-    const FfrfModel& f = *model.floating_frame;
-    scales.segment(offset + 3, 4).setConstant(0.5);
-    const bool has_fields = model.fields.cols() == model.field_count() && model.fields.rows() == model.nodes.rows();
-    Eigen::MatrixX3d u;  // every node's displacement in mode m (n_n x 3), Y W_m as two matrix products
-    for (Eigen::Index m = 0; m < f.modes; ++m) {
-      double largest = 0.0;
-      if (has_fields && model.nodes.rows() > 0) {
-        const auto w = f.shapes.middleCols<3>(3 * m);
-        u.noalias() = model.fields * w.bottomRows(model.field_count());
-        u.noalias() += model.nodes * w.middleRows<3>(1);
-        u.rowwise() += w.row(0);
-        largest = u.rowwise().norm().maxCoeff();
-      }
-      scales(offset + 7 + m) = largest > 0.0 ? r / largest : r * std::sqrt(model.mass / f.modal_mass(m, m));
-    }
-    return;
-  }
-  scales.segment(offset + 3, 9).setConstant(1.0);
-  for (Eigen::Index f = 0; f < model.field_count(); ++f) {
-    double scale = r;
-    if (!model.sparse && model.fields.cols() == model.field_count() && model.fields.rows() > 0)
-      scale = r / model.fields.col(f).cwiseAbs().maxCoeff();
-    else if (!model.sparse)
-      scale = r * std::sqrt(model.mass / model.mass_matrix(4 + f, 4 + f));
-    scales.segment(offset + 12 + 3 * f, 3).setConstant(scale);
-  }
-}
-
 }  // namespace
 
 GeneralizedAlpha::Impl::Impl(const System& system, const GeneralizedAlphaOptions& options, double t0)
@@ -102,8 +63,8 @@ GeneralizedAlpha::Impl::Impl(const System& system, const GeneralizedAlphaOptions
   scales_.resize(q_.size());
   reach_.resize(q_.size());
   for (int b = 0; b < system.body_count(); ++b) {
-    append_scales(system.model(b), scales_, system.offset(b));
     const Eigen::Index o = system.offset(b), n_b = system.model(b).coordinate_count();
+    detail::coordinate_scales(system.model(b), scales_.segment(o, n_b));
     reach_.segment(o, n_b) = scales_.segment(o, n_b) / scales_(o);  // scale per metre: τ's scale is r
   }
   for (const Joint& j : system.joints()) {
@@ -121,30 +82,9 @@ GeneralizedAlpha::Impl::Impl(const System& system, const GeneralizedAlphaOptions
                                 "non-finite radius of gyration, or a field that displaces no node)");
   spin_warned_.assign(static_cast<std::size_t>(system.body_count()), 0);
   for (int b = 0; b < system.body_count(); ++b) prestress_gaps_.push_back(system.prestress_gap(b));
-  for (int b = 0; b < system.body_count(); ++b) {  // bounding-box diagonals, for the deformation limit
-    const format::RowMatrixX3d& nodes = system.model(b).nodes;
-    body_sizes_.push_back(nodes.rows() ? (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm() : 0.0);
-  }
-  modal_grams_.resize(static_cast<std::size_t>(system.body_count()));
-  for (int b = 0; b < system.body_count(); ++b) {  // Γ_kl = c_kᵀ (G_ff ⊗ I3) c_l, by polarisation of the mass norm
-    const BodyModel& model = system.model(b);
-    if (!model.floating()) continue;
-    const Eigen::Index modes = model.coordinate_count() - 7;
-    Eigen::VectorXd q_b = Eigen::VectorXd::Zero(7 + modes);
-    q_b(3) = 1.0;
-    std::vector<Eigen::VectorXd> c(static_cast<std::size_t>(modes));
-    for (Eigen::Index k = 0; k < modes; ++k) {
-      q_b(7 + k) = 1.0;
-      c[static_cast<std::size_t>(k)] = ffrf_field_coordinates(*model.floating_frame, q_b);
-      q_b(7 + k) = 0.0;
-    }
-    Eigen::MatrixXd& gram = modal_grams_[static_cast<std::size_t>(b)];
-    gram.resize(modes, modes);
-    for (Eigen::Index k = 0; k < modes; ++k)
-      for (Eigen::Index l = 0; l <= k; ++l) {
-        const Eigen::VectorXd &ck = c[static_cast<std::size_t>(k)], &cl = c[static_cast<std::size_t>(l)];
-        gram(k, l) = gram(l, k) = 0.25 * (field_mass_norm_squared(model, ck + cl) - field_mass_norm_squared(model, ck - cl));
-      }
+  for (int b = 0; b < system.body_count(); ++b) {  // for the deformation limit
+    body_sizes_.push_back(detail::body_size(system.model(b)));
+    deformations_.emplace_back(system.model(b));
   }
   const Eigen::Index n = q_.size(), m = system.constraint_count();
   const Eigen::VectorXd phi = system.constraints(t_, q_);

@@ -6,6 +6,8 @@
 
 #include "flexbody/runtime/generalized_alpha.hpp"
 
+#include "../body/body_measures.hpp"
+
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
@@ -112,9 +114,8 @@ class GeneralizedAlpha::Impl {
   Eigen::VectorXd nu_;              ///< the last step's ν, the next step's first guess
   bool time_dependent_ = false;     ///< a constraint depends on t (a driven joint)
   std::vector<double> body_sizes_;  ///< bounding-box diagonal of each body's mesh [m]
-  /// Per floating-frame body, Γ = Cᵀ (G_ff ⊗ I3) C of its modes' field coordinates c_k (ffrf_field_coordinates):
-  /// its elastic mass norm ηᵀ Γ η, checked every step, without forming ξ̄; empty for other bodies.
-  std::vector<Eigen::MatrixXd> modal_grams_;
+  /// Per body, the mass norm of its elastic displacement, checked every step (body_measures.hpp).
+  std::vector<detail::ElasticMassNorm> deformations_;
   /// Per coordinate, the length scale Newton's corrections are measured in (see GeneralizedAlphaOptions::tolerance).
   Eigen::VectorXd scales_;
   /// Per coordinate, W of ConstraintForm::stabilized_index2: scale_i² / (m r²) of its body. Within a body the

@@ -2,6 +2,7 @@
 // the checks of the model's validity after it (the deformation and spin limits).
 #include "generalized_alpha_impl.hpp"
 
+#include "../body/body_measures.hpp"
 #include "field_predictor.hpp"
 #include "finite.hpp"
 #include "local_error.hpp"
@@ -26,18 +27,6 @@ using detail::all_finite;
 // constant cores.
 constexpr double kSameStep = 1e-6;
 
-// ∫|u|² dm of body b's elastic displacement [kg m²]: ξ̄ᵀ (G_ff ⊗ I3) ξ̄ (and |ξ̄| = |ξ| for orthogonal A, so without
-// rotating). A floating-frame body's ξ̄ = Σ η_m c_m, the modes without the rigid part an interface frame gives them:
-// ηᵀ M_ff η would count that rigid motion as deformation (a rod in its crank-end frame was stopped at "2 % RMS" while
-// the same motion in the mean-axis frame was at 0.4 %).
-double elastic_mass_norm_squared(const System& system, int b, const Eigen::VectorXd& q) {
-  const BodyModel& model = system.model(b);
-  const Eigen::Index o = system.offset(b), n = model.coordinate_count();
-  if (model.floating())
-    return field_mass_norm_squared(model, ffrf_field_coordinates(*model.floating_frame, q.segment(o, n)));
-  return field_mass_norm_squared(model, q.segment(o + 12, n - 12));
-}
-
 }  // namespace
 
 void GeneralizedAlpha::Impl::check_deformation(double t, const Eigen::VectorXd& q) const {
@@ -45,14 +34,8 @@ void GeneralizedAlpha::Impl::check_deformation(double t, const Eigen::VectorXd& 
   for (int b = 0; b < system_.body_count(); ++b) {
     const BodyModel& model = system_.model(b);
     if (model.rigid()) continue;
-    double squared = 0.0;
-    if (model.floating()) {  // ηᵀ Γ η with Γ = Cᵀ (G_ff ⊗ I3) C: the same as ‖Σ η_k c_k‖², without a vector of 3 n_f
-      const Eigen::MatrixXd& gram = modal_grams_[static_cast<std::size_t>(b)];
-      const auto eta = q.segment(system_.offset(b) + 7, gram.rows());
-      for (Eigen::Index k = 0; k < gram.rows(); ++k) squared += eta(k) * gram.col(k).dot(eta);
-    } else {
-      squared = elastic_mass_norm_squared(system_, b, q);
-    }
+    const double squared =
+        deformations_[static_cast<std::size_t>(b)].squared(q.segment(system_.offset(b), model.coordinate_count()));
     const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
     const double size = body_sizes_[static_cast<std::size_t>(b)];
     if (rms > options_.deformation_limit * size) {
@@ -122,7 +105,8 @@ std::string GeneralizedAlpha::Impl::last_state_diagnosis() const {
     const BodyModel& model = system_.model(b);
     const double size = body_sizes_[static_cast<std::size_t>(b)];
     if (model.rigid() || !(size > 0.0)) continue;
-    const double squared = elastic_mass_norm_squared(system_, b, q_);
+    const double squared =
+        detail::elastic_mass_norm_squared(model, q_.segment(system_.offset(b), model.coordinate_count()));
     const double rms = std::sqrt(std::max(squared, 0.0) / model.mass);
     if (!(rms / size < largest_share)) largest_share = rms / size, most_deformed = b, rms_of_most = rms;
   }

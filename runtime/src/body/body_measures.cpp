@@ -43,7 +43,7 @@ void coordinate_scales(const BodyModel& model, Eigen::Ref<Eigen::VectorXd> scale
   }
 }
 
-double body_size(const BodyModel& model) {
+double mesh_diagonal(const BodyModel& model) {
   const format::RowMatrixX3d& nodes = model.nodes;
   return nodes.rows() ? (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm() : 0.0;
 }

@@ -19,8 +19,9 @@ namespace flexbody::runtime::detail {
 /// displacement, r √(m / G_ff(f, f)) (r √(m / M_mm) for a mode).
 void coordinate_scales(const BodyModel& model, Eigen::Ref<Eigen::VectorXd> scales);
 
-/// The bounding-box diagonal of the body's mesh [m]; 0 for a body without nodes.
-[[nodiscard]] double body_size(const BodyModel& model);
+/// The bounding-box diagonal of the body's mesh [m]; 0 for a body without nodes (the integrator then has no size to
+/// judge its deformation by; runtime::body_size, the initial assembly's, falls back on its radius of gyration).
+[[nodiscard]] double mesh_diagonal(const BodyModel& model);
 
 /// ∫|u|² dm of the body's elastic displacement [kg m²] at its coordinates q_b: ξ̄ᵀ (G_ff ⊗ I3) ξ̄, and |ξ̄| = |ξ| for an
 /// orthogonal A, so without rotating. A floating-frame body's ξ̄ = Σ η_m c_m, its modes' field coordinates without the

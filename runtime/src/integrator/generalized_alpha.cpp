@@ -83,7 +83,7 @@ GeneralizedAlpha::Impl::Impl(const System& system, const GeneralizedAlphaOptions
   spin_warned_.assign(static_cast<std::size_t>(system.body_count()), 0);
   for (int b = 0; b < system.body_count(); ++b) prestress_gaps_.push_back(system.prestress_gap(b));
   for (int b = 0; b < system.body_count(); ++b) {  // for the deformation limit
-    body_sizes_.push_back(detail::body_size(system.model(b)));
+    body_sizes_.push_back(detail::mesh_diagonal(system.model(b)));
     deformations_.emplace_back(system.model(b));
   }
   const Eigen::Index n = q_.size(), m = system.constraint_count();

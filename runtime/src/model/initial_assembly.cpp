@@ -1,5 +1,7 @@
 #include "flexbody/runtime/initial_assembly.hpp"
 
+#include "../body/body_measures.hpp"
+
 #include "flexbody/runtime/ffrf_dynamics.hpp"
 #include "flexbody/runtime/ffrf_model.hpp"
 
@@ -267,8 +269,7 @@ Outcome gauss_newton(const System& system, const Unknowns& u, const InitialAssem
 }  // namespace
 
 double body_size(const BodyModel& model) {
-  const format::RowMatrixX3d& nodes = model.nodes;
-  if (nodes.rows() > 0) return (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm();
+  if (model.nodes.rows() > 0) return detail::mesh_diagonal(model);
   const double trace = model.g_border(1, 1) + model.g_border(2, 2) + model.g_border(3, 3);
   return 2.0 * std::sqrt(3.0 * std::max(trace, 0.0) / model.mass);  // a cube's diagonal for its radius of gyration
 }

@@ -248,21 +248,22 @@ void Simulation::Run::recover() {
   flush();
 }
 
+void Simulation::Run::ended(Termination how, std::string why) {
+  summary.termination = how;
+  summary.termination_message = std::move(why);
+}
+
 void Simulation::Run::ended_by_exception(const std::exception_ptr& reason) {
   try {
     std::rethrow_exception(reason);
   } catch (const runtime::StepFailure& e) {
-    summary.termination = Termination::step_failed;
-    summary.termination_message = e.what();
+    ended(Termination::step_failed, e.what());
   } catch (const RunInterrupted& e) {
-    summary.termination = Termination::stopped;
-    summary.termination_message = e.what();
+    ended(Termination::stopped, e.what());
   } catch (const std::exception& e) {
-    summary.termination = Termination::error;
-    summary.termination_message = e.what();
+    ended(Termination::error, e.what());
   } catch (...) {
-    summary.termination = Termination::error;
-    summary.termination_message = "an exception that is not a std::exception";
+    ended(Termination::error, "an exception that is not a std::exception");
   }
 }
 
@@ -350,13 +351,12 @@ void Simulation::step() {
     throw;
   }
   run_->summary.cpu_seconds += cpu_since(cpu_start);
-  run_->summary.termination = Termination::running;
+  run_->ended(Termination::running);
 }
 
 bool Simulation::run(double end, const std::function<void(double)>& progress, const std::function<bool()>& stop) {
   Run& r = *run_;
-  r.summary.termination = Termination::running;
-  r.summary.termination_message.clear();
+  r.ended(Termination::running);
   const double now = r.integrator->time();
   const double h = r.scene.integrator.step;
   // A time that is `end` up to the rounding of t0 + k h (nine steps of 1e-3 s end at 0.009000000000000001) is there.
@@ -365,7 +365,7 @@ bool Simulation::run(double end, const std::function<void(double)>& progress, co
   if (!std::isfinite(end) || end < now - slack)
     throw std::invalid_argument(fmt::format("run to t = {} s: the simulation is at t = {} s already", end, now));
   if (end <= now + slack) {
-    r.summary.termination = Termination::end_reached;
+    r.ended(Termination::end_reached);
     return true;
   }
   // Fixed steps: whole steps, the last one shortened to end on `end` exactly (step_count), at most kMostSteps
@@ -393,7 +393,7 @@ bool Simulation::run(double end, const std::function<void(double)>& progress, co
       if (stop && stop()) {
         r.flush();
         r.summary.cpu_seconds += cpu_since(cpu_start);
-        r.summary.termination = Termination::stopped;
+        r.ended(Termination::stopped);
         return false;
       }
     }
@@ -405,7 +405,7 @@ bool Simulation::run(double end, const std::function<void(double)>& progress, co
   }
   r.flush();
   r.summary.cpu_seconds += cpu_since(cpu_start);
-  r.summary.termination = Termination::end_reached;
+  r.ended(Termination::end_reached);
   return true;
 }
 
@@ -422,8 +422,7 @@ const runtime::GeneralizedAlpha& Simulation::integrator() const { return *run_->
 runtime::IntegratorState Simulation::state() const { return run_->integrator->state(); }
 void Simulation::set_state(const runtime::IntegratorState& state) {
   run_->integrator->set_state(state);
-  run_->summary.termination = Termination::running;
-  run_->summary.termination_message.clear();
+  run_->ended(Termination::running);
   run_->baseline();
   run_->reschedule();
 }

@@ -82,7 +82,10 @@ struct Simulation::Run {
   void reschedule();
   void advance(bool to_end, double end, bool last);
   void recover();  // after a failed step: the last completed step recorded and drawn
-  /// The summary's termination for the exception that ended a step: step_failed for runtime::StepFailure, else error.
+  /// The summary's termination and its reason (empty but for a failure or an error).
+  void ended(Termination how, std::string why = {});
+  /// The same for the exception that ended a step: step_failed for runtime::StepFailure, stopped for RunInterrupted,
+  /// else error, with its message.
   void ended_by_exception(const std::exception_ptr& reason);
   void start(Scene s, const OutputSinks& sinks, std::function<void(const std::string&)> w,
              const format::CheckpointData* from, const std::filesystem::path& label = {});
